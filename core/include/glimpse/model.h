@@ -1,0 +1,83 @@
+// A trained model: everything training produces (codebooks, PCA bases, centres, category names,
+// statistics), the train/classify entry points, and its versioned byte format (sec. 3.3, sec. 4).
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "glimpse/cloud.h"
+#include "glimpse/expected.h"
+
+namespace glimpse {
+
+// The recognition methods of the paper (BoK, BoG, KGH, VFH) plus ESF and a score-level fusion.
+enum class Method : uint8_t { kBoK = 0, kBoG = 1, kKGH = 2, kVFH = 3, kESF = 4, kFusion = 5 };
+inline constexpr Method kAllMethods[] = {Method::kBoK, Method::kBoG, Method::kKGH,
+                                         Method::kVFH, Method::kESF, Method::kFusion};
+const char* method_name(Method m);                       // "bok", "bog", "kgh", "vfh", "esf", "fusion"
+Expected<Method> parse_method(std::string_view name);   // case-insensitive; error lists valid names
+
+struct LabelledCloud {
+  std::string category;
+  std::string object_id;  // views of one object share it (cross-validation splits by object)
+  Cloud cloud;
+};
+
+struct TrainProgress {
+  std::string stage;  // "features", "codebooks", "histograms", "centres", "done"
+  size_t done = 0;
+  size_t total = 0;
+};
+using ProgressFn = std::function<void(const TrainProgress&)>;
+using CancelFn = std::function<bool()>;  // returns true when the caller wants the work stopped
+
+struct TrainingStats {
+  size_t clouds = 0;
+  size_t objects = 0;
+  size_t keypoints = 0;
+  std::vector<std::string> categories;
+  std::vector<size_t> clouds_per_category;
+  double seconds = 0;
+};
+
+struct ModelImpl;  // codebooks, bases, centres: defined in core/src (model_impl.h)
+
+struct TrainParams;  // defined in train_params.h: features, codebooks, decision; defaults there
+
+struct Model {
+  std::vector<std::string> categories;
+  std::vector<Method> methods;  // methods this model can classify with
+  Method default_method = Method::kFusion;
+  TrainingStats stats;
+  std::shared_ptr<const ModelImpl> impl;  // immutable after training; shared by sessions/threads
+};
+
+struct Classification {
+  Method method = Method::kFusion;
+  std::vector<std::string> categories;
+  std::vector<double> scores;  // one per category, in [0, 1], summing to 1; higher is more likely
+  int winner = -1;             // index into categories
+  size_t points = 0;           // after cleaning
+  size_t keypoints = 0;
+  double feature_ms = 0;
+  double decision_ms = 0;
+};
+
+Expected<Model> train(const std::vector<LabelledCloud>& data, const TrainParams& params,
+                      const ProgressFn& progress = {}, const CancelFn& cancel = {});
+
+Expected<Classification> classify(const Model& model, const Cloud& cloud,
+                                  std::optional<Method> method = std::nullopt,
+                                  const CancelFn& cancel = {});
+
+// Versioned, little-endian byte format with a checksum; deserialize rejects truncated or corrupt input.
+std::vector<uint8_t> serialize(const Model& model);
+Expected<Model> deserialize(std::span<const uint8_t> bytes);
+
+}  // namespace glimpse

@@ -1,0 +1,43 @@
+#!/usr/bin/env bash
+# Installs every build and runtime dependency of Glimpse from Debian 12 packages.
+# Idempotent: packages already present are skipped. Used by README, .ci/run and the Dockerfile.
+#   deploy/install-deps.sh            build + test dependencies
+#   deploy/install-deps.sh --runtime  only the shared libraries the binaries need (container runtime stage)
+set -euo pipefail
+
+build_pkgs=(
+  build-essential cmake ninja-build pkg-config git ca-certificates
+  libeigen3-dev libpcl-dev libnanoflann-dev libqhull-dev
+  libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc
+  libsqlite3-dev sqlite3
+  libgtest-dev libgmock-dev libbenchmark-dev
+  prometheus-cpp-dev
+  python3 python3-grpcio python3-grpc-tools
+)
+runtime_pkgs=(
+  libgrpc++1.51 libprotobuf32 libsqlite3-0 libqhull-r8.0 libgomp1
+  libpcl-common1.13 libpcl-features1.13 libpcl-search1.13 libpcl-kdtree1.13
+  libprometheus-cpp-core1.0 libprometheus-cpp-pull1.0 ca-certificates
+)
+
+pkgs=("${build_pkgs[@]}")
+if [[ "${1:-}" == "--runtime" ]]; then pkgs=("${runtime_pkgs[@]}"); fi
+
+missing=()
+for p in "${pkgs[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+
+if ((${#missing[@]} == 0)); then
+  echo "install-deps: all ${#pkgs[@]} packages already installed"
+  exit 0
+fi
+
+SUDO=""
+if [[ $(id -u) -ne 0 ]]; then SUDO="sudo"; fi
+echo "install-deps: installing ${#missing[@]} packages: ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
