@@ -1,0 +1,55 @@
+// Keypoints with a characteristic radius (sec. 2.2, 3.2.2): points where the smaller principal Harris
+// curvature is large, taken greedily in descending order of it; each keypoint claims the sphere of its
+// characteristic radius rho1 = 2 / sqrt(lambda_min) (eq. 3), so radii grow monotonically.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <numbers>
+#include <vector>
+
+#include "glimpse/cloud.h"
+#include "glimpse/geometry.h"
+
+namespace glimpse {
+
+struct KeypointParams {
+  // Candidates whose rho1 would exceed this are flat, not keypoints. 0 = automatic:
+  // max_radius_supports x the support radius r.
+  float max_characteristic_radius_m = 0;
+  float max_radius_supports = 8.f;
+  // Boundary points of a 2.5D view and their r-neighbourhood never give keypoints (sec. 3.2.2).
+  bool exclude_boundary = true;
+  float boundary_gap_rad = std::numbers::pi_v<float> / 2;
+  size_t max_keypoints = 0;  // 0 = no limit
+};
+
+struct Keypoint {
+  uint32_t index = 0;               // into the cloud the surfaces were computed on
+  Vec3 position = Vec3::Zero();
+  float characteristic_radius = 0;  // rho1, eq. 3 (metres)
+  float lambda_min = 0;
+  float lambda_max = 0;
+};
+
+struct KeypointStats {
+  size_t candidates = 0;          // valid points with rho1 below the maximum
+  size_t boundary_rejected = 0;   // candidates dropped for touching a boundary
+  float max_radius_m = 0;         // the maximum rho1 used
+};
+
+// eq. 3: rho1 = 2 / sqrt(lambda_min); on a sphere of radius rho this is sqrt(2) rho (eq. 1-2).
+inline float characteristic_radius(float lambda_min) {
+  return lambda_min > 0 ? 2.f / std::sqrt(lambda_min) : std::numeric_limits<float>::infinity();
+}
+
+// Deterministic: the same surfaces give the same keypoints, in the same order (descending lambda_min,
+// ties by index), whatever the thread count.
+std::vector<Keypoint> characteristic_scale_keypoints(const KdTree& tree,
+                                                     const std::vector<LocalSurface>& surfaces,
+                                                     float support_radius_m,
+                                                     const KeypointParams& params,
+                                                     KeypointStats* stats = nullptr);
+
+}  // namespace glimpse

@@ -1,0 +1,360 @@
+#include "glimpse/geometry.h"
+
+#include <omp.h>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <nanoflann.hpp>
+#include <numbers>
+#include <queue>
+#include <unordered_map>
+
+#include "parallel.h"
+
+namespace glimpse {
+
+// ---- Cleaning ------------------------------------------------------------------------------------
+
+namespace {
+
+struct CellKey {
+  int64_t x, y, z;
+  bool operator==(const CellKey&) const = default;
+};
+struct CellHash {
+  size_t operator()(const CellKey& k) const {
+    return static_cast<size_t>(k.x * 73856093LL ^ k.y * 19349663LL ^ k.z * 83492791LL);
+  }
+};
+CellKey cell_of(const Vec3& p, float cell) {
+  return {static_cast<int64_t>(std::floor(p.x() / cell)), static_cast<int64_t>(std::floor(p.y() / cell)),
+          static_cast<int64_t>(std::floor(p.z() / cell))};
+}
+
+}  // namespace
+
+Cloud clean(const Cloud& cloud, float duplicate_tolerance_m, CleanReport* report) {
+  CleanReport r;
+  r.input = cloud.points.size();
+  Cloud out;
+  out.sensor = cloud.sensor;
+  out.points.reserve(cloud.points.size());
+  // Exact duplicates are found with a grid far finer than any sensor resolution.
+  const float cell = duplicate_tolerance_m > 0 ? duplicate_tolerance_m : 1e-6f;
+  std::unordered_map<CellKey, uint32_t, CellHash> seen;
+  seen.reserve(cloud.points.size());
+  for (const Vec3& p : cloud.points) {
+    if (!p.allFinite()) {
+      ++r.non_finite;
+      continue;
+    }
+    auto [it, inserted] = seen.try_emplace(cell_of(p, cell), static_cast<uint32_t>(out.points.size()));
+    if (!inserted && (duplicate_tolerance_m > 0 || out.points[it->second] == p)) {
+      ++r.duplicates;
+      continue;
+    }
+    out.points.push_back(p);
+  }
+  r.kept = out.points.size();
+  if (report) *report = r;
+  return out;
+}
+
+Cloud voxel_downsample(const Cloud& cloud, float voxel_m) {
+  Cloud out;
+  out.sensor = cloud.sensor;
+  if (voxel_m <= 0) {
+    out.points = cloud.points;
+    return out;
+  }
+  std::unordered_map<CellKey, uint32_t, CellHash> slot;
+  std::vector<Eigen::Vector3d> sums;
+  std::vector<uint32_t> counts;
+  for (const Vec3& p : cloud.points) {
+    if (!p.allFinite()) continue;
+    auto [it, inserted] = slot.try_emplace(cell_of(p, voxel_m), static_cast<uint32_t>(sums.size()));
+    if (inserted) {
+      sums.emplace_back(Eigen::Vector3d::Zero());
+      counts.push_back(0);
+    }
+    sums[it->second] += p.cast<double>();
+    ++counts[it->second];
+  }
+  out.points.reserve(sums.size());
+  for (size_t i = 0; i < sums.size(); ++i) out.points.push_back((sums[i] / counts[i]).cast<float>());
+  return out;
+}
+
+// ---- Neighbourhoods ------------------------------------------------------------------------------
+
+namespace {
+struct PointsAdaptor {
+  const Points* pts;
+  size_t kdtree_get_point_count() const { return pts->size(); }
+  float kdtree_get_pt(size_t i, size_t dim) const { return (*pts)[i][static_cast<int>(dim)]; }
+  template <class BBox>
+  bool kdtree_get_bbox(BBox&) const { return false; }
+};
+using Tree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, PointsAdaptor>,
+                                                 PointsAdaptor, 3, uint32_t>;
+}  // namespace
+
+struct KdTree::Impl {
+  explicit Impl(const Points& p) : adaptor{&p}, tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16)) {
+    if (!p.empty()) tree.buildIndex();
+  }
+  PointsAdaptor adaptor;
+  Tree tree;
+};
+
+KdTree::KdTree(const Points& points) : impl_(std::make_unique<Impl>(points)) {}
+KdTree::~KdTree() = default;
+KdTree::KdTree(KdTree&&) noexcept = default;
+KdTree& KdTree::operator=(KdTree&&) noexcept = default;
+const Points& KdTree::points() const { return *impl_->adaptor.pts; }
+
+void KdTree::radius(const Vec3& query, float radius, std::vector<Neighbour>& out) const {
+  out.clear();
+  if (impl_->adaptor.pts->empty()) return;
+  // nanoflann 1.4 returns (index, squared distance) pairs; it wants the squared radius.
+  thread_local std::vector<std::pair<uint32_t, float>> found;
+  found.clear();
+  nanoflann::SearchParams params(32, 0.f, false);
+  impl_->tree.radiusSearch(query.data(), radius * radius, found, params);
+  out.reserve(found.size());
+  for (const auto& [i, d] : found) out.push_back({i, d});
+}
+
+void KdTree::nearest(const Vec3& query, size_t k, std::vector<Neighbour>& out) const {
+  out.clear();
+  k = std::min(k, impl_->adaptor.pts->size());
+  if (k == 0) return;
+  thread_local std::vector<uint32_t> idx;
+  thread_local std::vector<float> dist;
+  idx.resize(k);
+  dist.resize(k);
+  const size_t n = impl_->tree.knnSearch(query.data(), k, idx.data(), dist.data());
+  for (size_t i = 0; i < n; ++i) out.push_back({idx[i], dist[i]});
+}
+
+float median_spacing(const KdTree& tree, size_t sample) {
+  const Points& pts = tree.points();
+  if (pts.size() < 2) return 0.f;
+  const size_t step = std::max<size_t>(1, pts.size() / std::max<size_t>(sample, 1));
+  std::vector<float> d;
+  std::vector<Neighbour> nn;
+  for (size_t i = 0; i < pts.size(); i += step) {
+    tree.nearest(pts[i], 2, nn);
+    if (nn.size() == 2) d.push_back(std::sqrt(nn[1].distance_sq));
+  }
+  if (d.empty()) return 0.f;
+  auto mid = d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2);
+  std::nth_element(d.begin(), mid, d.end());
+  return *mid;
+}
+
+float support_radius(const KdTree& tree, const SurfaceParams& params) {
+  if (params.support_radius_m > 0) return params.support_radius_m;
+  return params.support_radius_spacings * median_spacing(tree);
+}
+
+// ---- Local surfaces ------------------------------------------------------------------------------
+
+Eigen::Vector2f harris_eigenvalues(float p1, float p2, float p3, float p4, float p5) {
+  // Sipiran & Bustos 2011: Harris matrix of the fitted quadric under a unit Gaussian.
+  const double A = double(p4) * p4 + 2.0 * p1 * p1 + 2.0 * p2 * p2;
+  const double B = double(p5) * p5 + 2.0 * p2 * p2 + 2.0 * p3 * p3;
+  const double C = double(p4) * p5 + 2.0 * p1 * p2 + 2.0 * p2 * p3;
+  const double mean = 0.5 * (A + B);
+  const double dev = std::sqrt(0.25 * (A - B) * (A - B) + C * C);
+  return {static_cast<float>(std::max(0.0, mean - dev)), static_cast<float>(mean + dev)};
+}
+
+Eigen::Vector2f principal_curvatures(float p1, float p2, float p3, float p4, float p5) {
+  // First and second fundamental forms of the graph z = f(x, y) at the origin.
+  const double fx = p4, fy = p5;
+  const double E = 1 + fx * fx, F = fx * fy, G = 1 + fy * fy;
+  const double w = std::sqrt(1 + fx * fx + fy * fy);
+  const double L = p1 / w, M = p2 / w, N = p3 / w;
+  const double det = E * G - F * F;
+  const double K = (L * N - M * M) / det;
+  const double H = (E * N - 2 * F * M + G * L) / (2 * det);
+  const double root = std::sqrt(std::max(0.0, H * H - K));
+  return {static_cast<float>(H + root), static_cast<float>(H - root)};
+}
+
+namespace {
+
+// PCA of a neighbourhood: centroid and eigenvectors (ascending eigenvalues) in double precision.
+struct Pca3 {
+  Eigen::Vector3d centroid;
+  Eigen::Matrix3d axes;  // columns: smallest (normal), middle, largest
+  bool ok = false;
+};
+
+Pca3 neighbourhood_pca(const Points& pts, const std::vector<Neighbour>& nb) {
+  Pca3 out;
+  if (nb.size() < 3) return out;
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  for (const Neighbour& n : nb) c += pts[n.index].cast<double>();
+  c /= static_cast<double>(nb.size());
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (const Neighbour& n : nb) {
+    const Eigen::Vector3d d = pts[n.index].cast<double>() - c;
+    cov.noalias() += d * d.transpose();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
+  es.computeDirect(cov);
+  out.centroid = c;
+  out.axes = es.eigenvectors();
+  out.ok = es.info() == Eigen::Success && out.axes.allFinite();
+  return out;
+}
+
+}  // namespace
+
+Vec3 pca_normal(const KdTree& tree, const Vec3& centre, float radius, std::vector<Neighbour>& scratch) {
+  tree.radius(centre, radius, scratch);
+  const Pca3 pca = neighbourhood_pca(tree.points(), scratch);
+  if (!pca.ok) return Vec3::Zero();
+  return pca.axes.col(0).normalized().cast<float>();
+}
+
+LocalSurface local_surface(const KdTree& tree, uint32_t index, float r,
+                           const std::optional<Vec3>& viewpoint, int min_neighbours,
+                           std::vector<Neighbour>& nb) {
+  LocalSurface s;
+  const Points& pts = tree.points();
+  const Vec3& p = pts[index];
+  tree.radius(p, r, nb);
+  s.neighbours = static_cast<uint16_t>(std::min<size_t>(nb.size(), 65535));
+  if (static_cast<int>(nb.size()) < std::max(min_neighbours, 6)) return s;
+  const Pca3 pca = neighbourhood_pca(pts, nb);
+  if (!pca.ok) return s;
+  Eigen::Vector3d n = pca.axes.col(0).normalized();
+  if (viewpoint && n.dot((*viewpoint - p).cast<double>()) < 0) n = -n;
+  const Eigen::Vector3d e1 = pca.axes.col(2).normalized();
+  const Eigen::Vector3d e2 = n.cross(e1);
+
+  // Least squares for z = 1/2 p1 x^2 + p2 xy + 1/2 p3 y^2 + p4 x + p5 y + p6 in the frame (e1, e2, n)
+  // centred on the point; coordinates are divided by r to keep the normal equations well conditioned.
+  Eigen::Matrix<double, 6, 6> AtA = Eigen::Matrix<double, 6, 6>::Zero();
+  Eigen::Matrix<double, 6, 1> Atz = Eigen::Matrix<double, 6, 1>::Zero();
+  const Eigen::Vector3d pd = p.cast<double>();
+  const double inv_r = 1.0 / r;
+  // Gaussian weights (sigma = r/2) favour the centre, so a crease at the edge of the neighbourhood
+  // bends the fit less (fewer false corners next to sharp edges).
+  for (const Neighbour& q : nb) {
+    const Eigen::Vector3d d = (pts[q.index].cast<double>() - pd) * inv_r;
+    const double x = d.dot(e1), y = d.dot(e2), z = d.dot(n);
+    const double w = std::exp(-2.0 * d.squaredNorm());
+    Eigen::Matrix<double, 6, 1> row;
+    row << 0.5 * x * x, x * y, 0.5 * y * y, x, y, 1.0;
+    AtA.noalias() += w * row * row.transpose();
+    Atz.noalias() += w * row * z;
+  }
+  const Eigen::Matrix<double, 6, 1> c = AtA.ldlt().solve(Atz);
+  if (!c.allFinite()) return s;
+  // Undo the 1/r scaling: second-order terms scale with 1/r, slopes are unitless.
+  const float p1 = static_cast<float>(c[0] * inv_r), p2 = static_cast<float>(c[1] * inv_r),
+              p3 = static_cast<float>(c[2] * inv_r), p4 = static_cast<float>(c[3]),
+              p5 = static_cast<float>(c[4]);
+  const Eigen::Vector2f k = principal_curvatures(p1, p2, p3, p4, p5);
+  const Eigen::Vector2f lambda = harris_eigenvalues(p1, p2, p3, p4, p5);
+  s.normal = n.cast<float>();
+  s.k1 = k[0];
+  s.k2 = k[1];
+  s.lambda_min = lambda[0];
+  s.lambda_max = lambda[1];
+  s.valid = s.normal.allFinite() && std::isfinite(s.lambda_max);
+  return s;
+}
+
+std::vector<LocalSurface> local_surfaces(const KdTree& tree, float r, const std::optional<Vec3>& viewpoint,
+                                         const SurfaceParams& params) {
+  const size_t n = tree.points().size();
+  std::vector<LocalSurface> out(n);
+  const int threads = resolve_threads(params.threads);
+#pragma omp parallel num_threads(threads)
+  {
+    std::vector<Neighbour> scratch;
+#pragma omp for schedule(dynamic, 256)
+    for (int64_t i = 0; i < static_cast<int64_t>(n); ++i)
+      out[i] = local_surface(tree, static_cast<uint32_t>(i), r, viewpoint, params.min_neighbours, scratch);
+  }
+  if (!viewpoint) orient_normals_propagated(tree, out);
+  return out;
+}
+
+void orient_normals_propagated(const KdTree& tree, std::vector<LocalSurface>& surfaces, int k) {
+  const Points& pts = tree.points();
+  const size_t n = pts.size();
+  if (n == 0) return;
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (const Vec3& p : pts) centroid += p.cast<double>();
+  centroid /= static_cast<double>(n);
+  auto flip = [](LocalSurface& s) {
+    s.normal = -s.normal;
+    const float k1 = s.k1;
+    s.k1 = -s.k2;
+    s.k2 = -k1;
+  };
+  // Root order: highest point first (its normal turned up), then any unvisited point in index order
+  // for further components (turned away from the centroid).
+  std::vector<uint32_t> roots(n);
+  for (uint32_t i = 0; i < n; ++i) roots[i] = i;
+  std::stable_sort(roots.begin(), roots.end(), [&](uint32_t a, uint32_t b) { return pts[a].z() > pts[b].z(); });
+  std::vector<uint8_t> visited(n, 0);
+  using Item = std::tuple<float, uint32_t, uint32_t>;  // weight, index, parent
+  std::priority_queue<Item, std::vector<Item>, std::greater<Item>> queue;
+  std::vector<Neighbour> nb;
+  bool first = true;
+  for (uint32_t root : roots) {
+    if (visited[root] || !surfaces[root].valid) continue;
+    LocalSurface& rs = surfaces[root];
+    const Vec3 outward = first ? Vec3(Vec3::UnitZ()) : Vec3((pts[root].cast<double>() - centroid).cast<float>());
+    if (rs.normal.dot(outward) < 0) flip(rs);
+    first = false;
+    queue.emplace(0.f, root, root);
+    while (!queue.empty()) {
+      const auto [w, i, parent] = queue.top();
+      queue.pop();
+      if (visited[i]) continue;
+      visited[i] = 1;
+      if (i != parent && surfaces[i].normal.dot(surfaces[parent].normal) < 0) flip(surfaces[i]);
+      tree.nearest(pts[i], static_cast<size_t>(k) + 1, nb);
+      for (const Neighbour& q : nb) {
+        if (visited[q.index] || !surfaces[q.index].valid) continue;
+        const float weight = 1.f - std::abs(surfaces[i].normal.dot(surfaces[q.index].normal));
+        queue.emplace(weight, q.index, i);
+      }
+    }
+  }
+}
+
+// ---- Boundaries ----------------------------------------------------------------------------------
+
+bool is_boundary_point(const KdTree& tree, uint32_t index, const Vec3& normal, float r, float max_gap_rad,
+                       std::vector<Neighbour>& nb) {
+  const Points& pts = tree.points();
+  tree.radius(pts[index], r, nb);
+  if (nb.size() < 4 || !normal.allFinite() || normal.isZero()) return true;
+  const Vec3 u = normal.unitOrthogonal();
+  const Vec3 v = normal.cross(u);
+  std::vector<float> angles;
+  angles.reserve(nb.size());
+  for (const Neighbour& q : nb) {
+    if (q.index == index) continue;
+    const Vec3 d = pts[q.index] - pts[index];
+    angles.push_back(std::atan2(d.dot(v), d.dot(u)));
+  }
+  if (angles.size() < 3) return true;
+  std::sort(angles.begin(), angles.end());
+  float gap = angles.front() + 2.f * std::numbers::pi_v<float> - angles.back();
+  for (size_t i = 1; i < angles.size(); ++i) gap = std::max(gap, angles[i] - angles[i - 1]);
+  return gap > max_gap_rad;
+}
+
+}  // namespace glimpse

@@ -1,0 +1,87 @@
+// Per-stage cost of feature extraction on a 10k-point single view, against the floor: one radius-
+// neighbourhood pass over the cloud (every point's neighbourhood must be visited at least once).
+// Goal (issue 3): the whole extraction within 2x that pass. Compare the medians in the same run.
+#include <benchmark/benchmark.h>
+
+#include "../core/shapes.h"
+#include "glimpse/features.h"
+#include "glimpse/geometry.h"
+
+namespace glimpse {
+namespace {
+
+// A single view of a chair-sized scene (boxes, a ball, a post), points facing the camera only.
+Cloud single_view(size_t target) {
+  const Vec3 camera(2.f, 1.5f, 1.5f);
+  Points all;
+  for (const Vec3& p : test::cube(0.45f, 0.0062f)) all.push_back(p);
+  for (const Vec3& p : test::sphere(0.12f, 6000, Vec3(0.2f, 0.2f, 0.6f))) all.push_back(p);
+  for (const Vec3& p : test::cylinder(0.03f, 0.8f, 0.0062f)) all.push_back(p + Vec3(0.6f, 0.1f, 0.4f));
+  Cloud view{{}, camera};
+  const Vec3 centre(0.25f, 0.25f, 0.3f);
+  for (const Vec3& p : all)
+    if ((p - centre).dot(camera - centre) > 0) view.points.push_back(p);
+  // Thin evenly to the target size, so every part of the scene stays in the view.
+  Cloud thinned{{}, camera};
+  const double step = std::max(1.0, static_cast<double>(view.points.size()) / static_cast<double>(target));
+  for (double i = 0; i < static_cast<double>(view.points.size()); i += step)
+    thinned.points.push_back(view.points[static_cast<size_t>(i)]);
+  return thinned;
+}
+
+const Cloud& view10k() {
+  static const Cloud c = single_view(10000);
+  return c;
+}
+
+void BM_RadiusPassFloor(benchmark::State& state) {
+  const Cloud& c = view10k();
+  const KdTree tree(c.points);
+  const float r = support_radius(tree, {});
+  std::vector<Neighbour> nb;
+  for (auto _ : state) {
+    size_t total = 0;
+    for (const Vec3& p : c.points) {
+      tree.radius(p, r, nb);
+      total += nb.size();
+    }
+    benchmark::DoNotOptimize(total);
+  }
+  state.counters["points"] = static_cast<double>(c.points.size());
+}
+BENCHMARK(BM_RadiusPassFloor)->Unit(benchmark::kMillisecond);
+
+void BM_LocalSurfaces(benchmark::State& state) {
+  const Cloud& c = view10k();
+  const KdTree tree(c.points);
+  SurfaceParams params;
+  params.threads = static_cast<int>(state.range(0));
+  const float r = support_radius(tree, params);
+  for (auto _ : state) benchmark::DoNotOptimize(local_surfaces(tree, r, c.sensor, params));
+}
+BENCHMARK(BM_LocalSurfaces)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
+
+void BM_Extract(benchmark::State& state) {
+  const Cloud& c = view10k();
+  FeatureParams params;
+  params.surface.threads = static_cast<int>(state.range(0));
+  size_t keypoints = 0;
+  double surf = 0, kp = 0, desc = 0;
+  for (auto _ : state) {
+    auto f = extract(c, params);
+    if (!f.ok()) state.SkipWithError(f.error().message.c_str());
+    keypoints = f->keypoints.size();
+    surf += f->diagnostics.surfaces_ms, kp += f->diagnostics.keypoints_ms, desc += f->diagnostics.descriptors_ms;
+  }
+  const double n = static_cast<double>(state.iterations());
+  state.counters["keypoints"] = static_cast<double>(keypoints);
+  state.counters["surfaces_ms"] = surf / n;
+  state.counters["keypoints_ms"] = kp / n;
+  state.counters["descriptors_ms"] = desc / n;
+}
+BENCHMARK(BM_Extract)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+}  // namespace glimpse
+
+BENCHMARK_MAIN();

@@ -1,0 +1,330 @@
+// Local geometry, keypoints and the 12-D descriptor on analytic shapes (sec. 2.2-2.3, 3.2).
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+
+#include "glimpse/descriptor.h"
+#include "glimpse/features.h"
+#include "glimpse/geometry.h"
+#include "glimpse/keypoints.h"
+#include "shapes.h"
+
+namespace glimpse {
+namespace {
+
+using test::kPi;
+
+// Median of a per-point quantity over valid surfaces satisfying `keep`.
+template <class Get, class Keep>
+float median_over(const std::vector<LocalSurface>& s, const Points& pts, Get get, Keep keep) {
+  std::vector<float> v;
+  for (size_t i = 0; i < s.size(); ++i)
+    if (s[i].valid && keep(pts[i])) v.push_back(get(s[i]));
+  EXPECT_FALSE(v.empty());
+  if (v.empty()) return NAN;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+TEST(HarrisEigenvalues, SphereQuadricGivesTwoOverRhoSquared) {
+  const float rho = 0.2f;  // z = (x^2 + y^2) / (2 rho): p1 = p3 = 1/rho (eq. 2)
+  const Eigen::Vector2f l = harris_eigenvalues(1 / rho, 0, 1 / rho, 0, 0);
+  EXPECT_NEAR(l[0], 2 / (rho * rho), 1e-3);
+  EXPECT_NEAR(l[1], 2 / (rho * rho), 1e-3);
+  const Eigen::Vector2f k = principal_curvatures(1 / rho, 0, 1 / rho, 0, 0);
+  EXPECT_NEAR(k[0], 1 / rho, 1e-4);
+  EXPECT_NEAR(k[1], 1 / rho, 1e-4);
+}
+
+TEST(HarrisEigenvalues, CylinderHasOneFlatDirection) {
+  const Eigen::Vector2f l = harris_eigenvalues(10, 0, 0, 0, 0);
+  EXPECT_NEAR(l[0], 0, 1e-5);
+  EXPECT_NEAR(l[1], 200, 1e-3);
+}
+
+TEST(LocalSurfaces, SphereCurvatureAndShapeIndex) {
+  const float rho = 0.1f;
+  const Points pts = test::sphere(rho, 6000);
+  const KdTree tree(pts);
+  SurfaceParams params;
+  const float r = support_radius(tree, params);
+  ASSERT_GT(r, 0);
+  const auto s = local_surfaces(tree, r, Vec3(0, 0, 1), params);
+  auto all = [](const Vec3&) { return true; };
+  const float lmin = median_over(s, pts, [](auto& q) { return q.lambda_min; }, all);
+  const float lmax = median_over(s, pts, [](auto& q) { return q.lambda_max; }, all);
+  EXPECT_NEAR(lmin, 2 / (rho * rho), 0.1 * 2 / (rho * rho));  // eq. 2
+  EXPECT_NEAR(lmax, 2 / (rho * rho), 0.1 * 2 / (rho * rho));
+  const float shape = median_over(s, pts, [](auto& q) { return modified_shape_index(q.k1, q.k2); }, all);
+  EXPECT_NEAR(shape, 0.5f, 0.03f);
+  // |k| = 1 / rho at every point; the sign says cap (towards the viewer) or cup (away).
+  const float kabs = median_over(s, pts, [](auto& q) { return std::abs(q.k1 + q.k2) / 2; }, all);
+  EXPECT_NEAR(kabs, 1 / rho, 0.1 / rho);
+}
+
+TEST(LocalSurfaces, CylinderShapeIndexIsOneQuarter) {
+  const Points pts = test::cylinder(0.1f, 0.6f, 0.006f);
+  const KdTree tree(pts);
+  const auto s = local_surfaces(tree, 0.025f, Vec3(1, 0, 0), {});
+  auto middle = [](const Vec3& p) { return std::abs(p.z()) < 0.2f; };
+  EXPECT_NEAR(median_over(s, pts, [](auto& q) { return modified_shape_index(q.k1, q.k2); }, middle), 0.25f, 0.03f);
+  // One principal curvature 1/rho, the other 0: lambda_min ~ 0 (eq. 2 fails: not a keypoint shape).
+  EXPECT_LT(median_over(s, pts, [](auto& q) { return q.lambda_min; }, middle), 0.05f * 2 / (0.1f * 0.1f));
+}
+
+TEST(LocalSurfaces, SaddleShapeIndexIsZero) {
+  const float a = 0.2f;
+  const Points pts = test::height_field(0.1f, 0.004f, [&](float x, float y) { return (x * x - y * y) / (2 * a); });
+  const KdTree tree(pts);
+  const auto s = local_surfaces(tree, 0.02f, Vec3(0, 0, 1), {});
+  auto centre = [](const Vec3& p) { return p.head<2>().norm() < 0.02f; };
+  EXPECT_NEAR(median_over(s, pts, [](auto& q) { return modified_shape_index(q.k1, q.k2); }, centre), 0.f, 0.05f);
+  EXPECT_NEAR(median_over(s, pts, [](auto& q) { return q.k1; }, centre), 1 / a, 0.15 / a);
+  EXPECT_NEAR(median_over(s, pts, [](auto& q) { return q.k2; }, centre), -1 / a, 0.15 / a);
+}
+
+TEST(LocalSurfaces, PlaneNormalsFaceTheViewpoint) {
+  const Points pts = test::jitter(test::plane(0.2f, 0.01f), 0.0005f, 3);
+  const KdTree tree(pts);
+  for (const Vec3 viewpoint : {Vec3(0.3f, -0.2f, 1.f), Vec3(0.f, 0.5f, -2.f)}) {
+    const auto s = local_surfaces(tree, 0.03f, viewpoint, {});
+    for (size_t i = 0; i < s.size(); ++i) {
+      ASSERT_TRUE(s[i].valid);
+      EXPECT_GT(s[i].normal.dot(viewpoint - pts[i]), 0) << "point " << i;
+      EXPECT_GT(std::abs(s[i].normal.z()), 0.98f);
+    }
+  }
+}
+
+TEST(LocalSurfaces, PropagationOrientsASphereConsistently) {
+  const Points pts = test::sphere(0.15f, 3000, Vec3(1, 2, 3));
+  const KdTree tree(pts);
+  const auto s = local_surfaces(tree, 0.03f, std::nullopt, {});
+  size_t outward = 0, valid = 0;
+  for (size_t i = 0; i < s.size(); ++i) {
+    if (!s[i].valid) continue;
+    ++valid;
+    outward += s[i].normal.dot(pts[i] - Vec3(1, 2, 3)) > 0;
+  }
+  ASSERT_EQ(valid, pts.size());
+  EXPECT_EQ(outward, valid) << "the root (highest point) is turned up, i.e. outward on a sphere";
+}
+
+TEST(Keypoints, PlaneHasNone) {
+  Cloud c{test::jitter(test::plane(0.3f, 0.01f), 0.0003f, 7), Vec3(0, 0, 1)};
+  auto f = extract(c);
+  ASSERT_TRUE(f.ok()) << f.error().message;
+  EXPECT_TRUE(f->keypoints.empty());
+  EXPECT_FALSE(f->diagnostics.note.empty());
+}
+
+TEST(Keypoints, CubeKeypointsSitAtTheCornersOnly) {
+  const float side = 0.3f;
+  Cloud c{test::cube(side, 0.006f), std::nullopt};
+  auto f = extract(c);
+  ASSERT_TRUE(f.ok()) << f.error().message;
+  const float r = f->diagnostics.support_radius_m;
+  ASSERT_GE(f->keypoints.size(), 8u);
+  std::vector<int> per_corner(8, 0);
+  for (const Keypoint& kp : f->keypoints) {
+    int best = -1;
+    float best_d = 1e9f;
+    for (int k = 0; k < 8; ++k) {
+      const Vec3 corner(side * (k & 1), side * ((k >> 1) & 1), side * ((k >> 2) & 1));
+      const float d = (kp.position - corner).norm();
+      if (d < best_d) best_d = d, best = k;
+    }
+    EXPECT_LT(best_d, 2.5f * r) << "keypoint at " << kp.position.transpose() << " is not at a corner";
+    ++per_corner[best];
+  }
+  for (int k = 0; k < 8; ++k) EXPECT_GE(per_corner[k], 1) << "corner " << k << " has no keypoint";
+}
+
+TEST(Keypoints, RadiiGrowMonotonically) {
+  Cloud c{test::jitter(test::sphere(0.05f, 2000), 0.0002f, 1), std::nullopt};
+  for (const Vec3& p : test::sphere(0.12f, 4000, Vec3(0.3f, 0, 0))) c.points.push_back(p);
+  for (const Vec3& p : test::cube(0.2f, 0.008f)) c.points.push_back(p + Vec3(-0.4f, 0, 0));
+  auto f = extract(c);
+  ASSERT_TRUE(f.ok());
+  ASSERT_GE(f->keypoints.size(), 3u);
+  for (size_t i = 1; i < f->keypoints.size(); ++i)
+    EXPECT_GE(f->keypoints[i].characteristic_radius, f->keypoints[i - 1].characteristic_radius);
+  // No keypoint inside another's characteristic sphere (eq. 3 suppression).
+  for (size_t i = 0; i < f->keypoints.size(); ++i)
+    for (size_t j = i + 1; j < f->keypoints.size(); ++j)
+      EXPECT_GT((f->keypoints[i].position - f->keypoints[j].position).norm(),
+                std::max(f->keypoints[i].characteristic_radius, f->diagnostics.support_radius_m));
+}
+
+TEST(Keypoints, BoundaryOfAViewGivesNone) {
+  // A hemisphere cap seen from above: strongly curved everywhere, but its rim is a view boundary.
+  Points cap;
+  for (const Vec3& p : test::sphere(0.05f, 2000))
+    if (p.z() > 0.015f) cap.push_back(p);
+  auto with = extract({cap, Vec3(0, 0, 1)});
+  ASSERT_TRUE(with.ok());
+  ASSERT_FALSE(with->keypoints.empty());
+  const float r = with->diagnostics.support_radius_m;
+  const float rim_z = 0.015f;
+  for (const Keypoint& kp : with->keypoints) {
+    // Distance from the rim circle, along the surface roughly: vertical gap is a lower bound.
+    EXPECT_GT(kp.position.z() - rim_z, 0.5f * r) << "keypoint too close to the rim";
+  }
+  EXPECT_GT(with->diagnostics.keypoints.boundary_rejected, 0u);
+  FeatureParams no_boundary;
+  no_boundary.keypoints.exclude_boundary = false;
+  auto without = extract({cap, Vec3(0, 0, 1)}, no_boundary);
+  ASSERT_TRUE(without.ok());
+  EXPECT_EQ(without->diagnostics.keypoints.boundary_rejected, 0u);
+}
+
+TEST(Descriptor, ShapeIndexEnds) {
+  EXPECT_NEAR(modified_shape_index(5, 5), 0.5f, 1e-6);     // cap
+  EXPECT_NEAR(modified_shape_index(-5, -5), 0.5f, 1e-6);   // cup
+  EXPECT_NEAR(modified_shape_index(5, 0), 0.25f, 1e-6);    // ridge
+  EXPECT_NEAR(modified_shape_index(5, -5), 0.f, 1e-6);     // saddle
+}
+
+TEST(Descriptor, PfhIsAHistogram) {
+  std::vector<Vec3> p = test::sphere(0.1f, 200);
+  std::vector<Vec3> n;
+  for (const Vec3& q : p) n.push_back(q.normalized());
+  const auto h = pfh8(p, n);
+  float sum = 0;
+  for (float b : h) {
+    EXPECT_GE(b, 0);
+    sum += b;
+  }
+  EXPECT_NEAR(sum, 1.f, 1e-5);
+  const auto empty = pfh8({}, {});
+  for (float b : empty) EXPECT_EQ(b, 0);
+}
+
+TEST(Descriptor, PfhChangesLittleWithDensity) {
+  // The same ellipsoid-like blob sampled at two densities, same support radius.
+  auto blob = [](size_t n) {
+    Points p = test::sphere(1.f, n);
+    for (Vec3& q : p) q = Vec3(0.15f * q.x(), 0.1f * q.y(), 0.07f * q.z());
+    return p;
+  };
+  FeatureParams params;
+  params.surface.support_radius_m = 0.03f;
+  const Vec3 probe(0.15f, 0, 0);
+  std::array<float, 8> h[2];
+  int k = 0;
+  for (size_t n : {4000u, 8000u}) {
+    const Points pts = blob(n);
+    const KdTree tree(pts);
+    const auto s = local_surfaces(tree, 0.03f, std::nullopt, params.surface);
+    std::vector<Neighbour> nb;
+    tree.nearest(probe, 1, nb);
+    const uint32_t i = nb[0].index;
+    Keypoint kp{i, pts[i], 0.05f, s[i].lambda_min, s[i].lambda_max};
+    const Descriptor d = local_descriptor(tree, s, kp, 0.03f, params.descriptor, nb);
+    for (int b = 0; b < 8; ++b) h[k][b] = d[b];
+    ++k;
+  }
+  float l1 = 0;
+  for (int b = 0; b < 8; ++b) l1 += std::abs(h[0][b] - h[1][b]);
+  EXPECT_LT(l1, 0.25f);
+}
+
+Cloud transformed(const Cloud& c, const Eigen::Isometry3f& T) {
+  Cloud out;
+  for (const Vec3& p : c.points) out.points.push_back(T * p);
+  if (c.sensor) out.sensor = T * *c.sensor;
+  return out;
+}
+
+TEST(Descriptor, InvariantToRotationAndTranslation) {
+  Cloud c{test::jitter(test::cube(0.25f, 0.006f), 0.0002f, 5), std::nullopt};
+  for (const Vec3& p : test::sphere(0.08f, 3000, Vec3(0.5f, 0.1f, 0.1f))) c.points.push_back(p);
+  Eigen::Isometry3f T = Eigen::Isometry3f::Identity();
+  T.rotate(Eigen::AngleAxisf(0.7f, Vec3(1, 2, 3).normalized()));
+  T.translate(Vec3(3, -1, 2));
+  auto a = extract(c);
+  auto b = extract(transformed(c, T));
+  ASSERT_TRUE(a.ok() && b.ok());
+  ASSERT_FALSE(a->keypoints.empty());
+  size_t matched = 0;
+  for (size_t i = 0; i < a->keypoints.size(); ++i) {
+    for (size_t j = 0; j < b->keypoints.size(); ++j) {
+      if (a->keypoints[i].index != b->keypoints[j].index) continue;
+      ++matched;
+      const Descriptor& da = a->descriptors[i];
+      const Descriptor& db = b->descriptors[j];
+      EXPECT_LT((da.head<8>() - db.head<8>()).lpNorm<1>(), 0.1f);
+      EXPECT_NEAR(da[kNormalAngle], db[kNormalAngle], 0.05f);
+      EXPECT_NEAR(da[kShapeIndex], db[kShapeIndex], 0.03f);
+      EXPECT_NEAR(da[kRho2], db[kRho2], 0.05f * da[kRho2]);
+      EXPECT_NEAR(da[kHullVolume], db[kHullVolume], 0.05f * da[kHullVolume] + 1e-9f);
+    }
+  }
+  EXPECT_GE(matched, a->keypoints.size() * 8 / 10);
+}
+
+TEST(Extract, DeterministicWhateverTheThreadCount) {
+  Cloud c{test::jitter(test::cube(0.3f, 0.005f), 0.0003f, 11), Vec3(1, 1, 1)};
+  FeatureParams one, two;
+  one.surface.threads = 1;
+  two.surface.threads = 2;
+  auto a = extract(c, one), b = extract(c, two), again = extract(c, two);
+  ASSERT_TRUE(a.ok() && b.ok() && again.ok());
+  ASSERT_EQ(a->keypoints.size(), b->keypoints.size());
+  for (size_t i = 0; i < a->keypoints.size(); ++i) {
+    EXPECT_EQ(a->keypoints[i].index, b->keypoints[i].index);
+    EXPECT_EQ(a->descriptors[i], b->descriptors[i]);
+    EXPECT_EQ(b->descriptors[i], again->descriptors[i]);
+  }
+}
+
+TEST(Extract, BadInput) {
+  auto empty = extract({});
+  ASSERT_FALSE(empty.ok());
+  EXPECT_EQ(empty.error().code, ErrorCode::kInvalidArgument);
+
+  auto few = extract({{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)}, std::nullopt});
+  ASSERT_FALSE(few.ok());
+  EXPECT_NE(few.error().message.find("at least"), std::string::npos);
+
+  Cloud nans;
+  for (int i = 0; i < 100; ++i) nans.points.emplace_back(NAN, 0.f, static_cast<float>(i));
+  auto all_nan = extract(nans);
+  ASSERT_FALSE(all_nan.ok());
+  EXPECT_NE(all_nan.error().message.find("NaN"), std::string::npos);
+
+  Cloud line;
+  for (int i = 0; i < 500; ++i) line.points.emplace_back(0.001f * i, 0.f, 0.f);
+  auto collinear = extract(line);
+  ASSERT_TRUE(collinear.ok()) << collinear.error().message;
+  EXPECT_TRUE(collinear->keypoints.empty());
+  EXPECT_FALSE(collinear->diagnostics.note.empty());
+
+  Cloud mixed{test::cube(0.2f, 0.01f), std::nullopt};
+  const size_t finite = mixed.points.size();
+  mixed.points.emplace_back(INFINITY, 0.f, 0.f);
+  mixed.points.push_back(mixed.points.front());
+  auto m = extract(mixed);
+  ASSERT_TRUE(m.ok());
+  EXPECT_EQ(m->diagnostics.clean.non_finite, 1u);
+  EXPECT_GE(m->diagnostics.clean.duplicates, 1u);
+  EXPECT_LE(m->cloud.points.size(), finite);
+}
+
+TEST(Clean, VoxelDownsampleAveragesEachCell) {
+  Cloud c{{Vec3(0.01f, 0.01f, 0.01f), Vec3(0.03f, 0.03f, 0.03f), Vec3(0.51f, 0, 0)}, std::nullopt};
+  Cloud d = voxel_downsample(c, 0.1f);
+  ASSERT_EQ(d.points.size(), 2u);
+  EXPECT_TRUE(d.points[0].isApprox(Vec3(0.02f, 0.02f, 0.02f)));
+}
+
+TEST(Hull, VolumeOfACubeAndAFlatSet) {
+  const Points cube = test::cube(0.5f, 0.05f);
+  EXPECT_NEAR(convex_hull_volume(cube), 0.125, 1e-4);
+  EXPECT_EQ(convex_hull_volume(test::plane(0.1f, 0.01f)), 0.0);
+  EXPECT_EQ(convex_hull_volume(std::vector<Vec3>{}), 0.0);
+}
+
+}  // namespace
+}  // namespace glimpse
