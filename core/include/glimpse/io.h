@@ -1,0 +1,35 @@
+// Reading meshes and point clouds from the formats users have (OFF, OBJ, PLY, PCD, XYZ) and writing
+// clouds back. Hand-written parsers: no PCL types, no exceptions, bounded allocations.
+//
+// Format is chosen by extension (case-insensitive). Malformed input gives an Error (code kDataLoss,
+// kNotFound for a missing file, kInvalidArgument for an unknown extension) whose message starts with
+// the path and names the line ("file.off:12: ...") for text or the byte offset for binary data.
+// Counts larger than the file could hold, or above 100M points / 200M triangles, are refused before
+// anything is allocated.
+#pragma once
+
+#include <string>
+
+#include "glimpse/cloud.h"
+#include "glimpse/expected.h"
+
+namespace glimpse {
+
+// .off (OFF/COFF/NOFF headers; text after the face list is ignored), .obj (v and f records, any
+// v/vt/vn index form, negative indices), .ply (ascii and binary of either endianness; vertex x,y,z of
+// any scalar type, face vertex_indices or vertex_index lists). Polygons are fan-triangulated.
+Expected<Mesh> read_mesh(const std::string& path);
+
+// .pcd (ascii or binary; binary_compressed is refused with a clear error; x y z anywhere among other
+// fields; NaN points are kept), .ply, .xyz/.txt/.csv (x y z per line separated by blanks or commas,
+// further columns ignored, '#' comments), .off/.obj (their vertices).
+// Sensor: a PCD VIEWPOINT other than the default "0 0 0 1 0 0 0" sets Cloud.sensor to its translation
+// (its rotation is ignored); PLY and XYZ files written by write_cloud carry it as a
+// "glimpse_sensor x y z" comment. A sensor exactly at the origin written to PCD reads back as none.
+Expected<Cloud> read_cloud(const std::string& path);
+
+// .pcd (ascii, fields x y z), .ply (binary_little_endian, float x y z), .xyz (ascii "x y z" lines).
+// Floats are printed with the shortest text that reads back bit-exactly.
+Status write_cloud(const std::string& path, const Cloud& cloud);
+
+}  // namespace glimpse

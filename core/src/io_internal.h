@@ -1,0 +1,75 @@
+// Shared pieces of the file readers (io*.cpp only): a bounded whole-file read, a line cursor that
+// knows its line number, number parsing that never throws, and error formatting "file:line: why".
+#pragma once
+
+#include <charconv>
+#include <optional>
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "glimpse/cloud.h"
+#include "glimpse/expected.h"
+
+namespace glimpse::io_detail {
+
+inline constexpr uint64_t kMaxFileBytes = 8ull << 30;  // refuse to slurp files above 8 GiB
+inline constexpr uint64_t kMaxPoints = 100'000'000;    // vertices / points per file
+inline constexpr uint64_t kMaxFaces = 200'000'000;     // triangles per file
+
+Expected<std::string> read_file(const std::string& path);
+
+inline Error text_error(const std::string& path, size_t line, const std::string& why) {
+  return data_loss(path + ":" + std::to_string(line) + ": " + why);
+}
+inline Error byte_error(const std::string& path, size_t offset, const std::string& why) {
+  return data_loss(path + ": byte offset " + std::to_string(offset) + ": " + why);
+}
+
+// Walks a text buffer line by line; '\r' before '\n' is dropped. `line_no` is 1-based.
+class LineCursor {
+ public:
+  explicit LineCursor(std::string_view text, size_t start = 0) : text_(text), pos_(start) {}
+  bool next(std::string_view& line);
+  size_t line_no() const { return line_no_; }
+  size_t offset() const { return pos_; }
+  size_t remaining() const { return text_.size() - pos_; }
+
+ private:
+  std::string_view text_;
+  size_t pos_ = 0;
+  size_t line_no_ = 0;
+};
+
+// Removes a '#' comment and surrounding blanks.
+std::string_view strip_comment(std::string_view line, char mark = '#');
+std::string_view trim(std::string_view s);
+// Splits on blanks (and on commas when `commas`); empty tokens are dropped.
+void split(std::string_view line, std::vector<std::string_view>& out, bool commas = false);
+
+bool parse_double(std::string_view token, double& out);  // accepts a leading '+', nan, inf
+bool parse_u64(std::string_view token, uint64_t& out);
+bool parse_i64(std::string_view token, int64_t& out);
+std::string lower(std::string_view s);
+
+// The writers print floats with the shortest text that reads back to the same value.
+void append_float(std::string& out, float v);
+
+Status write_bytes(const std::string& path, const std::string& data);
+
+// Fan-triangulates a polygon (already validated indices) into `faces`.
+void add_fan(const std::vector<int>& polygon, std::vector<Eigen::Vector3i>& faces);
+
+// The cloud readers keep a sensor position stored by our writers as "glimpse_sensor x y z".
+bool parse_sensor_comment(std::string_view comment, Vec3& sensor);
+
+Expected<Mesh> read_off(const std::string& path, std::string_view text);
+Expected<Mesh> read_obj(const std::string& path, std::string_view text);
+Expected<Mesh> read_ply(const std::string& path, std::string_view text, bool vertices_only,
+                        std::optional<Vec3>* sensor);
+Expected<Cloud> read_pcd(const std::string& path, std::string_view text);
+Status write_ply(const std::string& path, const Cloud& cloud);
+Status write_pcd(const std::string& path, const Cloud& cloud);
+
+}  // namespace glimpse::io_detail
