@@ -1,0 +1,267 @@
+// Single 2.5D views from full models (sec. 3.4) and the top-to-bottom exploring sequence (sec. 4).
+#include "glimpse/views.h"
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <numeric>
+#include <random>
+#include <string>
+
+extern "C" {
+#include <libqhull_r/qhull_ra.h>
+}
+
+namespace glimpse {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// Uniform in [0, 1) from the top 53 bits: the same on every standard library.
+double uniform01(std::mt19937_64& rng) { return double(rng() >> 11) * 0x1.0p-53; }
+
+double triangle_area(const Vec3& a, const Vec3& b, const Vec3& c) {
+  return 0.5 * (b - a).cast<double>().cross((c - a).cast<double>()).norm();
+}
+
+template <class F>
+Mesh transform_vertices(Mesh mesh, F&& f) {
+  for (Vec3& v : mesh.vertices) v = f(v);
+  return mesh;
+}
+
+}  // namespace
+
+Cloud mesh_vertices(const Mesh& mesh) { return Cloud{mesh.vertices, std::nullopt}; }
+
+double surface_area(const Mesh& mesh) {
+  double total = 0;
+  for (const Eigen::Vector3i& f : mesh.faces)
+    total += triangle_area(mesh.vertices[f[0]], mesh.vertices[f[1]], mesh.vertices[f[2]]);
+  return total;
+}
+
+Cloud sample_surface(const Mesh& mesh, double points_per_m2, uint64_t seed) {
+  constexpr double kMaxSamples = 50e6;
+  Cloud cloud;
+  std::vector<double> cumulative;
+  cumulative.reserve(mesh.faces.size());
+  double total = 0;
+  for (const Eigen::Vector3i& f : mesh.faces) {
+    const double a = triangle_area(mesh.vertices[f[0]], mesh.vertices[f[1]], mesh.vertices[f[2]]);
+    total += std::isfinite(a) ? a : 0.0;
+    cumulative.push_back(total);
+  }
+  if (!(total > 0) || !(points_per_m2 > 0)) return cloud;
+  const auto n = static_cast<size_t>(std::llround(std::min(total * points_per_m2, kMaxSamples)));
+  cloud.points.reserve(n);
+  std::mt19937_64 rng(seed);
+  for (size_t i = 0; i < n; ++i) {
+    const double pick = uniform01(rng) * total;
+    size_t t = std::upper_bound(cumulative.begin(), cumulative.end(), pick) - cumulative.begin();
+    t = std::min(t, cumulative.size() - 1);
+    const Eigen::Vector3i& f = mesh.faces[t];
+    // Uniform point in a triangle: Osada, Funkhouser, Chazelle & Dobkin 2002, eq. 1.
+    const double r1 = std::sqrt(uniform01(rng)), r2 = uniform01(rng);
+    const Eigen::Vector3d p = (1 - r1) * mesh.vertices[f[0]].cast<double>() +
+                              r1 * (1 - r2) * mesh.vertices[f[1]].cast<double>() +
+                              r1 * r2 * mesh.vertices[f[2]].cast<double>();
+    cloud.points.push_back(p.cast<float>());
+  }
+  return cloud;
+}
+
+Expected<UpAxis> parse_up_axis(std::string_view text) {
+  while (!text.empty() && std::isspace(static_cast<unsigned char>(text.front()))) text.remove_prefix(1);
+  while (!text.empty() && std::isspace(static_cast<unsigned char>(text.back()))) text.remove_suffix(1);
+  bool negative = false;
+  std::string_view axis = text;
+  if (!axis.empty() && (axis.front() == '+' || axis.front() == '-')) {
+    negative = axis.front() == '-';
+    axis.remove_prefix(1);
+  }
+  if (axis.size() == 1) {
+    switch (std::tolower(static_cast<unsigned char>(axis[0]))) {
+      case 'x': return negative ? UpAxis::kNegX : UpAxis::kPosX;
+      case 'y': return negative ? UpAxis::kNegY : UpAxis::kPosY;
+      case 'z': return negative ? UpAxis::kNegZ : UpAxis::kPosZ;
+    }
+  }
+  return invalid_argument("bad up axis '" + std::string(text) + "' (want +x, -x, +y, -y, +z or -z)");
+}
+
+const char* to_string(UpAxis up) {
+  switch (up) {
+    case UpAxis::kPosX: return "+x";
+    case UpAxis::kNegX: return "-x";
+    case UpAxis::kPosY: return "+y";
+    case UpAxis::kNegY: return "-y";
+    case UpAxis::kPosZ: return "+z";
+    case UpAxis::kNegZ: return "-z";
+  }
+  return "?";
+}
+
+Eigen::Matrix3f upright_rotation(UpAxis up) {
+  Eigen::Matrix3f r;
+  switch (up) {  // rows give the new x, y, z; each is a quarter or half turn about one axis
+    case UpAxis::kPosZ: r << 1, 0, 0, 0, 1, 0, 0, 0, 1; break;
+    case UpAxis::kNegZ: r << 1, 0, 0, 0, -1, 0, 0, 0, -1; break;   // half turn about x
+    case UpAxis::kPosY: r << 1, 0, 0, 0, 0, -1, 0, 1, 0; break;    // +90 deg about x
+    case UpAxis::kNegY: r << 1, 0, 0, 0, 0, 1, 0, -1, 0; break;    // -90 deg about x
+    case UpAxis::kPosX: r << 0, 0, -1, 0, 1, 0, 1, 0, 0; break;    // -90 deg about y
+    case UpAxis::kNegX: r << 0, 0, 1, 0, 1, 0, -1, 0, 0; break;    // +90 deg about y
+  }
+  return r;
+}
+
+Mesh stand_upright(Mesh mesh, UpAxis up) {
+  const Eigen::Matrix3f r = upright_rotation(up);
+  return transform_vertices(std::move(mesh), [&](const Vec3& v) -> Vec3 { return r * v; });
+}
+
+Mesh scale_uniform(Mesh mesh, float factor) {
+  return transform_vertices(std::move(mesh), [&](const Vec3& v) -> Vec3 { return v * factor; });
+}
+
+Mesh scale_to_height(Mesh mesh, float height_m) {
+  const float h = bounds(mesh.vertices).extent().z();
+  if (!(h > 0) || !std::isfinite(h)) return mesh;
+  return scale_uniform(std::move(mesh), height_m / h);
+}
+
+Mesh scale_to_largest_extent(Mesh mesh, float extent_m) {
+  const float e = bounds(mesh.vertices).extent().maxCoeff();
+  if (!(e > 0) || !std::isfinite(e)) return mesh;
+  return scale_uniform(std::move(mesh), extent_m / e);
+}
+
+Mesh place_on_ground(Mesh mesh) {
+  const Bounds b = bounds(mesh.vertices);
+  const Vec3 shift(-b.centre().x(), -b.centre().y(), -b.min.z());
+  return transform_vertices(std::move(mesh), [&](const Vec3& v) -> Vec3 { return v + shift; });
+}
+
+namespace {
+
+// Convex hull of `coords` (count x 3) with qhull; marks the input indices below `marked` that are
+// hull vertices. False when qhull reports an error.
+bool hull_vertices(std::vector<coordT>& coords, int count, const char* options, FILE* errfile,
+                   std::vector<char>& is_vertex) {
+  auto qh = std::make_unique<qhT>();
+  qh_zero(qh.get(), errfile);
+  std::string command = options;  // qh_new_qhull takes a non-const char*
+  const int code = qh_new_qhull(qh.get(), 3, count, coords.data(), False, command.data(), nullptr, errfile);
+  bool ok = code == 0;
+  if (ok) {
+    qhT* const qh_ptr = qh.get();
+    for (vertexT* v = qh_ptr->vertex_list; v && v->next; v = v->next) {
+      const int id = qh_pointid(qh_ptr, v->point);
+      if (id >= 0 && id < int(is_vertex.size())) is_vertex[id] = 1;
+    }
+  }
+  qh_freeqhull(qh.get(), !qh_ALL);
+  int curlong = 0, totlong = 0;
+  qh_memfreeshort(qh.get(), &curlong, &totlong);
+  return ok;
+}
+
+}  // namespace
+
+std::vector<uint32_t> hidden_point_removal_indices(const Points& points, const Vec3& camera,
+                                                   double radius_factor) {
+  std::vector<uint32_t> usable;
+  std::vector<Eigen::Vector3d> rel;
+  const Eigen::Vector3d c = camera.cast<double>();
+  double max_d = 0;
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (!points[i].allFinite()) continue;
+    const Eigen::Vector3d p = points[i].cast<double>() - c;
+    const double d = p.norm();
+    if (!(d > 0) || !std::isfinite(d)) continue;
+    usable.push_back(uint32_t(i));
+    rel.push_back(p);
+    max_d = std::max(max_d, d);
+  }
+  if (usable.size() < 4 || !camera.allFinite()) return usable;
+  // Katz et al. 2007, eq. 2: spherical flip p' = p + 2 (R - |p|) p / |p|, R beyond every point.
+  const double radius = std::max(radius_factor, 1.01) * max_d;
+  std::vector<coordT> coords;
+  coords.reserve(3 * (rel.size() + 1));
+  for (const Eigen::Vector3d& p : rel) {
+    const Eigen::Vector3d f = p * ((2 * radius - p.norm()) / p.norm());
+    coords.insert(coords.end(), {f.x(), f.y(), f.z()});
+  }
+  coords.insert(coords.end(), {0.0, 0.0, 0.0});  // the camera, at the origin of the flip
+  FILE* devnull = std::fopen("/dev/null", "w");
+  FILE* errfile = devnull ? devnull : std::tmpfile();
+  std::vector<char> is_vertex(rel.size(), 0);
+  const int count = int(rel.size() + 1);
+  bool ok = errfile && hull_vertices(coords, count, "qhull Qt", errfile, is_vertex);
+  if (!ok && errfile) {  // precision trouble (e.g. all points coplanar with the camera): joggle
+    std::fill(is_vertex.begin(), is_vertex.end(), 0);
+    ok = hull_vertices(coords, count, "qhull QJ", errfile, is_vertex);
+  }
+  if (errfile) std::fclose(errfile);
+  if (!ok) return usable;
+  std::vector<uint32_t> visible;
+  for (size_t k = 0; k < usable.size(); ++k)
+    if (is_vertex[k]) visible.push_back(usable[k]);
+  return visible;
+}
+
+Cloud hidden_point_removal(const Points& points, const Vec3& camera, double radius_factor) {
+  Cloud view;
+  view.sensor = camera;
+  for (uint32_t i : hidden_point_removal_indices(points, camera, radius_factor))
+    view.points.push_back(points[i]);
+  return view;
+}
+
+std::vector<Vec3> paper_viewpoints(const Points& points) {
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  size_t n = 0;
+  for (const Vec3& p : points)
+    if (p.allFinite()) centroid += p.cast<double>(), ++n;
+  if (n == 0) return {};
+  centroid /= double(n);
+  double radius = 0;
+  for (const Vec3& p : points)
+    if (p.allFinite()) radius = std::max(radius, (p.cast<double>() - centroid).norm());
+  const double distance = 3.0 * radius;  // sec. 3.4: 6 viewpoints around the object
+  const double elevation = 30.0 * kPi / 180.0;
+  std::vector<Vec3> cameras;
+  for (int k = 0; k < 6; ++k) {
+    const double azimuth = k * 60.0 * kPi / 180.0;
+    const Eigen::Vector3d dir(std::cos(elevation) * std::cos(azimuth),
+                              std::cos(elevation) * std::sin(azimuth), std::sin(elevation));
+    cameras.push_back((centroid + distance * dir).cast<float>());
+  }
+  return cameras;
+}
+
+std::vector<uint32_t> top_down_order(const Points& points) {
+  std::vector<uint32_t> order(points.size());
+  std::iota(order.begin(), order.end(), 0u);
+  std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+    const float za = points[a].z(), zb = points[b].z();
+    if (std::isnan(za) || std::isnan(zb)) return !std::isnan(za) && std::isnan(zb);
+    return za > zb;
+  });
+  return order;
+}
+
+Cloud reveal_top_down(const Cloud& cloud, size_t count) {
+  const std::vector<uint32_t> order = top_down_order(cloud.points);
+  Cloud out;
+  out.sensor = cloud.sensor;
+  count = std::min(count, order.size());
+  out.points.reserve(count);
+  for (size_t i = 0; i < count; ++i) out.points.push_back(cloud.points[order[i]]);
+  return out;
+}
+
+}  // namespace glimpse
