@@ -1,0 +1,172 @@
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <unistd.h>
+
+#include "glimpse/dataset.h"
+
+namespace glimpse {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A thin box 0.2 x 2 x 0.5 along +y (the SHREC default up), written as OFF.
+const char* kTallAlongY =
+    "OFF\n8 12 0\n0 0 0\n0.2 0 0\n0 2 0\n0.2 2 0\n0 0 0.5\n0.2 0 0.5\n0 2 0.5\n0.2 2 0.5\n"
+    "3 0 2 1\n3 1 2 3\n3 4 5 6\n3 5 7 6\n3 0 1 4\n3 1 5 4\n3 2 6 3\n3 3 6 7\n3 0 4 2\n3 2 4 6\n"
+    "3 1 3 5\n3 3 7 5\n";
+
+class DatasetTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    root_ = fs::temp_directory_path() / ("glimpse_ds_" + std::to_string(::getpid()) + "_" + info->name());
+    fs::create_directories(root_);
+  }
+  void TearDown() override { fs::remove_all(root_); }
+  void file(const std::string& rel, const std::string& text) {
+    fs::create_directories((root_ / rel).parent_path());
+    std::ofstream(root_ / rel) << text;
+  }
+  fs::path root_;
+};
+
+TEST_F(DatasetTest, ScanSortsByCategoryThenNumericIdAndReadsUpAxes) {
+  file("human/10.off", kTallAlongY);
+  file("human/2.off", kTallAlongY);
+  file("human/notes.txt", "not a mesh");
+  file("chair/7.OFF", kTallAlongY);
+  file("widget/w1.off", kTallAlongY);
+  file(".hidden/1.off", kTallAlongY);
+  fs::create_directories(root_ / "empty");
+  file("up_axis.csv", "# id,up\n\n10,+z\n7, -x  # trailing comment\n999,+z\n");
+  Expected<Dataset> ds = scan_dataset(root_.string());
+  ASSERT_TRUE(ds.ok()) << ds.error().message;
+  EXPECT_EQ(ds->categories, (std::vector<std::string>{"chair", "human", "widget"}));
+  ASSERT_EQ(ds->objects.size(), 4u);
+  EXPECT_EQ(ds->objects[0].id, "7");
+  EXPECT_EQ(ds->objects[0].up, UpAxis::kNegX);
+  EXPECT_EQ(ds->objects[1].id, "2");  // 2 before 10: numeric order
+  EXPECT_EQ(ds->objects[1].up, UpAxis::kPosY);
+  EXPECT_EQ(ds->objects[2].id, "10");
+  EXPECT_EQ(ds->objects[2].up, UpAxis::kPosZ);
+  EXPECT_EQ(ds->objects[1].size.measure, CategorySize::kHeight);
+  EXPECT_FLOAT_EQ(ds->objects[1].size.min_m, 1.55f);
+  EXPECT_EQ(ds->objects[3].category, "widget");  // unknown category: documented default
+  EXPECT_EQ(ds->objects[3].size.measure, CategorySize::kLargestExtent);
+  EXPECT_FLOAT_EQ(ds->objects[3].size.min_m, 0.3f);
+  EXPECT_FLOAT_EQ(ds->objects[3].size.max_m, 1.0f);
+}
+
+TEST_F(DatasetTest, SizeTableCanBeOverridden) {
+  file("human/1.off", kTallAlongY);
+  Expected<Dataset> ds = scan_dataset(root_.string(), {{"human", CategorySize::kHeight, 0.1f, 0.2f}});
+  ASSERT_TRUE(ds.ok()) << ds.error().message;
+  EXPECT_FLOAT_EQ(ds->objects[0].size.max_m, 0.2f);
+  Expected<Mesh> m = load_object(ds->objects[0], 1);
+  ASSERT_TRUE(m.ok());
+  const float h = bounds(m->vertices).extent().z();
+  EXPECT_GE(h, 0.1f - 1e-5f);
+  EXPECT_LE(h, 0.2f + 1e-5f);
+}
+
+TEST_F(DatasetTest, MissingOrEmptyFolderNamesIt) {
+  Expected<Dataset> missing = scan_dataset((root_ / "nope").string());
+  ASSERT_FALSE(missing.ok());
+  EXPECT_EQ(missing.error().code, ErrorCode::kNotFound);
+  EXPECT_NE(missing.error().message.find("nope"), std::string::npos);
+  fs::create_directories(root_ / "chair");
+  Expected<Dataset> empty = scan_dataset(root_.string());
+  ASSERT_FALSE(empty.ok());
+  EXPECT_NE(empty.error().message.find(root_.string()), std::string::npos);
+}
+
+TEST_F(DatasetTest, BadUpAxisRowsNameFileAndLine) {
+  file("human/1.off", kTallAlongY);
+  for (const char* csv : {"# c\n1,+w\n", "# c\n1\n", "# c\n,+z\n", "# c\n1,+z,2\n", "# c\n1,+z\n1,-z\n"}) {
+    SCOPED_TRACE(csv);
+    file("up_axis.csv", csv);
+    Expected<Dataset> ds = scan_dataset(root_.string());
+    ASSERT_FALSE(ds.ok());
+    const std::string& msg = ds.error().message;
+    EXPECT_NE(msg.find("up_axis.csv:"), std::string::npos) << msg;
+    EXPECT_TRUE(msg.find(":2:") != std::string::npos || msg.find(":3:") != std::string::npos) << msg;
+  }
+}
+
+TEST_F(DatasetTest, LoadStandsScalesAndGroundsDeterministically) {
+  file("human/1.off", kTallAlongY);
+  file("human/2.off", kTallAlongY);
+  file("mechanic/5.off", kTallAlongY);
+  Expected<Dataset> ds = scan_dataset(root_.string());
+  ASSERT_TRUE(ds.ok()) << ds.error().message;
+  std::set<float> heights;
+  for (const DatasetObject& o : ds->objects) {
+    SCOPED_TRACE(o.path);
+    Expected<Mesh> m = load_object(o, 11);
+    ASSERT_TRUE(m.ok()) << m.error().message;
+    const Bounds b = bounds(m->vertices);
+    EXPECT_NEAR(b.min.z(), 0.f, 1e-6f);
+    EXPECT_NEAR(b.centre().x(), 0.f, 1e-6f);
+    EXPECT_NEAR(b.centre().y(), 0.f, 1e-6f);
+    const float measured = o.size.measure == CategorySize::kHeight ? b.extent().z() : b.extent().maxCoeff();
+    EXPECT_NEAR(measured, object_size_m(o, 11), 1e-5f);
+    EXPECT_GE(measured, o.size.min_m - 1e-5f);
+    EXPECT_LE(measured, o.size.max_m + 1e-5f);
+    if (o.size.measure == CategorySize::kHeight)  // the 2 m y side now points up
+      EXPECT_GT(b.extent().z(), 3 * b.extent().x());
+    Expected<Mesh> again = load_object(o, 11);
+    ASSERT_TRUE(again.ok());
+    EXPECT_EQ(again->vertices, m->vertices);
+    heights.insert(measured);
+  }
+  EXPECT_EQ(heights.size(), 3u);  // two humans get different sizes
+  EXPECT_NE(object_size_m(ds->objects[0], 11), object_size_m(ds->objects[0], 12));
+}
+
+TEST_F(DatasetTest, LoadReportsBrokenMesh) {
+  file("chair/3.off", "OFF\n3 1 0\n0 0 0\n");
+  Expected<Dataset> ds = scan_dataset(root_.string());
+  ASSERT_TRUE(ds.ok());
+  Expected<Mesh> m = load_object(ds->objects[0], 1);
+  ASSERT_FALSE(m.ok());
+  EXPECT_NE(m.error().message.find("3.off"), std::string::npos);
+}
+
+// ---- the real SHREC 2007 subset (not in the repository: academic licence) ----
+
+std::string shrec_dir() {
+  if (const char* env = std::getenv("GLIMPSE_SHREC_DIR")) return env;
+  return GLIMPSE_SOURCE_DIR "/../shared/data/shrec07";
+}
+
+TEST(Shrec07, AllHundredLoadUprightAtRealLifeSize) {
+  const std::string dir = shrec_dir();
+  if (!fs::is_directory(dir)) GTEST_SKIP() << "SHREC 2007 subset not found at " << dir << " (set GLIMPSE_SHREC_DIR)";
+  Expected<Dataset> ds = scan_dataset(dir);
+  ASSERT_TRUE(ds.ok()) << ds.error().message;
+  EXPECT_EQ(ds->categories, (std::vector<std::string>{"chair", "fourleg", "human", "mechanic", "table"}));
+  ASSERT_EQ(ds->objects.size(), 100u);
+  size_t not_y = 0;
+  for (const DatasetObject& o : ds->objects) {
+    SCOPED_TRACE(o.path);
+    not_y += o.up != UpAxis::kPosY;
+    Expected<Mesh> m = load_object(o, 2024);
+    ASSERT_TRUE(m.ok()) << m.error().message;
+    EXPECT_GT(m->vertices.size(), 1000u);
+    const Bounds b = bounds(m->vertices);
+    EXPECT_NEAR(b.min.z(), 0.f, 1e-5f);
+    const float measured = o.size.measure == CategorySize::kHeight ? b.extent().z() : b.extent().maxCoeff();
+    EXPECT_GE(measured, o.size.min_m - 1e-4f);
+    EXPECT_LE(measured, o.size.max_m + 1e-4f);
+    if (o.category == "human")  // upright people are taller than they are wide
+      EXPECT_GT(b.extent().z(), 0.8f * std::max(b.extent().x(), b.extent().y()));
+  }
+  EXPECT_EQ(not_y, 19u);
+}
+
+}  // namespace
+}  // namespace glimpse
