@@ -77,22 +77,32 @@ Expected<Eigen::VectorXf> vfh(const Cloud& cloud, const GlobalDescriptorParams& 
   if (!(radius > 0)) return invalid_argument("vfh: cannot derive a normal radius (duplicate points only)");
 
   // Sec. 3.2.4: PCA normals, oriented toward the camera when the viewpoint is known.
-  // Each normal depends only on its own neighbourhood: identical for any number of threads.
-  pcl::NormalEstimationOMP<pcl::PointXYZ, pcl::Normal> ne(static_cast<unsigned>(std::max(0, params.threads)));
-  ne.setInputCloud(pc);
-  ne.setSearchMethod(tree);
-  ne.setRadiusSearch(radius);
-  if (cloud.sensor) ne.setViewPoint(cloud.sensor->x(), cloud.sensor->y(), cloud.sensor->z());
-  PclNormals normals;
-  ne.compute(normals);
-  if (normals.size() != pc->size()) return internal_error("vfh: normal estimation failed");
+  // Each normal depends only on its own neighbourhood: identical for any number of threads. One
+  // thread takes the serial estimator (same arithmetic, ~15% faster than the OpenMP one on 1 thread).
+  PclNormals::Ptr normals(new PclNormals);
+  auto estimate = [&](auto& ne) {
+    ne.setInputCloud(pc);
+    ne.setSearchMethod(tree);
+    ne.setRadiusSearch(radius);
+    if (cloud.sensor) ne.setViewPoint(cloud.sensor->x(), cloud.sensor->y(), cloud.sensor->z());
+    ne.compute(*normals);
+  };
+  if (params.threads == 1) {
+    pcl::NormalEstimation<pcl::PointXYZ, pcl::Normal> ne;
+    estimate(ne);
+  } else {
+    pcl::NormalEstimationOMP<pcl::PointXYZ, pcl::Normal> ne(static_cast<unsigned>(std::max(0, params.threads)));
+    estimate(ne);
+  }
+  if (normals->size() != pc->size()) return internal_error("vfh: normal estimation failed");
 
-  // Undefined normals (< 3 neighbours) would turn VFH's sums into NaN: drop their points.
+  // Undefined normals (< 3 neighbours) would turn VFH's sums into NaN: leave their points out through
+  // the index list (same result as a filtered copy, without rebuilding the search tree).
   const Eigen::Vector3d c = centroid(cloud.points);
-  PclCloud::Ptr kept(new PclCloud);
-  PclNormals::Ptr kept_normals(new PclNormals);
+  pcl::IndicesPtr kept(new pcl::Indices);
+  kept->reserve(pc->size());
   for (size_t i = 0; i < pc->size(); ++i) {
-    pcl::Normal n = normals[i];
+    pcl::Normal& n = (*normals)[i];
     if (!std::isfinite(n.normal_x) || !std::isfinite(n.normal_y) || !std::isfinite(n.normal_z)) continue;
     if (!cloud.sensor) {  // no viewpoint: orient away from the centroid
       const Eigen::Vector3d out = cloud.points[i].cast<double>() - c;
@@ -102,9 +112,9 @@ Expected<Eigen::VectorXf> vfh(const Cloud& cloud, const GlobalDescriptorParams& 
         n.normal_z = -n.normal_z;
       }
     }
-    kept->push_back((*pc)[i]);
-    kept_normals->push_back(n);
+    kept->push_back(static_cast<pcl::index_t>(i));
   }
+  normals->is_dense = kept->size() == pc->size();
   if (kept->size() < static_cast<size_t>(kMinGlobalDescriptorPoints))
     return invalid_argument("vfh: only " + std::to_string(kept->size()) + " of " + std::to_string(pc->size()) +
                             " points have a normal within " + std::to_string(radius) +
@@ -112,9 +122,10 @@ Expected<Eigen::VectorXf> vfh(const Cloud& cloud, const GlobalDescriptorParams& 
 
   // Sec. 3.1: VFH with the viewpoint direction and the surface shape (size) component.
   pcl::VFHEstimation<pcl::PointXYZ, pcl::Normal, pcl::VFHSignature308> est;
-  est.setInputCloud(kept);
-  est.setInputNormals(kept_normals);
-  est.setSearchMethod(tree);  // unused by VFH itself, but PCL builds one when none is given
+  est.setInputCloud(pc);
+  est.setIndices(kept);
+  est.setInputNormals(normals);
+  est.setSearchMethod(tree);  // unused by VFH itself, but PCL would build one
   const Vec3 vp = cloud.sensor.value_or(Vec3::Zero());
   est.setViewPoint(vp.x(), vp.y(), vp.z());
   est.setFillSizeComponent(params.fill_size_component);

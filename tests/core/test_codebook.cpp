@@ -104,7 +104,9 @@ TEST(Pca, ExplainedVarianceCutPicksTheCount) {
     Eigen::Index arg;
     full->basis.col(c).cwiseAbs().maxCoeff(&arg);
     EXPECT_GT(full->basis(arg, c), 0);
-    if (c > 0) EXPECT_GE(full->explained[c - 1], full->explained[c]);
+    if (c > 0) {
+      EXPECT_GE(full->explained[c - 1], full->explained[c]);
+    }
   }
 }
 
@@ -128,8 +130,9 @@ TEST(Pca, FewerRowsThanDimensionsMatchesTheCovarianceReference) {
   const double total = values.sum();
   for (int c = 0; c < k; ++c) {
     EXPECT_NEAR(pca->explained[c], values[c] / total, 1e-9);
-    if (c + 1 < k && values[c] - values[c + 1] > 1e-6 * total)  // well-separated: same direction
+    if (c + 1 < k && values[c] - values[c + 1] > 1e-6 * total) {  // well-separated: same direction
       EXPECT_NEAR(std::abs(pca->basis.col(c).dot(eig.eigenvectors().col(599 - c))), 1.0, 1e-6);
+    }
   }
   // Projection of rows agrees with the row variant and is centred.
   const MatrixXd z = project(*pca, rows);

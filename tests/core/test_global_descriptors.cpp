@@ -196,7 +196,9 @@ TEST(Esf, StatisticallyCloseToPcl) {
     EXPECT_LT(to_pcl, 0.5 * other_shapes) << "shape " << i;
     // PCL's own output is nearest to ours of the same shape.
     for (size_t j = 0; j < ours.size(); ++j)
-      if (j != i) EXPECT_LT(to_pcl, l1(theirs[i], ours[j])) << "shapes " << i << ", " << j;
+      if (j != i) {
+        EXPECT_LT(to_pcl, l1(theirs[i], ours[j])) << "shapes " << i << ", " << j;
+      }
   }
 }
 

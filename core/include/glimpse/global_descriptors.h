@@ -22,7 +22,8 @@ struct GlobalDescriptorParams {
   // VFH's shape-distribution component (distances to the centroid, in cm bins 0..44 as in PCL: objects
   // wider than ~0.9 m saturate its last bin). false leaves those 45 bins at zero.
   bool fill_size_component = true;
-  // Threads for normal estimation; 0 = all cores. The output does not depend on it.
+  // Threads for normal estimation (1: PCL's serial estimator; else its OpenMP one; 0 = all cores).
+  // The output is bit-identical for any value.
   int threads = 1;
 };
 

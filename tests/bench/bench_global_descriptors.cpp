@@ -1,0 +1,119 @@
+// The global-descriptor baseline (sec. 3.1) other benchmarks compare against: describing a 10k-point
+// single view and finding its nearest neighbour (L1, sec. 4) among 100 stored descriptors, with
+// (a) PCL's own VFH pipeline as a user writes it (NormalEstimation + VFHEstimation),
+// (b) our vfh(), (c) our esf() — and PCL's ESFEstimation for reference.
+// Run with --benchmark_repetitions=5 --benchmark_report_aggregates_only=true and compare medians.
+#include <benchmark/benchmark.h>
+
+#include <random>
+
+#include "../core/shapes.h"
+#include "glimpse/codebook.h"
+#include "glimpse/global_descriptors.h"
+
+namespace glimpse {
+namespace {
+
+// The same chair-sized scene as bench_features.cpp (boxes, a ball, a post), points facing the camera.
+Cloud single_view(size_t target) {
+  const Vec3 camera(2.f, 1.5f, 1.5f);
+  Points all;
+  for (const Vec3& p : test::cube(0.45f, 0.0062f)) all.push_back(p);
+  for (const Vec3& p : test::sphere(0.12f, 6000, Vec3(0.2f, 0.2f, 0.6f))) all.push_back(p);
+  for (const Vec3& p : test::cylinder(0.03f, 0.8f, 0.0062f)) all.push_back(p + Vec3(0.6f, 0.1f, 0.4f));
+  Cloud view{{}, camera};
+  const Vec3 centre(0.25f, 0.25f, 0.3f);
+  for (const Vec3& p : all)
+    if ((p - centre).dot(camera - centre) > 0) view.points.push_back(p);
+  Cloud thinned{{}, camera};
+  const double step = std::max(1.0, static_cast<double>(view.points.size()) / static_cast<double>(target));
+  for (double i = 0; i < static_cast<double>(view.points.size()); i += step)
+    thinned.points.push_back(view.points[static_cast<size_t>(i)]);
+  return thinned;
+}
+
+const Cloud& view10k() {
+  static const Cloud c = single_view(10000);
+  return c;
+}
+
+// 100 stored descriptors: random non-negative histograms with the layout's total mass.
+std::vector<Eigen::VectorXf> stored(int size, float mass) {
+  std::mt19937_64 rng(7);
+  std::vector<Eigen::VectorXf> out(100, Eigen::VectorXf(size));
+  for (Eigen::VectorXf& h : out) {
+    for (int i = 0; i < size; ++i) h[i] = static_cast<float>(rng() >> 40);
+    h *= mass / h.sum();
+  }
+  return out;
+}
+
+int nearest(const Eigen::VectorXf& q, const std::vector<Eigen::VectorXf>& db) {
+  int best = 0;
+  double best_d = l1(q, db[0]);
+  for (int i = 1; i < static_cast<int>(db.size()); ++i)
+    if (const double d = l1(q, db[i]); d < best_d) best_d = d, best = i;
+  return best;
+}
+
+void BM_PclVfhPipeline(benchmark::State& state) {
+  const Cloud& c = view10k();
+  const auto db = stored(kVfhSize, 500);
+  for (auto _ : state) {
+    auto h = pcl_reference::vfh(c, 0.03f);
+    if (!h.ok()) state.SkipWithError(h.error().message.c_str());
+    else benchmark::DoNotOptimize(nearest(*h, db));
+  }
+  state.counters["points"] = static_cast<double>(c.points.size());
+}
+BENCHMARK(BM_PclVfhPipeline)->Unit(benchmark::kMillisecond);
+
+void BM_GlimpseVfh(benchmark::State& state) {  // arg: threads
+  const Cloud& c = view10k();
+  const auto db = stored(kVfhSize, 500);
+  const GlobalDescriptorParams params{.normal_radius_m = 0.03f, .threads = static_cast<int>(state.range(0))};
+  for (auto _ : state) {
+    auto h = vfh(c, params);
+    if (!h.ok()) state.SkipWithError(h.error().message.c_str());
+    else benchmark::DoNotOptimize(nearest(*h, db));
+  }
+}
+BENCHMARK(BM_GlimpseVfh)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
+
+void BM_GlimpseVfhAutoRadius(benchmark::State& state) {
+  const Cloud& c = view10k();
+  const auto db = stored(kVfhSize, 500);
+  for (auto _ : state) {
+    auto h = vfh(c, {.normal_radius_m = 0, .threads = 1});
+    if (!h.ok()) state.SkipWithError(h.error().message.c_str());
+    else benchmark::DoNotOptimize(nearest(*h, db));
+  }
+}
+BENCHMARK(BM_GlimpseVfhAutoRadius)->Unit(benchmark::kMillisecond);
+
+void BM_GlimpseEsf(benchmark::State& state) {
+  const Cloud& c = view10k();
+  const auto db = stored(kEsfSize, 1);
+  for (auto _ : state) {
+    auto h = esf(c, 1);
+    if (!h.ok()) state.SkipWithError(h.error().message.c_str());
+    else benchmark::DoNotOptimize(nearest(*h, db));
+  }
+}
+BENCHMARK(BM_GlimpseEsf)->Unit(benchmark::kMillisecond);
+
+void BM_PclEsf(benchmark::State& state) {
+  const Cloud& c = view10k();
+  const auto db = stored(kEsfSize, 1);
+  for (auto _ : state) {
+    auto h = pcl_reference::esf(c);
+    if (!h.ok()) state.SkipWithError(h.error().message.c_str());
+    else benchmark::DoNotOptimize(nearest(*h, db));
+  }
+}
+BENCHMARK(BM_PclEsf)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+}  // namespace glimpse
+
+BENCHMARK_MAIN();
