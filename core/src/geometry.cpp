@@ -8,6 +8,7 @@
 #include <cmath>
 #include <nanoflann.hpp>
 #include <numbers>
+#include <limits>
 #include <queue>
 #include <unordered_map>
 
@@ -139,15 +140,16 @@ void KdTree::nearest(const Vec3& query, size_t k, std::vector<Neighbour>& out) c
   for (size_t i = 0; i < n; ++i) out.push_back({idx[i], dist[i]});
 }
 
-float median_spacing(const KdTree& tree, size_t sample) {
+float median_knn_distance(const KdTree& tree, size_t k, size_t sample) {
   const Points& pts = tree.points();
-  if (pts.size() < 2) return 0.f;
+  if (pts.size() < 2 || k == 0) return 0.f;
+  k = std::min(k, pts.size() - 1);
   const size_t step = std::max<size_t>(1, pts.size() / std::max<size_t>(sample, 1));
   std::vector<float> d;
   std::vector<Neighbour> nn;
   for (size_t i = 0; i < pts.size(); i += step) {
-    tree.nearest(pts[i], 2, nn);
-    if (nn.size() == 2) d.push_back(std::sqrt(nn[1].distance_sq));
+    tree.nearest(pts[i], k + 1, nn);  // the point itself comes first
+    if (nn.size() == k + 1) d.push_back(std::sqrt(nn[k].distance_sq));
   }
   if (d.empty()) return 0.f;
   auto mid = d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2);
@@ -157,7 +159,7 @@ float median_spacing(const KdTree& tree, size_t sample) {
 
 float support_radius(const KdTree& tree, const SurfaceParams& params) {
   if (params.support_radius_m > 0) return params.support_radius_m;
-  return params.support_radius_spacings * median_spacing(tree);
+  return median_knn_distance(tree, static_cast<size_t>(std::max(1, params.support_neighbours)));
 }
 
 // ---- Local surfaces ------------------------------------------------------------------------------
@@ -292,45 +294,52 @@ void orient_normals_propagated(const KdTree& tree, std::vector<LocalSurface>& su
   const Points& pts = tree.points();
   const size_t n = pts.size();
   if (n == 0) return;
-  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-  for (const Vec3& p : pts) centroid += p.cast<double>();
-  centroid /= static_cast<double>(n);
   auto flip = [](LocalSurface& s) {
     s.normal = -s.normal;
     const float k1 = s.k1;
     s.k1 = -s.k2;
     s.k2 = -k1;
   };
-  // Root order: highest point first (its normal turned up), then any unvisited point in index order
-  // for further components (turned away from the centroid).
+  // Components are grown from roots in a fixed order (highest point first, ties by index); within a
+  // component each normal is flipped to agree with its parent in the spanning tree.
   std::vector<uint32_t> roots(n);
   for (uint32_t i = 0; i < n; ++i) roots[i] = i;
   std::stable_sort(roots.begin(), roots.end(), [&](uint32_t a, uint32_t b) { return pts[a].z() > pts[b].z(); });
-  std::vector<uint8_t> visited(n, 0);
+  constexpr uint32_t kUnvisited = std::numeric_limits<uint32_t>::max();
+  std::vector<uint32_t> component(n, kUnvisited);
+  std::vector<uint32_t> members;
   using Item = std::tuple<float, uint32_t, uint32_t>;  // weight, index, parent
   std::priority_queue<Item, std::vector<Item>, std::greater<Item>> queue;
   std::vector<Neighbour> nb;
-  bool first = true;
+  uint32_t next_component = 0;
   for (uint32_t root : roots) {
-    if (visited[root] || !surfaces[root].valid) continue;
-    LocalSurface& rs = surfaces[root];
-    const Vec3 outward = first ? Vec3(Vec3::UnitZ()) : Vec3((pts[root].cast<double>() - centroid).cast<float>());
-    if (rs.normal.dot(outward) < 0) flip(rs);
-    first = false;
+    if (component[root] != kUnvisited || !surfaces[root].valid) continue;
+    const uint32_t id = next_component++;
+    members.clear();
     queue.emplace(0.f, root, root);
     while (!queue.empty()) {
       const auto [w, i, parent] = queue.top();
       queue.pop();
-      if (visited[i]) continue;
-      visited[i] = 1;
+      if (component[i] != kUnvisited) continue;
+      component[i] = id;
+      members.push_back(i);
       if (i != parent && surfaces[i].normal.dot(surfaces[parent].normal) < 0) flip(surfaces[i]);
       tree.nearest(pts[i], static_cast<size_t>(k) + 1, nb);
       for (const Neighbour& q : nb) {
-        if (visited[q.index] || !surfaces[q.index].valid) continue;
+        if (component[q.index] != kUnvisited || !surfaces[q.index].valid) continue;
         const float weight = 1.f - std::abs(surfaces[i].normal.dot(surfaces[q.index].normal));
         queue.emplace(weight, q.index, i);
       }
     }
+    // The sign of a whole component is arbitrary so far: turn it outward (most normals pointing away
+    // from the component's centroid), which does not depend on the cloud's pose.
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    for (uint32_t i : members) centroid += pts[i].cast<double>();
+    centroid /= static_cast<double>(members.size());
+    double outward = 0;
+    for (uint32_t i : members) outward += surfaces[i].normal.cast<double>().dot(pts[i].cast<double>() - centroid);
+    if (outward < 0)
+      for (uint32_t i : members) flip(surfaces[i]);
   }
 }
 

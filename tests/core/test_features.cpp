@@ -108,7 +108,7 @@ TEST(LocalSurfaces, PropagationOrientsASphereConsistently) {
     outward += s[i].normal.dot(pts[i] - Vec3(1, 2, 3)) > 0;
   }
   ASSERT_EQ(valid, pts.size());
-  EXPECT_EQ(outward, valid) << "the root (highest point) is turned up, i.e. outward on a sphere";
+  EXPECT_EQ(outward, valid) << "every component is turned outward";
 }
 
 TEST(Keypoints, PlaneHasNone) {

@@ -56,15 +56,17 @@ class KdTree {
   std::unique_ptr<Impl> impl_;
 };
 
-// Median distance from a point to its nearest neighbour (over a deterministic sample of at most
-// `sample` points); 0 for fewer than 2 points.
-float median_spacing(const KdTree& tree, size_t sample = 4000);
+// Median distance from a point to its k-th nearest other point (over a deterministic sample of at
+// most `sample` points); 0 for fewer than 2 points. k = 1 gives the median spacing.
+float median_knn_distance(const KdTree& tree, size_t k, size_t sample = 4000);
 
 // ---- Local surfaces ------------------------------------------------------------------------------
 
 struct SurfaceParams {
   float support_radius_m = 0;          // r of sec. 3.2.1; 0 = automatic from the density
-  float support_radius_spacings = 3.f; // automatic r = this x the median nearest-neighbour spacing
+  int support_neighbours = 30;         // automatic r: median distance to the this-th nearest neighbour,
+                                       // so a neighbourhood holds about this many points, however the
+                                       // surface was sampled (grid-like sensors or random samples)
   int min_neighbours = 8;              // fewer neighbours within r: no surface at that point
   int threads = 0;                     // 0 = all cores; results do not depend on it
 };
@@ -107,8 +109,8 @@ Vec3 pca_normal(const KdTree& tree, const Vec3& centre, float radius,
                 std::vector<Neighbour>& scratch);
 
 // Normal orientation propagation (Hoppe et al. 1992): a minimum spanning tree over the k-nearest-
-// neighbour graph weighted by 1 - |n_i . n_j|, rooted at the highest point whose normal is turned
-// up, flips normals to agree with their parent. Deterministic.
+// neighbour graph weighted by 1 - |n_i . n_j| flips normals to agree with their parent; each connected
+// component is then turned outward (away from its centroid). Deterministic and pose-independent.
 void orient_normals_propagated(const KdTree& tree, std::vector<LocalSurface>& surfaces, int k = 8);
 
 // ---- Boundaries of 2.5D views (sec. 3.2.2) -------------------------------------------------------

@@ -1,0 +1,52 @@
+// Every training parameter in one place, with the paper's settings as defaults where it gives them
+// (sec. 4: BoK 60 clusters; BoG 6 keypoint x 5 volume clusters reduced to 65 dims; KGH 8 clusters x 15
+// distance bins) and the decision stage (sec. 3.3, 4).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "glimpse/features.h"
+#include "glimpse/global_descriptors.h"
+#include "glimpse/model.h"
+
+namespace glimpse {
+
+enum class DecisionKind : uint8_t {
+  kNearestCentre = 0,      // the paper's setting: one K-means centre per category, L1 distance (sec. 4)
+  kCentres = 1,            // several K-means centres per category
+  kNearestNeighbours = 2,  // k-NN over every training vector, L1 distance
+};
+
+struct DecisionParams {
+  DecisionKind kind = DecisionKind::kNearestNeighbours;
+  int centres_per_category = 3;     // for kCentres
+  int neighbours = 5;               // for kNearestNeighbours
+  double pca_explained_variance = 0.98;  // PCA of the training histograms (sec. 3.3.2)
+  int max_pca_dims = 65;
+};
+
+struct TrainParams {
+  FeatureParams features;
+  GlobalDescriptorParams global;
+  std::vector<Method> methods = {Method::kBoK, Method::kBoG, Method::kKGH,
+                                 Method::kVFH, Method::kESF, Method::kFusion};
+  Method default_method = Method::kFusion;
+
+  double codebook_explained_variance = 0.95;  // PCA of standardised descriptors (sec. 3.2.5)
+  int bok_clusters = 60;
+  bool normalise_histograms = true;  // divide by keypoint count: partial views see fewer (sec. 4)
+  int bog_keypoint_clusters = 6;
+  int bog_volume_clusters = 5;
+  int bog_pca_dims = 65;
+  int kgh_clusters = 8;
+  int kgh_distance_bins = 15;
+  std::vector<Method> fusion_of = {Method::kBoK, Method::kBoG, Method::kVFH, Method::kESF};
+
+  DecisionParams decision;
+  int kmeans_restarts = 4;
+  uint64_t seed = 42;
+  int threads = 0;  // 0 = all cores; results do not depend on it
+};
+
+}  // namespace glimpse

@@ -1,0 +1,303 @@
+// Training and classification (sec. 3.2.5-3.3.3, 4): features of every training cloud -> keypoint
+// codebooks -> per-method global histograms -> Bag-of-Features decision stages.
+#include <algorithm>
+#include <atomic>
+#include <cctype>
+#include <chrono>
+#include <map>
+#include <set>
+#include <string>
+
+#include "glimpse/model.h"
+#include "glimpse/train_params.h"
+#include "model_impl.h"
+#include "parallel.h"
+
+namespace glimpse {
+
+const char* method_name(Method m) {
+  switch (m) {
+    case Method::kBoK: return "bok";
+    case Method::kBoG: return "bog";
+    case Method::kKGH: return "kgh";
+    case Method::kVFH: return "vfh";
+    case Method::kESF: return "esf";
+    case Method::kFusion: return "fusion";
+  }
+  return "unknown";
+}
+
+Expected<Method> parse_method(std::string_view name) {
+  std::string lower(name);
+  for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  for (Method m : kAllMethods)
+    if (lower == method_name(m)) return m;
+  return invalid_argument("unknown method '" + std::string(name) + "' (valid: bok, bog, kgh, vfh, esf, fusion)");
+}
+
+std::vector<Method> component_methods(const ModelImpl& impl, Method method) {
+  if (method != Method::kFusion) return {method};
+  std::vector<Method> out;
+  for (Method m : impl.params.fusion_of)
+    if (m != Method::kFusion && impl.stages[static_cast<int>(m)]) out.push_back(m);
+  return out;
+}
+
+namespace {
+
+double ms_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+bool needs(const std::vector<Method>& methods, Method m) {
+  return std::find(methods.begin(), methods.end(), m) != methods.end();
+}
+
+}  // namespace
+
+Expected<CloudFeatures> cloud_features(const Cloud& cloud, const TrainParams& params,
+                                       const std::vector<Method>& methods, int threads) {
+  CloudFeatures out;
+  FeatureParams fp = params.features;
+  fp.surface.threads = threads;
+  auto f = extract(cloud, fp);
+  if (!f.ok()) return f.error();
+  out.points = f->cloud.points.size();
+  for (const Keypoint& k : f->keypoints) out.positions.push_back(k.position);
+  out.descriptors = std::move(f->descriptors);
+  if (needs(methods, Method::kVFH)) {
+    GlobalDescriptorParams gp = params.global;
+    gp.threads = threads;
+    auto v = vfh(f->cloud, gp);
+    if (!v.ok()) return v.error();
+    out.vfh = std::move(*v);
+  }
+  if (needs(methods, Method::kESF)) {
+    auto e = esf(f->cloud, params.seed);
+    if (!e.ok()) return e.error();
+    out.esf = std::move(*e);
+  }
+  return out;
+}
+
+Eigen::VectorXd method_histogram(const ModelImpl& impl, Method method, const CloudFeatures& f) {
+  const TrainParams& p = impl.params;
+  switch (method) {
+    case Method::kBoK:
+      return bag_of_keypoints(keypoint_words(impl.bok, f.descriptors), p.bok_clusters, p.normalise_histograms);
+    case Method::kBoG:
+      return bag_of_graphs(local_graphs(f.positions, keypoint_words(impl.bog, f.descriptors)), impl.graphs,
+                           p.normalise_histograms);
+    case Method::kKGH:
+      return keypoint_global_histogram(f.positions, keypoint_words(impl.kgh, f.descriptors), p.kgh_clusters,
+                                       p.kgh_distance_bins, impl.kgh_max_distance_m, p.normalise_histograms);
+    case Method::kVFH: return f.vfh ? Eigen::VectorXd(f.vfh->cast<double>()) : Eigen::VectorXd::Zero(kVfhSize);
+    case Method::kESF: return f.esf ? Eigen::VectorXd(f.esf->cast<double>()) : Eigen::VectorXd::Zero(kEsfSize);
+    case Method::kFusion: break;
+  }
+  return {};
+}
+
+Eigen::VectorXd method_scores(const ModelImpl& impl, Method method, const CloudFeatures& f) {
+  const std::vector<Method> parts = component_methods(impl, method);
+  Eigen::VectorXd sum;
+  for (Method m : parts) {
+    const Eigen::VectorXd s = decide(*impl.stages[static_cast<int>(m)], method_histogram(impl, m, f));
+    sum = sum.size() ? Eigen::VectorXd(sum + s) : s;
+  }
+  return sum / static_cast<double>(std::max<size_t>(1, parts.size()));
+}
+
+// ---- Training -------------------------------------------------------------------------------------
+
+namespace {
+
+Status validate(const std::vector<LabelledCloud>& data, const TrainParams& params) {
+  if (data.empty()) return invalid_argument("no training clouds");
+  if (params.methods.empty()) return invalid_argument("no method to train");
+  for (size_t i = 0; i < data.size(); ++i)
+    if (data[i].category.empty()) return invalid_argument("training cloud " + std::to_string(i) + " has no category");
+  std::set<std::string> categories;
+  for (const auto& d : data) categories.insert(d.category);
+  if (categories.size() < 2)
+    return invalid_argument("training needs at least 2 categories; got only '" + *categories.begin() + "'");
+  if (params.bok_clusters < 2 || params.bog_keypoint_clusters < 2 || params.kgh_clusters < 2 ||
+      params.bog_volume_clusters < 1 || params.kgh_distance_bins < 1)
+    return invalid_argument("codebook sizes must be at least 2 clusters (and 1 volume cluster / distance bin)");
+  if (params.bog_keypoint_clusters > 40) return invalid_argument("bog_keypoint_clusters above 40 is not supported");
+  return {};
+}
+
+// Every keypoint descriptor of the training set, subsampled evenly above `cap` rows.
+Eigen::MatrixXd pooled_descriptors(const std::vector<CloudFeatures>& feats, size_t cap) {
+  size_t total = 0;
+  for (const auto& f : feats) total += f.descriptors.size();
+  const size_t step = std::max<size_t>(1, (total + cap - 1) / cap);
+  std::vector<Descriptor> rows;
+  size_t i = 0;
+  for (const auto& f : feats)
+    for (const Descriptor& d : f.descriptors)
+      if (i++ % step == 0) rows.push_back(d);
+  return descriptor_rows(rows);
+}
+
+}  // namespace
+
+Expected<Model> train(const std::vector<LabelledCloud>& data, const TrainParams& params, const ProgressFn& progress,
+                      const CancelFn& cancel) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (Status s = validate(data, params); !s.ok()) return s.error();
+  auto report = [&](const char* stage, size_t done, size_t total) {
+    if (progress) progress({stage, done, total});
+  };
+  auto cancelled_now = [&] { return cancel && cancel(); };
+
+  Model model;
+  auto impl = std::make_shared<ModelImpl>();
+  impl->params = params;
+  std::map<std::string, int> index;
+  for (const auto& d : data) index.emplace(d.category, 0);
+  for (auto& [name, i] : index) {
+    i = static_cast<int>(model.categories.size());
+    model.categories.push_back(name);
+  }
+  std::vector<int> labels;
+  for (const auto& d : data) labels.push_back(index[d.category]);
+
+  std::vector<Method> base;
+  for (Method m : params.methods)
+    if (m != Method::kFusion && !needs(base, m)) base.push_back(m);
+  if (needs(params.methods, Method::kFusion))
+    for (Method m : params.fusion_of)
+      if (m != Method::kFusion && !needs(base, m)) base.push_back(m);
+
+  // 1. Features of every cloud, in parallel over clouds; batches keep progress and cancel responsive.
+  const int threads = resolve_threads(params.threads);
+  std::vector<Expected<CloudFeatures>> feats(data.size(), internal_error("not computed"));
+  const size_t batch = static_cast<size_t>(threads) * 4;
+  for (size_t begin = 0; begin < data.size(); begin += batch) {
+    if (cancelled_now()) return cancelled("training cancelled");
+    const int64_t end = static_cast<int64_t>(std::min(data.size(), begin + batch));
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 1)
+    for (int64_t i = static_cast<int64_t>(begin); i < end; ++i) feats[i] = cloud_features(data[i].cloud, params, base, 1);
+    report("features", static_cast<size_t>(end), data.size());
+  }
+  std::vector<CloudFeatures> f;
+  f.reserve(data.size());
+  for (size_t i = 0; i < data.size(); ++i) {
+    if (!feats[i].ok())
+      return Error{feats[i].error().code, "training cloud " + std::to_string(i) + " (category '" + data[i].category +
+                                              "', object '" + data[i].object_id + "'): " + feats[i].error().message};
+    f.push_back(std::move(*feats[i]));
+  }
+  feats.clear();
+
+  // 2. Keypoint codebooks (sec. 3.2.5).
+  report("codebooks", 0, 3);
+  const Eigen::MatrixXd pooled = std::any_of(base.begin(), base.end(), uses_keypoints)
+                                     ? pooled_descriptors(f, 100000) : Eigen::MatrixXd();
+  auto codebook = [&](int clusters, uint64_t salt) {
+    return fit_keypoint_codebook(pooled, {clusters, params.codebook_explained_variance, params.kmeans_restarts,
+                                          params.seed + salt, threads});
+  };
+  auto with_method = [&](Method m, const Error& e) {
+    return Error{e.code, std::string(method_name(m)) + ": " + e.message};
+  };
+  if (needs(base, Method::kBoK)) {
+    auto cb = codebook(params.bok_clusters, 1);
+    if (!cb.ok()) return with_method(Method::kBoK, cb.error());
+    impl->bok = std::move(*cb);
+  }
+  if (needs(base, Method::kBoG)) {
+    auto cb = codebook(params.bog_keypoint_clusters, 2);
+    if (!cb.ok()) return with_method(Method::kBoG, cb.error());
+    impl->bog = std::move(*cb);
+    std::vector<std::vector<LocalGraph>> graphs;
+    for (const auto& c : f) graphs.push_back(local_graphs(c.positions, keypoint_words(impl->bog, c.descriptors)));
+    auto voc = fit_graph_vocabulary(graphs, params.bog_keypoint_clusters, params.bog_volume_clusters, params.seed + 3);
+    if (!voc.ok()) return with_method(Method::kBoG, voc.error());
+    impl->graphs = std::move(*voc);
+  }
+  if (needs(base, Method::kKGH)) {
+    auto cb = codebook(params.kgh_clusters, 4);
+    if (!cb.ok()) return with_method(Method::kKGH, cb.error());
+    impl->kgh = std::move(*cb);
+    // Distance bins span the largest keypoint distance seen in training (robustly: its 95th percentile).
+    std::vector<float> spans;
+    for (const auto& c : f) {
+      float span = 0;
+      for (size_t i = 0; i < c.positions.size(); ++i)
+        for (size_t j = i + 1; j < c.positions.size(); ++j) span = std::max(span, (c.positions[i] - c.positions[j]).norm());
+      if (span > 0) spans.push_back(span);
+    }
+    std::sort(spans.begin(), spans.end());
+    impl->kgh_max_distance_m = spans.empty() ? 1.f : spans[std::min(spans.size() - 1, spans.size() * 95 / 100)];
+  }
+  report("codebooks", 3, 3);
+  if (cancelled_now()) return cancelled("training cancelled");
+
+  // 3. Global histograms and decision stages (sec. 3.3).
+  size_t done = 0;
+  for (Method m : base) {
+    Eigen::MatrixXd h;
+    for (size_t i = 0; i < f.size(); ++i) {
+      const Eigen::VectorXd row = method_histogram(*impl, m, f[i]);
+      if (i == 0) h.resize(static_cast<Eigen::Index>(f.size()), row.size());
+      h.row(static_cast<Eigen::Index>(i)) = row.transpose();
+    }
+    DecisionParams dp = params.decision;
+    if (m == Method::kBoG) dp.max_pca_dims = params.bog_pca_dims;
+    auto stage = fit_decision(h, labels, static_cast<int>(model.categories.size()), dp, params.seed + 10 + static_cast<uint64_t>(m), threads);
+    if (!stage.ok()) return with_method(m, stage.error());
+    impl->stages[static_cast<int>(m)] = std::move(*stage);
+    report("centres", ++done, base.size());
+    if (cancelled_now()) return cancelled("training cancelled");
+  }
+
+  for (Method m : kAllMethods)
+    if (needs(params.methods, m)) model.methods.push_back(m);
+  if (needs(model.methods, Method::kFusion) && component_methods(*impl, Method::kFusion).empty())
+    return invalid_argument("fusion needs at least one of its component methods (fusion_of)");
+  model.default_method = needs(model.methods, params.default_method) ? params.default_method : model.methods.front();
+  model.stats.clouds = data.size();
+  std::set<std::string> objects;
+  for (const auto& d : data) objects.insert(d.category + "/" + d.object_id);
+  model.stats.objects = objects.size();
+  for (const auto& c : f) model.stats.keypoints += c.positions.size();
+  model.stats.categories = model.categories;
+  model.stats.clouds_per_category.assign(model.categories.size(), 0);
+  for (int l : labels) ++model.stats.clouds_per_category[static_cast<size_t>(l)];
+  model.stats.seconds = ms_since(t0) / 1000.0;
+  model.impl = std::move(impl);
+  report("done", 1, 1);
+  return model;
+}
+
+// ---- Classification -------------------------------------------------------------------------------
+
+Expected<Classification> classify(const Model& model, const Cloud& cloud, std::optional<Method> method,
+                                  const CancelFn& cancel) {
+  if (!model.impl) return failed_precondition("the model is not trained");
+  const Method m = method.value_or(model.default_method);
+  if (!needs(model.methods, m))
+    return invalid_argument(std::string("the model was not trained for method '") + method_name(m) + "'");
+  const ModelImpl& impl = *model.impl;
+  const auto t0 = std::chrono::steady_clock::now();
+  auto f = cloud_features(cloud, impl.params, component_methods(impl, m), impl.params.threads);
+  if (!f.ok()) return f.error();
+  if (cancel && cancel()) return cancelled("classification cancelled");
+  Classification c;
+  c.feature_ms = ms_since(t0);
+  const auto t1 = std::chrono::steady_clock::now();
+  const Eigen::VectorXd scores = method_scores(impl, m, *f);
+  c.decision_ms = ms_since(t1);
+  c.method = m;
+  c.categories = model.categories;
+  c.scores.assign(scores.data(), scores.data() + scores.size());
+  c.winner = argmax(scores);
+  c.points = f->points;
+  c.keypoints = f->positions.size();
+  return c;
+}
+
+}  // namespace glimpse

@@ -1,0 +1,51 @@
+// Private: what a trained Model holds beyond its public summary, and the per-cloud feature pipeline
+// shared by train, classify and ScanSession.
+#pragma once
+
+#include <array>
+#include <optional>
+
+#include "glimpse/classifiers.h"
+#include "glimpse/features.h"
+#include "glimpse/model.h"
+#include "glimpse/train_params.h"
+
+namespace glimpse {
+
+inline constexpr int kBaseMethods = 5;  // every Method but kFusion, which combines them
+
+struct ModelImpl {
+  TrainParams params;
+  KeypointCodebook bok;        // sec. 3.2.5, one codebook per method (the paper's cluster counts differ)
+  KeypointCodebook bog;
+  KeypointCodebook kgh;
+  GraphVocabulary graphs;
+  float kgh_max_distance_m = 1;
+  std::array<std::optional<DecisionStage>, kBaseMethods> stages;  // indexed by Method
+};
+
+inline bool uses_keypoints(Method m) { return m == Method::kBoK || m == Method::kBoG || m == Method::kKGH; }
+
+// What the methods of a model need from one cloud.
+struct CloudFeatures {
+  std::vector<Vec3> positions;           // keypoint positions
+  std::vector<Descriptor> descriptors;   // their 12-D descriptors
+  std::optional<Eigen::VectorXf> vfh;
+  std::optional<Eigen::VectorXf> esf;
+  size_t points = 0;
+};
+
+// The methods a model needs computed for `method` (fusion expands to its components).
+std::vector<Method> component_methods(const ModelImpl& impl, Method method);
+
+// Features for the given methods; keypoint features only when one of them needs keypoints.
+Expected<CloudFeatures> cloud_features(const Cloud& cloud, const TrainParams& params,
+                                       const std::vector<Method>& methods, int threads);
+
+// The global histogram of one base method (BoK, BoG, KGH, VFH, ESF).
+Eigen::VectorXd method_histogram(const ModelImpl& impl, Method method, const CloudFeatures& f);
+
+// Scores of `method` (fusion: the mean of its components' scores).
+Eigen::VectorXd method_scores(const ModelImpl& impl, Method method, const CloudFeatures& f);
+
+}  // namespace glimpse

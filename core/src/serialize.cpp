@@ -1,0 +1,424 @@
+// The model's byte format: "GLMPSMDL", u32 format version, u64 payload length, payload, u32 CRC-32 of
+// the payload. All integers little-endian, reals IEEE-754 binary64 little-endian. Training parameters
+// are (name, value) pairs so that later versions can add parameters and still read old models.
+// deserialize() checks every length against the bytes left and every index against its table, so
+// truncated, corrupt or hostile input gives an error, never undefined behaviour.
+#include <array>
+#include <bit>
+#include <cstring>
+#include <map>
+#include <string>
+
+#include "glimpse/model.h"
+#include "glimpse/train_params.h"
+#include "model_impl.h"
+
+namespace glimpse {
+
+namespace {
+
+constexpr char kMagic[8] = {'G', 'L', 'M', 'P', 'S', 'M', 'D', 'L'};
+constexpr uint32_t kFormatVersion = 1;
+
+uint32_t crc32(const uint8_t* data, size_t n) {
+  static const std::array<uint32_t, 256> table = [] {
+    std::array<uint32_t, 256> t{};
+    for (uint32_t i = 0; i < 256; ++i) {
+      uint32_t c = i;
+      for (int k = 0; k < 8; ++k) c = (c & 1) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+      t[i] = c;
+    }
+    return t;
+  }();
+  uint32_t c = 0xFFFFFFFFu;
+  for (size_t i = 0; i < n; ++i) c = table[(c ^ data[i]) & 0xFF] ^ (c >> 8);
+  return c ^ 0xFFFFFFFFu;
+}
+
+class Writer {
+ public:
+  std::vector<uint8_t> bytes;
+  template <class T>
+  void uint(T v) {
+    for (size_t i = 0; i < sizeof(T); ++i) bytes.push_back(static_cast<uint8_t>(static_cast<uint64_t>(v) >> (8 * i)));
+  }
+  void u8(uint8_t v) { uint(v); }
+  void u32(uint32_t v) { uint(v); }
+  void i32(int32_t v) { uint(static_cast<uint32_t>(v)); }
+  void u64(uint64_t v) { uint(v); }
+  void f64(double v) { uint(std::bit_cast<uint64_t>(v)); }
+  void str(const std::string& s) {
+    u32(static_cast<uint32_t>(s.size()));
+    bytes.insert(bytes.end(), s.begin(), s.end());
+  }
+  void vec(const Eigen::VectorXd& v) {
+    u32(static_cast<uint32_t>(v.size()));
+    for (Eigen::Index i = 0; i < v.size(); ++i) f64(v[i]);
+  }
+  void mat(const Eigen::MatrixXd& m) {
+    u32(static_cast<uint32_t>(m.rows()));
+    u32(static_cast<uint32_t>(m.cols()));
+    for (Eigen::Index r = 0; r < m.rows(); ++r)
+      for (Eigen::Index c = 0; c < m.cols(); ++c) f64(m(r, c));
+  }
+};
+
+class Reader {
+ public:
+  Reader(const uint8_t* p, size_t n) : p_(p), end_(p + n) {}
+  bool failed() const { return failed_; }
+  const std::string& why() const { return why_; }
+  size_t left() const { return static_cast<size_t>(end_ - p_); }
+  void fail(const std::string& why) {
+    if (!failed_) why_ = why;
+    failed_ = true;
+  }
+  bool need(size_t n, const char* what) {
+    if (failed_) return false;
+    if (left() < n) fail(std::string("truncated while reading ") + what);
+    return !failed_;
+  }
+  template <class T>
+  T uint(const char* what) {
+    if (!need(sizeof(T), what)) return T{};
+    uint64_t v = 0;
+    for (size_t i = 0; i < sizeof(T); ++i) v |= static_cast<uint64_t>(p_[i]) << (8 * i);
+    p_ += sizeof(T);
+    return static_cast<T>(v);
+  }
+  uint8_t u8(const char* w) { return uint<uint8_t>(w); }
+  uint32_t u32(const char* w) { return uint<uint32_t>(w); }
+  int32_t i32(const char* w) { return static_cast<int32_t>(uint<uint32_t>(w)); }
+  uint64_t u64(const char* w) { return uint<uint64_t>(w); }
+  double f64(const char* w) { return std::bit_cast<double>(uint<uint64_t>(w)); }
+  std::string str(const char* what) {
+    const uint32_t n = u32(what);
+    if (!need(n, what)) return {};
+    std::string s(reinterpret_cast<const char*>(p_), n);
+    p_ += n;
+    return s;
+  }
+  Eigen::VectorXd vec(const char* what) {
+    const uint32_t n = u32(what);
+    if (!need(size_t{n} * 8, what)) return {};
+    Eigen::VectorXd v(n);
+    for (uint32_t i = 0; i < n; ++i) v[i] = f64(what);
+    return v;
+  }
+  Eigen::MatrixXd mat(const char* what) {
+    const uint64_t rows = u32(what), cols = u32(what);
+    if (cols && rows > left() / 8 / cols) {
+      fail(std::string("truncated while reading ") + what);
+      return {};
+    }
+    if (!need(rows * cols * 8, what)) return {};
+    Eigen::MatrixXd m(static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(cols));
+    for (uint64_t r = 0; r < rows; ++r)
+      for (uint64_t c = 0; c < cols; ++c) m(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = f64(what);
+    return m;
+  }
+
+ private:
+  const uint8_t* p_;
+  const uint8_t* end_;
+  bool failed_ = false;
+  std::string why_;
+};
+
+// ---- Training parameters as (name, value) pairs ---------------------------------------------------
+
+template <class F>
+void visit_params(TrainParams& p, F&& f) {
+  f("features.duplicate_tolerance_m", p.features.duplicate_tolerance_m);
+  f("features.min_points", p.features.min_points);
+  f("surface.support_radius_m", p.features.surface.support_radius_m);
+  f("surface.support_neighbours", p.features.surface.support_neighbours);
+  f("surface.min_neighbours", p.features.surface.min_neighbours);
+  f("keypoints.max_characteristic_radius_m", p.features.keypoints.max_characteristic_radius_m);
+  f("keypoints.max_radius_supports", p.features.keypoints.max_radius_supports);
+  f("keypoints.exclude_boundary", p.features.keypoints.exclude_boundary);
+  f("keypoints.boundary_gap_rad", p.features.keypoints.boundary_gap_rad);
+  f("keypoints.max_keypoints", p.features.keypoints.max_keypoints);
+  f("descriptor.large_window_supports", p.features.descriptor.large_window_supports);
+  f("descriptor.max_pfh_points", p.features.descriptor.max_pfh_points);
+  f("global.normal_radius_m", p.global.normal_radius_m);
+  f("global.fill_size_component", p.global.fill_size_component);
+  f("codebook_explained_variance", p.codebook_explained_variance);
+  f("bok_clusters", p.bok_clusters);
+  f("normalise_histograms", p.normalise_histograms);
+  f("bog_keypoint_clusters", p.bog_keypoint_clusters);
+  f("bog_volume_clusters", p.bog_volume_clusters);
+  f("bog_pca_dims", p.bog_pca_dims);
+  f("kgh_clusters", p.kgh_clusters);
+  f("kgh_distance_bins", p.kgh_distance_bins);
+  f("decision.kind", p.decision.kind);
+  f("decision.centres_per_category", p.decision.centres_per_category);
+  f("decision.neighbours", p.decision.neighbours);
+  f("decision.pca_explained_variance", p.decision.pca_explained_variance);
+  f("decision.max_pca_dims", p.decision.max_pca_dims);
+  f("kmeans_restarts", p.kmeans_restarts);
+  f("seed", p.seed);
+}
+
+template <class T>
+double to_double(const T& v) {
+  if constexpr (std::is_enum_v<T>) return static_cast<double>(static_cast<int>(v));
+  else return static_cast<double>(v);
+}
+template <class T>
+void from_double(T& v, double d) {
+  if constexpr (std::is_enum_v<T>) v = static_cast<T>(static_cast<int>(d));
+  else if constexpr (std::is_same_v<T, bool>) v = d != 0;
+  else v = static_cast<T>(d);
+}
+
+void write_methods(Writer& w, const std::vector<Method>& ms) {
+  w.u32(static_cast<uint32_t>(ms.size()));
+  for (Method m : ms) w.u8(static_cast<uint8_t>(m));
+}
+std::vector<Method> read_methods(Reader& r) {
+  const uint32_t n = r.u32("method list");
+  std::vector<Method> ms;
+  if (n > 64) {
+    r.fail("method list too long");
+    return ms;
+  }
+  for (uint32_t i = 0; i < n; ++i) {
+    const uint8_t m = r.u8("method");
+    if (m > static_cast<uint8_t>(Method::kFusion)) r.fail("unknown method code " + std::to_string(m));
+    ms.push_back(static_cast<Method>(m));
+  }
+  return ms;
+}
+
+void write_pca(Writer& w, const Pca& p) {
+  w.vec(p.mean);
+  w.mat(p.basis);
+  w.vec(p.explained);
+}
+Pca read_pca(Reader& r, bool check = true) {
+  Pca p;
+  p.mean = r.vec("PCA mean");
+  p.basis = r.mat("PCA basis");
+  p.explained = r.vec("PCA variances");
+  if (check && !r.failed() &&
+      (p.basis.rows() != p.mean.size() || p.explained.size() != p.basis.cols() || p.basis.cols() == 0))
+    r.fail("inconsistent PCA dimensions");
+  return p;
+}
+
+void write_codebook(Writer& w, const KeypointCodebook& c) {
+  w.vec(c.standardiser.mean);
+  w.vec(c.standardiser.scale);
+  write_pca(w, c.pca);
+  w.mat(c.centres);
+}
+KeypointCodebook read_codebook(Reader& r, bool used, int clusters) {
+  KeypointCodebook c;
+  c.standardiser.mean = r.vec("standardiser mean");
+  c.standardiser.scale = r.vec("standardiser scale");
+  c.pca = read_pca(r, used);
+  c.centres = r.mat("codebook centres");
+  if (!used) return c;  // an unused codebook is written empty
+  if (r.failed()) return c;
+  if (c.standardiser.mean.size() != kDescriptorSize || c.standardiser.scale.size() != kDescriptorSize ||
+      c.pca.mean.size() != kDescriptorSize || c.centres.rows() != clusters || c.centres.cols() != c.pca.basis.cols())
+    r.fail("inconsistent keypoint codebook dimensions");
+  return c;
+}
+
+void write_stage(Writer& w, const DecisionStage& s) {
+  w.u8(static_cast<uint8_t>(s.kind));
+  w.i32(s.categories);
+  w.i32(s.neighbours);
+  write_pca(w, s.pca);
+  w.mat(s.references);
+  w.u32(static_cast<uint32_t>(s.labels.size()));
+  for (int l : s.labels) w.i32(l);
+  w.f64(s.temperature);
+}
+DecisionStage read_stage(Reader& r, int categories, Eigen::Index histogram_size) {
+  DecisionStage s;
+  const uint8_t kind = r.u8("decision kind");
+  if (kind > static_cast<uint8_t>(DecisionKind::kNearestNeighbours)) r.fail("unknown decision kind");
+  s.kind = static_cast<DecisionKind>(kind);
+  s.categories = r.i32("decision categories");
+  s.neighbours = r.i32("decision neighbours");
+  s.pca = read_pca(r);
+  s.references = r.mat("decision references");
+  const uint32_t n = r.u32("decision labels");
+  if (n != s.references.rows()) r.fail("decision labels do not match references");
+  for (uint32_t i = 0; i < n && !r.failed(); ++i) {
+    s.labels.push_back(r.i32("decision label"));
+    if (s.labels.back() < 0 || s.labels.back() >= categories) r.fail("decision label out of range");
+  }
+  s.temperature = r.f64("decision temperature");
+  if (r.failed()) return s;
+  if (s.categories != categories || s.neighbours < 1 || s.references.rows() < 1 ||
+      s.references.cols() != s.pca.basis.cols() || s.pca.mean.size() != histogram_size || !(s.temperature > 0))
+    r.fail("inconsistent decision stage");
+  return s;
+}
+
+}  // namespace
+
+std::vector<uint8_t> serialize(const Model& model) {
+  Writer w;
+  w.u32(static_cast<uint32_t>(model.categories.size()));
+  for (const auto& c : model.categories) w.str(c);
+  write_methods(w, model.methods);
+  w.u8(static_cast<uint8_t>(model.default_method));
+  w.u64(model.stats.clouds);
+  w.u64(model.stats.objects);
+  w.u64(model.stats.keypoints);
+  w.f64(model.stats.seconds);
+  w.u32(static_cast<uint32_t>(model.stats.clouds_per_category.size()));
+  for (size_t n : model.stats.clouds_per_category) w.u64(n);
+
+  const bool trained = model.impl != nullptr;
+  w.u8(trained ? 1 : 0);
+  if (trained) {
+    const ModelImpl& m = *model.impl;
+    TrainParams p = m.params;
+    uint32_t count = 0;
+    visit_params(p, [&](const char*, auto&) { ++count; });
+    w.u32(count);
+    visit_params(p, [&](const char* name, auto& v) {
+      w.str(name);
+      w.f64(to_double(v));
+    });
+    write_methods(w, p.methods);
+    w.u8(static_cast<uint8_t>(p.default_method));
+    write_methods(w, p.fusion_of);
+    write_codebook(w, m.bok);
+    write_codebook(w, m.bog);
+    write_codebook(w, m.kgh);
+    w.i32(m.graphs.keypoint_clusters);
+    w.u32(static_cast<uint32_t>(m.graphs.log_volume_centres.size()));
+    for (double c : m.graphs.log_volume_centres) w.f64(c);
+    w.u32(static_cast<uint32_t>(m.graphs.types.size()));
+    for (uint64_t t : m.graphs.types) w.u64(t);
+    w.f64(m.kgh_max_distance_m);
+    for (const auto& s : m.stages) {
+      w.u8(s ? 1 : 0);
+      if (s) write_stage(w, *s);
+    }
+  }
+
+  Writer out;
+  out.bytes.insert(out.bytes.end(), kMagic, kMagic + 8);
+  out.u32(kFormatVersion);
+  out.u64(w.bytes.size());
+  out.bytes.insert(out.bytes.end(), w.bytes.begin(), w.bytes.end());
+  out.u32(crc32(w.bytes.data(), w.bytes.size()));
+  return out.bytes;
+}
+
+Expected<Model> deserialize(std::span<const uint8_t> bytes) {
+  if (bytes.size() < 8 + 4 + 8 + 4 || std::memcmp(bytes.data(), kMagic, 8) != 0)
+    return data_loss("not a Glimpse model (bad magic or too short: " + std::to_string(bytes.size()) + " bytes)");
+  Reader head(bytes.data() + 8, bytes.size() - 8);
+  const uint32_t version = head.u32("version");
+  if (version != kFormatVersion)
+    return data_loss("unsupported model format version " + std::to_string(version) + " (this build reads " +
+                     std::to_string(kFormatVersion) + ")");
+  const uint64_t length = head.u64("length");
+  if (length != bytes.size() - 8 - 4 - 8 - 4)
+    return data_loss("model length mismatch: header says " + std::to_string(length) + " payload bytes, found " +
+                     std::to_string(bytes.size() - 24));
+  const uint8_t* payload = bytes.data() + 20;
+  Reader tail(payload + length, 4);
+  if (crc32(payload, length) != tail.u32("checksum")) return data_loss("model checksum mismatch: the bytes are corrupt");
+
+  Reader r(payload, length);
+  Model model;
+  const uint32_t ncat = r.u32("category count");
+  if (ncat > 100000) r.fail("too many categories");
+  for (uint32_t i = 0; i < ncat && !r.failed(); ++i) model.categories.push_back(r.str("category name"));
+  model.methods = read_methods(r);
+  model.default_method = static_cast<Method>(r.u8("default method"));
+  model.stats.clouds = r.u64("stats");
+  model.stats.objects = r.u64("stats");
+  model.stats.keypoints = r.u64("stats");
+  model.stats.seconds = r.f64("stats");
+  const uint32_t nper = r.u32("stats");
+  if (nper != ncat) r.fail("per-category statistics do not match the categories");
+  for (uint32_t i = 0; i < nper && !r.failed(); ++i) model.stats.clouds_per_category.push_back(r.u64("stats"));
+  model.stats.categories = model.categories;
+
+  const bool trained = r.u8("trained flag") == 1;
+  if (trained && !r.failed()) {
+    auto impl = std::make_shared<ModelImpl>();
+    TrainParams& p = impl->params;
+    std::map<std::string, double> values;
+    const uint32_t count = r.u32("parameter count");
+    if (count > 10000) r.fail("too many parameters");
+    for (uint32_t i = 0; i < count && !r.failed(); ++i) {
+      std::string name = r.str("parameter name");
+      values[name] = r.f64("parameter value");
+    }
+    // Unknown names are ignored and missing ones keep their defaults (older or newer writers).
+    visit_params(p, [&](const char* name, auto& v) {
+      if (auto it = values.find(name); it != values.end()) from_double(v, it->second);
+    });
+    p.methods = read_methods(r);
+    p.default_method = static_cast<Method>(r.u8("default method"));
+    p.fusion_of = read_methods(r);
+    const int max_clusters = 100000;
+    if (p.bok_clusters < 2 || p.bok_clusters > max_clusters || p.bog_keypoint_clusters < 2 ||
+        p.bog_keypoint_clusters > 40 || p.kgh_clusters < 2 || p.kgh_clusters > 1000 || p.kgh_distance_bins < 1 ||
+        p.kgh_distance_bins > 10000 || p.bog_volume_clusters < 1 || p.bog_volume_clusters > 1000)
+      r.fail("codebook sizes out of range");
+    std::vector<bool> has(kBaseMethods, false);
+    auto used = [&](Method m) {
+      for (Method q : p.methods)
+        if (q == m) return true;
+      if (std::find(p.methods.begin(), p.methods.end(), Method::kFusion) != p.methods.end())
+        for (Method q : p.fusion_of)
+          if (q == m) return true;
+      return false;
+    };
+    impl->bok = read_codebook(r, used(Method::kBoK), p.bok_clusters);
+    impl->bog = read_codebook(r, used(Method::kBoG), p.bog_keypoint_clusters);
+    impl->kgh = read_codebook(r, used(Method::kKGH), p.kgh_clusters);
+    impl->graphs.keypoint_clusters = r.i32("graph clusters");
+    const uint32_t nvol = r.u32("volume centres");
+    if (nvol > 1000) r.fail("too many volume centres");
+    for (uint32_t i = 0; i < nvol && !r.failed(); ++i) impl->graphs.log_volume_centres.push_back(r.f64("volume centre"));
+    const uint32_t ntypes = r.u32("graph types");
+    r.need(size_t{ntypes} * 8, "graph types");
+    for (uint32_t i = 0; i < ntypes && !r.failed(); ++i) {
+      impl->graphs.types.push_back(r.u64("graph type"));
+      if (i && impl->graphs.types[i] <= impl->graphs.types[i - 1]) r.fail("graph types not sorted");
+    }
+    if (used(Method::kBoG) && !r.failed() &&
+        (impl->graphs.keypoint_clusters != p.bog_keypoint_clusters || impl->graphs.log_volume_centres.empty()))
+      r.fail("inconsistent graph vocabulary");
+    impl->kgh_max_distance_m = static_cast<float>(r.f64("KGH distance"));
+    if (!r.failed() && !(impl->kgh_max_distance_m > 0)) r.fail("KGH distance range must be positive");
+    const Eigen::Index sizes[kBaseMethods] = {
+        p.bok_clusters, static_cast<Eigen::Index>(impl->graphs.types.size()),
+        static_cast<Eigen::Index>(p.kgh_clusters) * p.kgh_clusters * p.kgh_distance_bins, kVfhSize, kEsfSize};
+    for (int m = 0; m < kBaseMethods && !r.failed(); ++m) {
+      if (r.u8("stage flag") == 1) impl->stages[m] = read_stage(r, static_cast<int>(ncat), sizes[m]);
+      if (!r.failed() && used(static_cast<Method>(m)) != impl->stages[m].has_value())
+        r.fail(std::string("decision stage of ") + method_name(static_cast<Method>(m)) + " missing or unexpected");
+    }
+    model.impl = std::move(impl);
+  }
+  if (!r.failed() && r.left() != 0) r.fail(std::to_string(r.left()) + " unexpected trailing bytes");
+  if (!r.failed()) {
+    if (model.methods.empty()) r.fail("the model has no method");
+    for (Method m : model.methods)
+      if (model.impl && m != Method::kFusion && !model.impl->stages[static_cast<int>(m)]) r.fail("a listed method has no decision stage");
+    const bool fusion = std::find(model.methods.begin(), model.methods.end(), Method::kFusion) != model.methods.end();
+    if (fusion && model.impl && component_methods(*model.impl, Method::kFusion).empty())
+      r.fail("fusion has no component method");
+    if (std::find(model.methods.begin(), model.methods.end(), model.default_method) == model.methods.end())
+      r.fail("the default method is not one of the model's methods");
+  }
+  if (r.failed()) return data_loss("corrupt model: " + r.why());
+  return model;
+}
+
+}  // namespace glimpse
