@@ -112,7 +112,8 @@ Eigen::VectorXd method_scores(const ModelImpl& impl, Method method, const CloudF
 
 namespace {
 
-Status validate(const std::vector<LabelledCloud>& data, const TrainParams& params) {
+template <class Sample>
+Status validate(const std::vector<Sample>& data, const TrainParams& params) {
   if (data.empty()) return invalid_argument("no training clouds");
   if (params.methods.empty()) return invalid_argument("no method to train");
   for (size_t i = 0; i < data.size(); ++i)
@@ -126,6 +127,16 @@ Status validate(const std::vector<LabelledCloud>& data, const TrainParams& param
     return invalid_argument("codebook sizes must be at least 2 clusters (and 1 volume cluster / distance bin)");
   if (params.bog_keypoint_clusters > 40) return invalid_argument("bog_keypoint_clusters above 40 is not supported");
   return {};
+}
+
+std::vector<Method> base_methods(const TrainParams& params) {
+  std::vector<Method> base;
+  for (Method m : params.methods)
+    if (m != Method::kFusion && !needs(base, m)) base.push_back(m);
+  if (needs(params.methods, Method::kFusion))
+    for (Method m : params.fusion_of)
+      if (m != Method::kFusion && !needs(base, m)) base.push_back(m);
+  return base;
 }
 
 // Every keypoint descriptor of the training set, subsampled evenly above `cap` rows.
@@ -147,6 +158,38 @@ Expected<Model> train(const std::vector<LabelledCloud>& data, const TrainParams&
                       const CancelFn& cancel) {
   const auto t0 = std::chrono::steady_clock::now();
   if (Status s = validate(data, params); !s.ok()) return s.error();
+  auto cancelled_now = [&] { return cancel && cancel(); };
+  const std::vector<Method> base = base_methods(params);
+
+  // Features of every cloud, in parallel over clouds; batches keep progress and cancel responsive.
+  const int threads = resolve_threads(params.threads);
+  std::vector<Expected<CloudFeatures>> feats(data.size(), internal_error("not computed"));
+  const size_t batch = static_cast<size_t>(threads) * 4;
+  for (size_t begin = 0; begin < data.size(); begin += batch) {
+    if (cancelled_now()) return cancelled("training cancelled");
+    const int64_t end = static_cast<int64_t>(std::min(data.size(), begin + batch));
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 1)
+    for (int64_t i = static_cast<int64_t>(begin); i < end; ++i) feats[i] = cloud_features(data[i].cloud, params, base, 1);
+    if (progress) progress({"features", static_cast<size_t>(end), data.size()});
+  }
+  std::vector<TrainingSample> samples;
+  samples.reserve(data.size());
+  for (size_t i = 0; i < data.size(); ++i) {
+    if (!feats[i].ok())
+      return Error{feats[i].error().code, "training cloud " + std::to_string(i) + " (category '" + data[i].category +
+                                              "', object '" + data[i].object_id + "'): " + feats[i].error().message};
+    samples.push_back({data[i].category, data[i].object_id, std::move(*feats[i])});
+  }
+  feats.clear();
+  auto model = train_on_features(std::move(samples), params, progress, cancel);
+  if (model.ok()) model->stats.seconds = ms_since(t0) / 1000.0;
+  return model;
+}
+
+Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainParams& params,
+                                  const ProgressFn& progress, const CancelFn& cancel) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (Status s = validate(data, params); !s.ok()) return s.error();
   auto report = [&](const char* stage, size_t done, size_t total) {
     if (progress) progress({stage, done, total});
   };
@@ -164,33 +207,11 @@ Expected<Model> train(const std::vector<LabelledCloud>& data, const TrainParams&
   std::vector<int> labels;
   for (const auto& d : data) labels.push_back(index[d.category]);
 
-  std::vector<Method> base;
-  for (Method m : params.methods)
-    if (m != Method::kFusion && !needs(base, m)) base.push_back(m);
-  if (needs(params.methods, Method::kFusion))
-    for (Method m : params.fusion_of)
-      if (m != Method::kFusion && !needs(base, m)) base.push_back(m);
-
-  // 1. Features of every cloud, in parallel over clouds; batches keep progress and cancel responsive.
+  const std::vector<Method> base = base_methods(params);
   const int threads = resolve_threads(params.threads);
-  std::vector<Expected<CloudFeatures>> feats(data.size(), internal_error("not computed"));
-  const size_t batch = static_cast<size_t>(threads) * 4;
-  for (size_t begin = 0; begin < data.size(); begin += batch) {
-    if (cancelled_now()) return cancelled("training cancelled");
-    const int64_t end = static_cast<int64_t>(std::min(data.size(), begin + batch));
-#pragma omp parallel for num_threads(threads) schedule(dynamic, 1)
-    for (int64_t i = static_cast<int64_t>(begin); i < end; ++i) feats[i] = cloud_features(data[i].cloud, params, base, 1);
-    report("features", static_cast<size_t>(end), data.size());
-  }
   std::vector<CloudFeatures> f;
   f.reserve(data.size());
-  for (size_t i = 0; i < data.size(); ++i) {
-    if (!feats[i].ok())
-      return Error{feats[i].error().code, "training cloud " + std::to_string(i) + " (category '" + data[i].category +
-                                              "', object '" + data[i].object_id + "'): " + feats[i].error().message};
-    f.push_back(std::move(*feats[i]));
-  }
-  feats.clear();
+  for (auto& d : data) f.push_back(std::move(d.features));
 
   // 2. Keypoint codebooks (sec. 3.2.5).
   report("codebooks", 0, 3);

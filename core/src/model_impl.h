@@ -45,6 +45,16 @@ Expected<CloudFeatures> cloud_features(const Cloud& cloud, const TrainParams& pa
 // The global histogram of one base method (BoK, BoG, KGH, VFH, ESF).
 Eigen::VectorXd method_histogram(const ModelImpl& impl, Method method, const CloudFeatures& f);
 
+// A training cloud whose features are already computed (train() computes them; the evaluation
+// computes each view's features once and trains every fold from them).
+struct TrainingSample {
+  std::string category;
+  std::string object_id;
+  CloudFeatures features;
+};
+Expected<Model> train_on_features(std::vector<TrainingSample> samples, const TrainParams& params,
+                                  const ProgressFn& progress = {}, const CancelFn& cancel = {});
+
 // Scores of `method` (fusion: the mean of its components' scores).
 Eigen::VectorXd method_scores(const ModelImpl& impl, Method method, const CloudFeatures& f);
 
