@@ -49,7 +49,7 @@ std::array<float, 8> pfh8(const std::vector<Vec3>& points, const std::vector<Vec
   return h;
 }
 
-Descriptor local_descriptor(const KdTree& tree, const std::vector<LocalSurface>& surfaces, const Keypoint& kp,
+Descriptor local_descriptor(const NeighbourIndex& tree, const std::vector<LocalSurface>& surfaces, const Keypoint& kp,
                             float r, const DescriptorParams& params, std::vector<Neighbour>& nb) {
   Descriptor d = Descriptor::Zero();
   const Points& pts = tree.points();

@@ -140,7 +140,71 @@ void KdTree::nearest(const Vec3& query, size_t k, std::vector<Neighbour>& out) c
   for (size_t i = 0; i < n; ++i) out.push_back({idx[i], dist[i]});
 }
 
-float median_knn_distance(const KdTree& tree, size_t k, size_t sample) {
+// ---- VoxelIndex ----------------------------------------------------------------------------------
+
+VoxelIndex::VoxelIndex(float cell_m) : cell_(cell_m > 0 ? cell_m : 1.f) {}
+
+size_t VoxelIndex::KeyHash::operator()(const Key& k) const {
+  return static_cast<size_t>(k.x) * 73856093u ^ static_cast<size_t>(k.y) * 19349663u ^ static_cast<size_t>(k.z) * 83492791u;
+}
+
+VoxelIndex::Key VoxelIndex::key(const Vec3& p) const {
+  auto c = [&](float v) { return static_cast<int32_t>(std::floor(v / cell_)); };
+  return {c(p.x()), c(p.y()), c(p.z())};
+}
+
+uint32_t VoxelIndex::add(const Vec3& p) {
+  const auto i = static_cast<uint32_t>(points_.size());
+  points_.push_back(p);
+  cells_[key(p)].push_back(i);
+  return i;
+}
+
+void VoxelIndex::radius(const Vec3& q, float radius, std::vector<Neighbour>& out) const {
+  out.clear();
+  const float r2 = radius * radius;
+  const Key lo = key(q - Vec3::Constant(radius)), hi = key(q + Vec3::Constant(radius));
+  const double span = (double(hi.x) - lo.x + 1) * (double(hi.y) - lo.y + 1) * (double(hi.z) - lo.z + 1);
+  if (span > static_cast<double>(cells_.size())) {
+    // A query larger than the whole set: visiting the occupied cells is cheaper than the empty ones.
+    for (const auto& [k, members] : cells_)
+      for (uint32_t i : members) {
+        const float d = (points_[i] - q).squaredNorm();
+        if (d <= r2) out.push_back({i, d});
+      }
+    return;
+  }
+  for (int32_t x = lo.x; x <= hi.x; ++x)
+    for (int32_t y = lo.y; y <= hi.y; ++y)
+      for (int32_t z = lo.z; z <= hi.z; ++z) {
+        const auto it = cells_.find({x, y, z});
+        if (it == cells_.end()) continue;
+        for (uint32_t i : it->second) {
+          const float d = (points_[i] - q).squaredNorm();
+          if (d <= r2) out.push_back({i, d});
+        }
+      }
+}
+
+void VoxelIndex::nearest(const Vec3& q, size_t k, std::vector<Neighbour>& out) const {
+  out.clear();
+  k = std::min(k, points_.size());
+  if (k == 0) return;
+  // Grow the search radius until k points are inside it; the k nearest are then exact.
+  float radius = cell_;
+  for (;;) {
+    this->radius(q, radius, out);
+    if (out.size() >= k) break;
+    radius *= 2;
+  }
+  auto order = [](const Neighbour& a, const Neighbour& b) {
+    return a.distance_sq != b.distance_sq ? a.distance_sq < b.distance_sq : a.index < b.index;
+  };
+  std::partial_sort(out.begin(), out.begin() + static_cast<std::ptrdiff_t>(k), out.end(), order);
+  out.resize(k);
+}
+
+float median_knn_distance(const NeighbourIndex& tree, size_t k, size_t sample) {
   const Points& pts = tree.points();
   if (pts.size() < 2 || k == 0) return 0.f;
   k = std::min(k, pts.size() - 1);
@@ -157,7 +221,7 @@ float median_knn_distance(const KdTree& tree, size_t k, size_t sample) {
   return *mid;
 }
 
-float support_radius(const KdTree& tree, const SurfaceParams& params) {
+float support_radius(const NeighbourIndex& tree, const SurfaceParams& params) {
   if (params.support_radius_m > 0) return params.support_radius_m;
   return median_knn_distance(tree, static_cast<size_t>(std::max(1, params.support_neighbours)));
 }
@@ -217,14 +281,14 @@ Pca3 neighbourhood_pca(const Points& pts, const std::vector<Neighbour>& nb) {
 
 }  // namespace
 
-Vec3 pca_normal(const KdTree& tree, const Vec3& centre, float radius, std::vector<Neighbour>& scratch) {
+Vec3 pca_normal(const NeighbourIndex& tree, const Vec3& centre, float radius, std::vector<Neighbour>& scratch) {
   tree.radius(centre, radius, scratch);
   const Pca3 pca = neighbourhood_pca(tree.points(), scratch);
   if (!pca.ok) return Vec3::Zero();
   return pca.axes.col(0).normalized().cast<float>();
 }
 
-LocalSurface local_surface(const KdTree& tree, uint32_t index, float r,
+LocalSurface local_surface(const NeighbourIndex& tree, uint32_t index, float r,
                            const std::optional<Vec3>& viewpoint, int min_neighbours,
                            std::vector<Neighbour>& nb) {
   LocalSurface s;
@@ -274,7 +338,7 @@ LocalSurface local_surface(const KdTree& tree, uint32_t index, float r,
   return s;
 }
 
-std::vector<LocalSurface> local_surfaces(const KdTree& tree, float r, const std::optional<Vec3>& viewpoint,
+std::vector<LocalSurface> local_surfaces(const NeighbourIndex& tree, float r, const std::optional<Vec3>& viewpoint,
                                          const SurfaceParams& params) {
   const size_t n = tree.points().size();
   std::vector<LocalSurface> out(n);
@@ -290,7 +354,7 @@ std::vector<LocalSurface> local_surfaces(const KdTree& tree, float r, const std:
   return out;
 }
 
-void orient_normals_propagated(const KdTree& tree, std::vector<LocalSurface>& surfaces, int k) {
+void orient_normals_propagated(const NeighbourIndex& tree, std::vector<LocalSurface>& surfaces, int k) {
   const Points& pts = tree.points();
   const size_t n = pts.size();
   if (n == 0) return;
@@ -345,7 +409,7 @@ void orient_normals_propagated(const KdTree& tree, std::vector<LocalSurface>& su
 
 // ---- Boundaries ----------------------------------------------------------------------------------
 
-bool is_boundary_point(const KdTree& tree, uint32_t index, const Vec3& normal, float r, float max_gap_rad,
+bool is_boundary_point(const NeighbourIndex& tree, uint32_t index, const Vec3& normal, float r, float max_gap_rad,
                        std::vector<Neighbour>& nb) {
   const Points& pts = tree.points();
   tree.radius(pts[index], r, nb);

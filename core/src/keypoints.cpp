@@ -3,10 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <unordered_map>
 
 namespace glimpse {
 
-std::vector<Keypoint> characteristic_scale_keypoints(const KdTree& tree, const std::vector<LocalSurface>& surfaces,
+std::vector<Keypoint> characteristic_scale_keypoints(const NeighbourIndex& tree, const std::vector<LocalSurface>& surfaces,
                                                      float r, const KeypointParams& params, KeypointStats* stats) {
   KeypointStats st;
   std::vector<Keypoint> keypoints;
@@ -26,7 +27,39 @@ std::vector<Keypoint> characteristic_scale_keypoints(const KdTree& tree, const s
   });
   st.candidates = candidates.size();
 
-  std::vector<uint8_t> suppressed(pts.size(), 0);
+  // Accepted keypoints in a grid of cells as large as the largest claim, so "is this candidate inside
+  // an accepted keypoint's sphere" looks at 27 cells, not at every point of the cloud.
+  const float claim_max = std::max(max_radius, r);
+  struct Cell {
+    int32_t x, y, z;
+    bool operator==(const Cell&) const = default;
+  };
+  struct CellHash {
+    size_t operator()(const Cell& c) const {
+      return static_cast<size_t>(c.x) * 73856093u ^ static_cast<size_t>(c.y) * 19349663u ^ static_cast<size_t>(c.z) * 83492791u;
+    }
+  };
+  auto cell_of = [&](const Vec3& p) {
+    return Cell{static_cast<int32_t>(std::floor(p.x() / claim_max)), static_cast<int32_t>(std::floor(p.y() / claim_max)),
+                static_cast<int32_t>(std::floor(p.z() / claim_max))};
+  };
+  std::unordered_map<Cell, std::vector<uint32_t>, CellHash> accepted;  // cell -> keypoint slots
+  auto claimed = [&](const Vec3& p) {
+    const Cell c = cell_of(p);
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          const auto it = accepted.find({c.x + dx, c.y + dy, c.z + dz});
+          if (it == accepted.end()) continue;
+          for (uint32_t k : it->second) {
+            // Below the support radius r curvature is not resolved, so a claim is never smaller than r.
+            const float claim = std::max(keypoints[k].characteristic_radius, r);
+            if ((keypoints[k].position - p).squaredNorm() <= claim * claim) return true;
+          }
+        }
+    return false;
+  };
+
   std::vector<int8_t> boundary(params.exclude_boundary ? pts.size() : 0, -1);  // -1: not yet known
   std::vector<Neighbour> near, scratch;
   auto on_boundary = [&](uint32_t i) {
@@ -38,7 +71,8 @@ std::vector<Keypoint> characteristic_scale_keypoints(const KdTree& tree, const s
   };
 
   for (uint32_t c : candidates) {
-    if (suppressed[c]) continue;
+    // The keypoint claims the sphere of its characteristic radius: no other keypoint inside it (eq. 3).
+    if (claimed(pts[c])) continue;
     if (params.exclude_boundary) {
       tree.radius(pts[c], r, near);
       const bool touches = std::any_of(near.begin(), near.end(), [&](const Neighbour& q) { return on_boundary(q.index); });
@@ -48,13 +82,9 @@ std::vector<Keypoint> characteristic_scale_keypoints(const KdTree& tree, const s
       }
     }
     const LocalSurface& s = surfaces[c];
-    Keypoint kp{c, pts[c], characteristic_radius(s.lambda_min), s.lambda_min, s.lambda_max};
-    keypoints.push_back(kp);
+    keypoints.push_back({c, pts[c], characteristic_radius(s.lambda_min), s.lambda_min, s.lambda_max});
+    accepted[cell_of(pts[c])].push_back(static_cast<uint32_t>(keypoints.size() - 1));
     if (params.max_keypoints && keypoints.size() >= params.max_keypoints) break;
-    // The keypoint claims the sphere of its characteristic radius: no other keypoint inside it. Below
-    // the support radius r curvature is not resolved, so the claim is never smaller than r.
-    tree.radius(pts[c], std::max(kp.characteristic_radius, r), near);
-    for (const Neighbour& q : near) suppressed[q.index] = 1;
   }
   if (stats) *stats = st;
   return keypoints;

@@ -36,7 +36,7 @@ float modified_shape_index(float k1, float k2);
 // fewer than 2 points).
 std::array<float, 8> pfh8(const std::vector<Vec3>& points, const std::vector<Vec3>& normals);
 
-Descriptor local_descriptor(const KdTree& tree, const std::vector<LocalSurface>& surfaces,
+Descriptor local_descriptor(const NeighbourIndex& tree, const std::vector<LocalSurface>& surfaces,
                             const Keypoint& keypoint, float support_radius_m,
                             const DescriptorParams& params, std::vector<Neighbour>& scratch);
 

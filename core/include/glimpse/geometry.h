@@ -7,6 +7,7 @@
 #include <memory>
 #include <optional>
 #include <span>
+#include <unordered_map>
 #include <vector>
 
 #include "glimpse/cloud.h"
@@ -37,28 +38,64 @@ struct Neighbour {
   float distance_sq;
 };
 
-// A kd-tree over a point set (nanoflann); the points must outlive the tree and stay unchanged.
-class KdTree {
+// Neighbourhood queries over a point set. Every stage that visits neighbourhoods takes this, so a
+// static cloud (KdTree) and a growing scan (VoxelIndex) share the same code.
+class NeighbourIndex {
+ public:
+  virtual ~NeighbourIndex() = default;
+  // Every point within `radius` of `query` (the query point itself included when it is in the set),
+  // in an order that depends only on the point set.
+  virtual void radius(const Vec3& query, float radius, std::vector<Neighbour>& out) const = 0;
+  // The `k` nearest points, nearest first (ties by index).
+  virtual void nearest(const Vec3& query, size_t k, std::vector<Neighbour>& out) const = 0;
+  virtual const Points& points() const = 0;
+};
+
+// A kd-tree over a fixed point set (nanoflann); the points must outlive the tree and stay unchanged.
+class KdTree final : public NeighbourIndex {
  public:
   explicit KdTree(const Points& points);
-  ~KdTree();
+  ~KdTree() override;
   KdTree(KdTree&&) noexcept;
   KdTree& operator=(KdTree&&) noexcept;
 
-  // Every point within `radius` of `query` (the query point itself included when it is in the set).
-  void radius(const Vec3& query, float radius, std::vector<Neighbour>& out) const;
-  // The `k` nearest points, nearest first.
-  void nearest(const Vec3& query, size_t k, std::vector<Neighbour>& out) const;
-  const Points& points() const;
+  void radius(const Vec3& query, float radius, std::vector<Neighbour>& out) const override;
+  void nearest(const Vec3& query, size_t k, std::vector<Neighbour>& out) const override;
+  const Points& points() const override;
 
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
 
+// A growing point set hashed into cubic cells (append-only): insertion and queries cost what the
+// neighbourhood holds, not what the set holds. Radius queries are fastest for radius <= cell size.
+class VoxelIndex final : public NeighbourIndex {
+ public:
+  explicit VoxelIndex(float cell_m);
+  uint32_t add(const Vec3& p);  // returns the new point's index
+  void radius(const Vec3& query, float radius, std::vector<Neighbour>& out) const override;
+  void nearest(const Vec3& query, size_t k, std::vector<Neighbour>& out) const override;
+  const Points& points() const override { return points_; }
+  float cell() const { return cell_; }
+
+ private:
+  struct Key {
+    int32_t x, y, z;
+    bool operator==(const Key&) const = default;
+  };
+  struct KeyHash {
+    size_t operator()(const Key& k) const;
+  };
+  Key key(const Vec3& p) const;
+  float cell_;
+  Points points_;
+  std::unordered_map<Key, std::vector<uint32_t>, KeyHash> cells_;
+};
+
 // Median distance from a point to its k-th nearest other point (over a deterministic sample of at
 // most `sample` points); 0 for fewer than 2 points. k = 1 gives the median spacing.
-float median_knn_distance(const KdTree& tree, size_t k, size_t sample = 4000);
+float median_knn_distance(const NeighbourIndex& tree, size_t k, size_t sample = 4000);
 
 // ---- Local surfaces ------------------------------------------------------------------------------
 
@@ -72,7 +109,7 @@ struct SurfaceParams {
 };
 
 // The radius actually used for a cloud: params.support_radius_m, or the automatic one.
-float support_radius(const KdTree& tree, const SurfaceParams& params);
+float support_radius(const NeighbourIndex& tree, const SurfaceParams& params);
 
 // Per point: PCA normal (small window r), the quadric z = 1/2 p1 x^2 + p2 xy + 1/2 p3 y^2 + p4 x +
 // p5 y + p6 fitted in the point's PCA frame, its signed principal curvatures and Harris eigenvalues.
@@ -94,30 +131,30 @@ Eigen::Vector2f principal_curvatures(float p1, float p2, float p3, float p4, flo
 
 // One surface per point, all neighbourhoods of radius r. Normals are oriented towards `viewpoint`
 // when given, else by propagation (orient_normals_propagated).
-std::vector<LocalSurface> local_surfaces(const KdTree& tree, float r,
+std::vector<LocalSurface> local_surfaces(const NeighbourIndex& tree, float r,
                                          const std::optional<Vec3>& viewpoint,
                                          const SurfaceParams& params);
 
 // The surface of one point (the work unit of local_surfaces; also used for incremental updates).
 // The normal is oriented towards `viewpoint` when given, else left as PCA gives it.
-LocalSurface local_surface(const KdTree& tree, uint32_t index, float r,
+LocalSurface local_surface(const NeighbourIndex& tree, uint32_t index, float r,
                            const std::optional<Vec3>& viewpoint, int min_neighbours,
                            std::vector<Neighbour>& scratch);
 
 // PCA normal of the neighbourhood of radius `radius` around a point (unoriented); zero if < 3 points.
-Vec3 pca_normal(const KdTree& tree, const Vec3& centre, float radius,
+Vec3 pca_normal(const NeighbourIndex& tree, const Vec3& centre, float radius,
                 std::vector<Neighbour>& scratch);
 
 // Normal orientation propagation (Hoppe et al. 1992): a minimum spanning tree over the k-nearest-
 // neighbour graph weighted by 1 - |n_i . n_j| flips normals to agree with their parent; each connected
 // component is then turned outward (away from its centroid). Deterministic and pose-independent.
-void orient_normals_propagated(const KdTree& tree, std::vector<LocalSurface>& surfaces, int k = 8);
+void orient_normals_propagated(const NeighbourIndex& tree, std::vector<LocalSurface>& surfaces, int k = 8);
 
 // ---- Boundaries of 2.5D views (sec. 3.2.2) -------------------------------------------------------
 
 // A point is on the boundary when the neighbours projected onto its tangent plane leave an angular
 // gap larger than `max_gap_rad` around it (as PCL's BoundaryEstimation).
-bool is_boundary_point(const KdTree& tree, uint32_t index, const Vec3& normal, float r,
+bool is_boundary_point(const NeighbourIndex& tree, uint32_t index, const Vec3& normal, float r,
                        float max_gap_rad, std::vector<Neighbour>& scratch);
 
 // ---- Hulls ---------------------------------------------------------------------------------------

@@ -46,7 +46,7 @@ inline float characteristic_radius(float lambda_min) {
 
 // Deterministic: the same surfaces give the same keypoints, in the same order (descending lambda_min,
 // ties by index), whatever the thread count.
-std::vector<Keypoint> characteristic_scale_keypoints(const KdTree& tree,
+std::vector<Keypoint> characteristic_scale_keypoints(const NeighbourIndex& tree,
                                                      const std::vector<LocalSurface>& surfaces,
                                                      float support_radius_m,
                                                      const KeypointParams& params,
