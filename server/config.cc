@@ -1,0 +1,155 @@
+#include "config.h"
+
+#include <charconv>
+#include <cstdlib>
+#include <thread>
+
+namespace glimpse::server {
+namespace {
+
+struct Option {
+  const char* flag;  // without "--"
+  const char* env;
+  const char* help;
+  std::function<Status(ServerConfig&, const std::string&)> set;
+};
+
+template <class T>
+Status ParseNumber(const std::string& text, T min, T& out) {
+  T v{};
+  auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+  if (ec != std::errc() || end != text.data() + text.size() || v < min)
+    return invalid_argument("'" + text + "' is not a number >= " + std::to_string(min));
+  out = v;
+  return {};
+}
+
+template <class T>
+std::function<Status(ServerConfig&, const std::string&)> Number(T ServerConfig::*field, T min) {
+  return [field, min](ServerConfig& c, const std::string& v) { return ParseNumber(v, min, c.*field); };
+}
+
+template <class T>
+std::function<Status(ServerConfig&, const std::string&)> Limit(T Limits::*field, T min) {
+  return [field, min](ServerConfig& c, const std::string& v) { return ParseNumber(v, min, c.limits.*field); };
+}
+
+std::function<Status(ServerConfig&, const std::string&)> Seconds(std::chrono::seconds* (*get)(ServerConfig&)) {
+  return [get](ServerConfig& c, const std::string& v) {
+    long long s = 0;
+    if (Status st = ParseNumber(v, 1LL, s); !st.ok()) return st;
+    *get(c) = std::chrono::seconds(s);
+    return Status{};
+  };
+}
+
+const std::vector<Option>& Options() {
+  static const std::vector<Option> options = {
+      {"address", "GLIMPSE_ADDRESS", "gRPC listen address [0.0.0.0:50051]",
+       [](ServerConfig& c, const std::string& v) {
+         if (v.empty()) return Status(invalid_argument("empty address"));
+         c.address = v;
+         return Status{};
+       }},
+      {"db", "GLIMPSE_DB", "SQLite model store; its folder is created [./var/glimpse.db]",
+       [](ServerConfig& c, const std::string& v) {
+         if (v.empty()) return Status(invalid_argument("empty database path"));
+         c.db_path = v;
+         return Status{};
+       }},
+      {"metrics-port", "GLIMPSE_METRICS_PORT", "Prometheus /metrics HTTP port, 0 disables [9464]",
+       Number(&ServerConfig::metrics_port, 0)},
+      {"threads", "GLIMPSE_THREADS", "gRPC worker threads, 0 = max streams + 2 per core [0]",
+       Number(&ServerConfig::threads, 0)},
+      {"shutdown-grace-seconds", "GLIMPSE_SHUTDOWN_GRACE_SECONDS",
+       "how long in-flight calls may finish after SIGTERM/SIGINT [10]",
+       Seconds([](ServerConfig& c) { return &c.shutdown_grace; })},
+      {"max-message-bytes", "GLIMPSE_MAX_MESSAGE_BYTES", "largest gRPC message [67108864]",
+       Limit(&Limits::max_message_bytes, size_t{1024})},
+      {"max-points", "GLIMPSE_MAX_POINTS", "points per cloud or chunk [1000000]",
+       Limit(&Limits::max_points_per_cloud, size_t{1})},
+      {"max-streams", "GLIMPSE_MAX_STREAMS", "concurrent Train/StreamClassify calls [64]",
+       Limit(&Limits::max_concurrent_streams, size_t{1})},
+      {"max-stream-seconds", "GLIMPSE_MAX_STREAM_SECONDS",
+       "longest StreamClassify call, and Train while receiving [600]",
+       Seconds([](ServerConfig& c) { return &c.limits.max_stream_duration; })},
+      {"max-train-clouds", "GLIMPSE_MAX_TRAIN_CLOUDS", "clouds per Train call [100000]",
+       Limit(&Limits::max_train_clouds, size_t{1})},
+      {"max-train-points", "GLIMPSE_MAX_TRAIN_POINTS", "points summed over a Train call [50000000]",
+       Limit(&Limits::max_train_points, size_t{1})},
+      {"max-session-points", "GLIMPSE_MAX_SESSION_POINTS", "points accumulated by one scan session [1000000]",
+       Limit(&Limits::max_session_points, size_t{1})},
+      {"max-cached-models", "GLIMPSE_MAX_CACHED_MODELS", "deserialized models kept in memory [16]",
+       Limit(&Limits::max_cached_models, size_t{1})},
+  };
+  return options;
+}
+
+}  // namespace
+
+EnvFn ProcessEnv() {
+  return [](const std::string& name) -> std::optional<std::string> {
+    const char* v = std::getenv(name.c_str());
+    return v ? std::optional<std::string>(v) : std::nullopt;
+  };
+}
+
+Expected<ServerConfig> ParseConfig(const std::vector<std::string>& args, const EnvFn& env) {
+  ServerConfig config;
+  for (const Option& o : Options()) {
+    if (auto v = env ? env(o.env) : std::nullopt) {
+      if (Status s = o.set(config, *v); !s.ok()) return invalid_argument(std::string(o.env) + ": " + s.error().message);
+    }
+  }
+  for (size_t i = 0; i < args.size(); ++i) {
+    const std::string& arg = args[i];
+    if (arg == "--help" || arg == "-h") {
+      config.help = true;
+      continue;
+    }
+    if (arg.rfind("--", 0) != 0) return invalid_argument("unexpected argument '" + arg + "' (see --help)");
+    std::string name = arg.substr(2), value;
+    bool has_value = false;
+    if (auto eq = name.find('='); eq != std::string::npos) {
+      value = name.substr(eq + 1);
+      name = name.substr(0, eq);
+      has_value = true;
+    }
+    const Option* option = nullptr;
+    for (const Option& o : Options())
+      if (name == o.flag) option = &o;
+    if (!option) return invalid_argument("unknown flag --" + name + " (see --help)");
+    if (!has_value) {
+      if (i + 1 >= args.size()) return invalid_argument("--" + name + " needs a value");
+      value = args[++i];
+    }
+    if (Status s = option->set(config, value); !s.ok()) return invalid_argument("--" + name + ": " + s.error().message);
+  }
+  return config;
+}
+
+std::string Usage() {
+  std::string out =
+      "glimpse-server: the glimpse.v1.Glimpse gRPC service (recognise object categories from partial point\n"
+      "clouds) with a SQLite model store, gRPC health checking and reflection, and Prometheus metrics.\n\n"
+      "usage: glimpse-server [--flag=value ...]\n\n"
+      "Every flag can also be set by its environment variable; flags win.\n\n";
+  for (const Option& o : Options()) {
+    std::string left = "  --" + std::string(o.flag) + "=N";
+    if (std::string_view(o.flag) == "address" || std::string_view(o.flag) == "db") left = "  --" + std::string(o.flag) + "=S";
+    left.resize(std::max<size_t>(left.size() + 1, 28), ' ');
+    std::string env = o.env;
+    env.resize(std::max<size_t>(env.size() + 1, 32), ' ');
+    out += left + env + o.help + "\n";
+  }
+  out += "  --help                      this text\n\nSIGTERM/SIGINT: stop accepting calls, let in-flight ones finish (up to the grace period), close the store.\n";
+  return out;
+}
+
+int EffectiveThreads(const ServerConfig& config) {
+  if (config.threads > 0) return config.threads;
+  const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  return static_cast<int>(config.limits.max_concurrent_streams) + std::max(4, 2 * cores);
+}
+
+}  // namespace glimpse::server

@@ -1,0 +1,35 @@
+// glimpse-server configuration: defaults here, then GLIMPSE_* environment variables, then flags.
+#pragma once
+
+#include <chrono>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "glimpse/expected.h"
+#include "limits.h"
+#include "store.h"
+
+namespace glimpse::server {
+
+struct ServerConfig {
+  std::string address = "0.0.0.0:50051";
+  std::string db_path = kDefaultDbPath;
+  int metrics_port = 9464;   // Prometheus /metrics; 0 disables
+  int threads = 0;           // gRPC worker threads; 0: max streams + 2 per core (at least 4)
+  std::chrono::seconds shutdown_grace{10};  // in-flight calls get this long after SIGTERM/SIGINT
+  Limits limits;
+  bool help = false;
+};
+
+using EnvFn = std::function<std::optional<std::string>(const std::string&)>;
+EnvFn ProcessEnv();  // std::getenv
+
+// args excludes argv[0]. Flags: --name=value or --name value. Unknown flags and bad numbers are
+// INVALID_ARGUMENT, naming the flag or variable.
+Expected<ServerConfig> ParseConfig(const std::vector<std::string>& args, const EnvFn& env);
+std::string Usage();
+int EffectiveThreads(const ServerConfig& config);
+
+}  // namespace glimpse::server

@@ -1,0 +1,82 @@
+// The real Engine: glimpse::train/classify/serialize/deserialize and ScanSession::create, with the
+// Train header's parameters mapped onto core's TrainParams (unset fields keep core's defaults).
+#include <algorithm>
+#include <limits>
+
+#include "engine.h"
+#include "glimpse/train_params.h"
+
+namespace glimpse::server {
+namespace {
+
+Expected<int> ToInt(uint32_t v, const char* field) {
+  if (v > static_cast<uint32_t>(std::numeric_limits<int>::max())) return invalid_argument(std::string(field) + " is too large");
+  return static_cast<int>(v);
+}
+
+}  // namespace
+
+Expected<TrainParams> ToTrainParams(const TrainSpec& spec) {
+  TrainParams params;
+  if (!spec.methods.empty()) params.methods = spec.methods;
+  if (spec.default_method) {
+    params.default_method = *spec.default_method;
+  } else if (std::find(params.methods.begin(), params.methods.end(), params.default_method) == params.methods.end()) {
+    params.default_method = params.methods.front();  // core's default (fusion) was not asked for
+  }
+  const v1::TrainParameters& p = spec.parameters;
+  if (p.has_support_radius_m()) params.features.surface.support_radius_m = static_cast<float>(p.support_radius_m());
+  struct IntField {
+    bool has;
+    uint32_t value;
+    const char* name;
+    int* target;
+  };
+  const IntField fields[] = {
+      {p.has_bok_codebook_size(), p.bok_codebook_size(), "bok_codebook_size", &params.bok_clusters},
+      {p.has_bog_keypoint_clusters(), p.bog_keypoint_clusters(), "bog_keypoint_clusters", &params.bog_keypoint_clusters},
+      {p.has_bog_volume_clusters(), p.bog_volume_clusters(), "bog_volume_clusters", &params.bog_volume_clusters},
+      {p.has_bog_pca_dims(), p.bog_pca_dims(), "bog_pca_dims", &params.bog_pca_dims},
+      {p.has_kgh_keypoint_clusters(), p.kgh_keypoint_clusters(), "kgh_keypoint_clusters", &params.kgh_clusters},
+      {p.has_kgh_distance_bins(), p.kgh_distance_bins(), "kgh_distance_bins", &params.kgh_distance_bins},
+      {p.has_centres_per_category(), p.centres_per_category(), "centres_per_category",
+       &params.decision.centres_per_category},
+      {p.has_neighbours(), p.neighbours(), "neighbours", &params.decision.neighbours},
+  };
+  for (const IntField& f : fields) {
+    if (!f.has) continue;
+    auto v = ToInt(f.value, f.name);
+    if (!v) return v.error();
+    *f.target = *v;
+  }
+  switch (p.decision()) {
+    case v1::DECISION_KIND_NEAREST_CENTRE: params.decision.kind = DecisionKind::kNearestCentre; break;
+    case v1::DECISION_KIND_NEAREST_NEIGHBOURS: params.decision.kind = DecisionKind::kNearestNeighbours; break;
+    case v1::DECISION_KIND_CENTRES: params.decision.kind = DecisionKind::kCentres; break;
+    default: break;  // unspecified: core's default
+  }
+  if (p.has_seed()) params.seed = p.seed();
+  if (p.has_normalise_histograms()) params.normalise_histograms = p.normalise_histograms();
+  return params;
+}
+
+Engine CoreEngine() {
+  Engine e;
+  e.train = [](const std::vector<LabelledCloud>& data, const TrainSpec& spec, const ProgressFn& progress,
+               const CancelFn& cancel) -> Expected<Model> {
+    auto params = ToTrainParams(spec);
+    if (!params) return params.error();
+    return glimpse::train(data, *params, progress, cancel);
+  };
+  e.classify = [](const Model& model, const Cloud& cloud, std::optional<Method> method, const CancelFn& cancel) {
+    return glimpse::classify(model, cloud, method, cancel);
+  };
+  e.serialize = [](const Model& model) { return glimpse::serialize(model); };
+  e.deserialize = [](std::span<const uint8_t> bytes) { return glimpse::deserialize(bytes); };
+  e.create_session = [](std::shared_ptr<const Model> model, const SessionParams& params) {
+    return ScanSession::create(std::move(model), params);
+  };
+  return e;
+}
+
+}  // namespace glimpse::server

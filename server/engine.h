@@ -1,0 +1,43 @@
+// The core functions the service calls, held as values so tests can hand in fakes (and so everything
+// but core_engine.cc builds without the recogniser). CoreEngine() returns the real glimpse:: ones.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "glimpse/model.h"
+#include "glimpse/session.h"
+#include "glimpse/v1/glimpse.pb.h"
+
+namespace glimpse::server {
+
+// What a Train header asks for, before it is mapped onto core's TrainParams.
+struct TrainSpec {
+  std::vector<Method> methods;  // empty: the recogniser's default set
+  std::optional<Method> default_method;
+  v1::TrainParameters parameters;
+};
+
+struct Engine {
+  std::function<Expected<Model>(const std::vector<LabelledCloud>&, const TrainSpec&, const ProgressFn&,
+                                const CancelFn&)>
+      train;
+  std::function<Expected<Classification>(const Model&, const Cloud&, std::optional<Method>,
+                                         const CancelFn&)>
+      classify;
+  std::function<std::vector<uint8_t>(const Model&)> serialize;
+  std::function<Expected<Model>(std::span<const uint8_t>)> deserialize;
+  std::function<Expected<std::unique_ptr<ScanSession>>(std::shared_ptr<const Model>, const SessionParams&)>
+      create_session;
+};
+
+// The real recogniser (core_engine.cc, target glimpse_server_engine).
+Engine CoreEngine();
+// Maps a Train header onto core's TrainParams (train_params.h); unset fields keep core's defaults.
+Expected<TrainParams> ToTrainParams(const TrainSpec& spec);
+
+}  // namespace glimpse::server

@@ -1,0 +1,61 @@
+#include "limits.h"
+
+#include <vector>
+
+namespace glimpse::server {
+
+StreamRegistry::StreamRegistry(size_t max_streams, std::chrono::steady_clock::duration max_duration,
+                               SteadyClock clock)
+    : max_streams_(max_streams), max_duration_(max_duration), clock_(std::move(clock)) {
+  if (!clock_) clock_ = [] { return std::chrono::steady_clock::now(); };
+}
+
+Expected<StreamRegistry::Ticket> StreamRegistry::Admit(std::function<void()> cancel) {
+  std::lock_guard lock(mutex_);
+  if (slots_.size() >= max_streams_)
+    return resource_exhausted("too many concurrent streams (limit " + std::to_string(max_streams_) + ")");
+  uint64_t id = next_id_++;
+  slots_.emplace(id, Slot{std::move(cancel), clock_(), true, false});
+  return Ticket(this, id);
+}
+
+size_t StreamRegistry::Reap() {
+  std::vector<std::function<void()>> to_cancel;
+  {
+    std::lock_guard lock(mutex_);
+    const auto now = clock_();
+    for (auto& [id, slot] : slots_) {
+      if (slot.armed && !slot.expired && now - slot.start > max_duration_) {
+        slot.expired = true;
+        to_cancel.push_back(slot.cancel);
+      }
+    }
+  }
+  for (auto& cancel : to_cancel)
+    if (cancel) cancel();  // outside the lock: TryCancel may run callbacks
+  return to_cancel.size();
+}
+
+size_t StreamRegistry::active() const {
+  std::lock_guard lock(mutex_);
+  return slots_.size();
+}
+
+StreamRegistry::Ticket::~Ticket() {
+  if (!registry_) return;
+  std::lock_guard lock(registry_->mutex_);
+  registry_->slots_.erase(id_);
+}
+
+bool StreamRegistry::Ticket::expired() const {
+  std::lock_guard lock(registry_->mutex_);
+  auto it = registry_->slots_.find(id_);
+  return it != registry_->slots_.end() && it->second.expired;
+}
+
+void StreamRegistry::Ticket::disarm() {
+  std::lock_guard lock(registry_->mutex_);
+  if (auto it = registry_->slots_.find(id_); it != registry_->slots_.end()) it->second.armed = false;
+}
+
+}  // namespace glimpse::server

@@ -1,0 +1,70 @@
+// Server limits (defaults in one place) and the registry that admits streams up to a concurrency
+// limit and cancels the ones that outlive the stream duration limit.
+#pragma once
+
+#include <chrono>
+#include <cstddef>
+#include <functional>
+#include <map>
+#include <mutex>
+
+#include "glimpse/expected.h"
+
+namespace glimpse::server {
+
+struct Limits {
+  size_t max_message_bytes = 64u << 20;       // gRPC receive/send limit per message
+  size_t max_points_per_cloud = 1'000'000;    // per cloud, chunk or training cloud
+  size_t max_concurrent_streams = 64;         // Train + StreamClassify calls at once
+  std::chrono::seconds max_stream_duration{600};  // StreamClassify, and Train while receiving
+  size_t max_train_clouds = 100'000;          // per Train call
+  size_t max_train_points = 50'000'000;       // summed over a Train call's clouds (~600 MB)
+  size_t max_session_points = 1'000'000;      // accumulated in one StreamClassify session
+  size_t max_session_chunks = 10'000;
+  size_t max_cached_models = 16;              // deserialized models kept in memory
+};
+
+using SteadyClock = std::function<std::chrono::steady_clock::time_point()>;
+
+class StreamRegistry {
+ public:
+  StreamRegistry(size_t max_streams, std::chrono::steady_clock::duration max_duration, SteadyClock clock);
+
+  // A slot held by one stream; released on destruction.
+  class Ticket {
+   public:
+    Ticket(Ticket&& other) noexcept : registry_(other.registry_), id_(other.id_) { other.registry_ = nullptr; }
+    Ticket& operator=(Ticket&&) = delete;
+    ~Ticket();
+    bool expired() const;  // the stream was cancelled for running too long
+    void disarm();         // from now on, no duration limit (Train once all clouds are in)
+
+   private:
+    friend class StreamRegistry;
+    Ticket(StreamRegistry* r, uint64_t id) : registry_(r), id_(id) {}
+    StreamRegistry* registry_;
+    uint64_t id_;
+  };
+
+  // RESOURCE_EXHAUSTED when max_streams are open. `cancel` stops the stream (ServerContext::TryCancel).
+  Expected<Ticket> Admit(std::function<void()> cancel);
+  // Cancels armed streams older than max_duration; returns how many. Called by a watchdog thread.
+  size_t Reap();
+  size_t active() const;
+
+ private:
+  struct Slot {
+    std::function<void()> cancel;
+    std::chrono::steady_clock::time_point start;
+    bool armed = true;
+    bool expired = false;
+  };
+  size_t max_streams_;
+  std::chrono::steady_clock::duration max_duration_;
+  SteadyClock clock_;
+  mutable std::mutex mutex_;
+  uint64_t next_id_ = 0;
+  std::map<uint64_t, Slot> slots_;
+};
+
+}  // namespace glimpse::server

@@ -1,0 +1,96 @@
+// glimpse-server: flags/environment -> model store -> metrics endpoint -> gRPC server; runs until
+// SIGTERM/SIGINT, then drains in-flight calls and closes the store.
+#include <prometheus/exposer.h>
+
+#include <csignal>
+#include <cstdio>
+#include <exception>
+#include <memory>
+#include <pthread.h>
+
+#include "config.h"
+#include "engine.h"
+#include "log.h"
+#include "metrics.h"
+#include "server.h"
+#include "service.h"
+#include "store.h"
+
+using namespace glimpse::server;
+
+namespace {
+
+int Run(const ServerConfig& config, const sigset_t& signals) {
+  auto store = ModelStore::Open(config.db_path);
+  if (!store) {
+    std::fprintf(stderr, "glimpse-server: cannot open the model store: %s\n", store.error().message.c_str());
+    return 1;
+  }
+  Metrics metrics;
+  std::unique_ptr<prometheus::Exposer> exposer;
+  if (config.metrics_port > 0) {
+    try {
+      exposer = std::make_unique<prometheus::Exposer>("0.0.0.0:" + std::to_string(config.metrics_port));
+      exposer->RegisterCollectable(metrics.registry());
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "glimpse-server: cannot serve metrics on port %d: %s\n", config.metrics_port, e.what());
+      return 1;
+    }
+  }
+
+  ServiceOptions options;
+  options.store = store->get();
+  options.engine = CoreEngine();
+  options.limits = config.limits;
+  options.metrics = &metrics;
+  GlimpseService service(std::move(options));
+
+  GrpcServerOptions grpc_options;
+  grpc_options.address = config.address;
+  grpc_options.threads = EffectiveThreads(config);
+  grpc_options.max_message_bytes = config.limits.max_message_bytes;
+  auto running = StartGrpcServer(grpc_options, &service);
+  if (!running) {
+    std::fprintf(stderr, "glimpse-server: %s\n", running.error().message.c_str());
+    return 1;
+  }
+  LogEvent("info", "serving glimpse.v1.Glimpse on " + config.address + " (port " + std::to_string(running->port) +
+                       "), store " + config.db_path + ", metrics port " + std::to_string(config.metrics_port) +
+                       ", " + std::to_string(grpc_options.threads) + " threads");
+
+  int signal = 0;
+  sigwait(&signals, &signal);
+  LogEvent("info", std::string("received ") + (signal == SIGTERM ? "SIGTERM" : "SIGINT") + ", draining calls for up to " +
+                       std::to_string(config.shutdown_grace.count()) + " s");
+  ShutdownGrpcServer(*running->server, config.shutdown_grace);
+  LogEvent("info", "stopped; closing the model store");
+  return 0;  // service, then store, are destroyed here: the database is closed cleanly
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  // Block the stop signals in every thread (gRPC's and prometheus' inherit the mask); the main thread
+  // waits for them with sigwait, so no code runs in a signal handler.
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGTERM);
+  sigaddset(&signals, SIGINT);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+
+  auto config = ParseConfig(std::vector<std::string>(argv + 1, argv + argc), ProcessEnv());
+  if (!config) {
+    std::fprintf(stderr, "glimpse-server: %s\n", config.error().message.c_str());
+    return 2;
+  }
+  if (config->help) {
+    std::fputs(Usage().c_str(), stdout);
+    return 0;
+  }
+  try {
+    return Run(*config, signals);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "glimpse-server: fatal: %s\n", e.what());
+    return 1;
+  }
+}

@@ -1,0 +1,88 @@
+#include "metrics.h"
+
+#include <string>
+
+namespace glimpse::server {
+
+const char* StatusCodeName(grpc::StatusCode code) {
+  switch (code) {
+    case grpc::StatusCode::OK: return "OK";
+    case grpc::StatusCode::CANCELLED: return "CANCELLED";
+    case grpc::StatusCode::UNKNOWN: return "UNKNOWN";
+    case grpc::StatusCode::INVALID_ARGUMENT: return "INVALID_ARGUMENT";
+    case grpc::StatusCode::DEADLINE_EXCEEDED: return "DEADLINE_EXCEEDED";
+    case grpc::StatusCode::NOT_FOUND: return "NOT_FOUND";
+    case grpc::StatusCode::ALREADY_EXISTS: return "ALREADY_EXISTS";
+    case grpc::StatusCode::PERMISSION_DENIED: return "PERMISSION_DENIED";
+    case grpc::StatusCode::UNAUTHENTICATED: return "UNAUTHENTICATED";
+    case grpc::StatusCode::RESOURCE_EXHAUSTED: return "RESOURCE_EXHAUSTED";
+    case grpc::StatusCode::FAILED_PRECONDITION: return "FAILED_PRECONDITION";
+    case grpc::StatusCode::ABORTED: return "ABORTED";
+    case grpc::StatusCode::OUT_OF_RANGE: return "OUT_OF_RANGE";
+    case grpc::StatusCode::UNIMPLEMENTED: return "UNIMPLEMENTED";
+    case grpc::StatusCode::INTERNAL: return "INTERNAL";
+    case grpc::StatusCode::UNAVAILABLE: return "UNAVAILABLE";
+    case grpc::StatusCode::DATA_LOSS: return "DATA_LOSS";
+    default: return "UNKNOWN";
+  }
+}
+
+namespace {
+// 1 ms .. ~2 min, roughly x2.5 apart: classification is milliseconds, training minutes.
+const prometheus::Histogram::BucketBoundaries kLatencyBuckets = {
+    0.001, 0.0025, 0.005, 0.01, 0.025, 0.05, 0.1, 0.25, 0.5, 1, 2.5, 5, 10, 25, 60, 120};
+
+double Value(const prometheus::Family<prometheus::Counter>& f, const prometheus::Labels& labels) {
+  if (!f.Has(labels)) return 0;
+  return const_cast<prometheus::Family<prometheus::Counter>&>(f).Add(labels).Value();
+}
+}  // namespace
+
+Metrics::Metrics(std::shared_ptr<prometheus::Registry> registry)
+    : registry_(std::move(registry)),
+      requests_(prometheus::BuildCounter()
+                    .Name("glimpse_rpc_requests_total")
+                    .Help("Finished RPCs by method and gRPC status code")
+                    .Register(*registry_)),
+      errors_(prometheus::BuildCounter()
+                  .Name("glimpse_rpc_errors_total")
+                  .Help("RPCs that finished with a status other than OK, by method and code")
+                  .Register(*registry_)),
+      latency_(prometheus::BuildHistogram()
+                   .Name("glimpse_rpc_duration_seconds")
+                   .Help("Server-side RPC latency by method")
+                   .Register(*registry_)),
+      active_streams_(prometheus::BuildGauge()
+                          .Name("glimpse_active_streams")
+                          .Help("Open streaming RPCs by method")
+                          .Register(*registry_)),
+      models_loaded_(prometheus::BuildGauge()
+                         .Name("glimpse_models_loaded")
+                         .Help("Deserialized models held in memory")
+                         .Register(*registry_)
+                         .Add({})) {}
+
+void Metrics::RecordRpc(std::string_view rpc, grpc::StatusCode code, double seconds) {
+  prometheus::Labels labels{{"method", std::string(rpc)}, {"code", StatusCodeName(code)}};
+  requests_.Add(labels).Increment();
+  if (code != grpc::StatusCode::OK) errors_.Add(labels).Increment();
+  latency_.Add({{"method", std::string(rpc)}}, kLatencyBuckets).Observe(seconds);
+}
+
+void Metrics::StreamOpened(std::string_view rpc) { active_streams_.Add({{"method", std::string(rpc)}}).Increment(); }
+void Metrics::StreamClosed(std::string_view rpc) { active_streams_.Add({{"method", std::string(rpc)}}).Decrement(); }
+void Metrics::SetModelsLoaded(size_t n) { models_loaded_.Set(static_cast<double>(n)); }
+
+double Metrics::RequestCount(std::string_view rpc, grpc::StatusCode code) const {
+  return Value(requests_, {{"method", std::string(rpc)}, {"code", StatusCodeName(code)}});
+}
+
+double Metrics::ActiveStreams(std::string_view rpc) const {
+  prometheus::Labels labels{{"method", std::string(rpc)}};
+  if (!active_streams_.Has(labels)) return 0;
+  return active_streams_.Add(labels).Value();
+}
+
+double Metrics::ModelsLoaded() const { return models_loaded_.Value(); }
+
+}  // namespace glimpse::server

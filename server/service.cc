@@ -1,0 +1,325 @@
+#include "service.h"
+
+#include <grpcpp/server_context.h>
+
+#include <condition_variable>
+#include <exception>
+#include <mutex>
+
+#include "convert.h"
+#include "train.h"
+
+namespace glimpse::server {
+namespace {
+
+constexpr size_t kReceivingProgressEvery = 256;  // clouds between "receiving" progress messages
+
+double MsSince(std::chrono::steady_clock::time_point start, std::chrono::steady_clock::time_point now) {
+  return std::chrono::duration<double, std::milli>(now - start).count();
+}
+
+std::string RefText(std::string_view name, uint32_t version) {
+  return version ? std::string(name) + "@" + std::to_string(version) : std::string(name);
+}
+
+const char* MethodText(const std::optional<Method>& m) {
+  static constexpr const char* kNames[] = {"bok", "bog", "kgh", "vfh", "esf", "fusion"};
+  if (!m) return "default";
+  auto i = static_cast<size_t>(*m);
+  return i < std::size(kNames) ? kNames[i] : "unknown";
+}
+
+void FillRef(const ModelRecord& r, v1::ModelRef* ref) {
+  ref->set_name(r.name);
+  ref->set_version(r.version);
+}
+
+}  // namespace
+
+CancelFn CancelFor(const grpc::ServerContext* ctx) {
+  return [ctx] { return const_cast<grpc::ServerContext*>(ctx)->IsCancelled() || DeadlinePassed(ctx); };
+}
+
+bool DeadlinePassed(const grpc::ServerContext* ctx) {
+  const auto deadline = ctx->deadline();
+  return deadline != std::chrono::system_clock::time_point::max() && std::chrono::system_clock::now() >= deadline;
+}
+
+GlimpseService::GlimpseService(ServiceOptions options)
+    : options_(std::move(options)),
+      cache_(*options_.store, options_.engine.deserialize, options_.limits.max_cached_models),
+      streams_(options_.limits.max_concurrent_streams, options_.limits.max_stream_duration, options_.clock) {
+  if (!options_.clock) options_.clock = [] { return std::chrono::steady_clock::now(); };
+  if (options_.reap_interval.count() > 0) {
+    watchdog_ = std::jthread([this](std::stop_token stop) {
+      std::mutex m;
+      std::condition_variable_any cv;
+      std::unique_lock lock(m);
+      while (!stop.stop_requested()) {
+        cv.wait_for(lock, stop, options_.reap_interval, [] { return false; });
+        if (!stop.stop_requested()) streams_.Reap();
+      }
+    });
+  }
+}
+
+GlimpseService::~GlimpseService() = default;  // jthread: stop + join
+
+template <class Body>
+grpc::Status GlimpseService::Handle(grpc::ServerContext* ctx, std::string_view rpc, RequestLog& log, Body&& body) {
+  const auto start = options_.clock();
+  log.rpc = std::string(rpc);
+  Status result;
+  try {
+    result = body();
+  } catch (const std::exception& e) {
+    result = internal_error(std::string("unexpected exception: ") + e.what());
+  } catch (...) {
+    result = internal_error("unexpected exception");
+  }
+  grpc::Status status = result.ok() ? grpc::Status::OK : ToGrpcStatus(result.error(), DeadlinePassed(ctx));
+  try {
+    const double ms = MsSince(start, options_.clock());
+    if (options_.metrics) {
+      options_.metrics->RecordRpc(rpc, status.error_code(), ms / 1000.0);
+      options_.metrics->SetModelsLoaded(cache_.size());
+    }
+    if (options_.log) {
+      log.latency_ms = ms;
+      log.code = StatusCodeName(status.error_code());
+      log.message = status.error_message();
+      options_.log(log);
+    }
+  } catch (...) {  // metrics and logs must not turn a finished call into a crash
+  }
+  return status;
+}
+
+Expected<StreamRegistry::Ticket> GlimpseService::OpenStream(grpc::ServerContext* ctx) {
+  return streams_.Admit([ctx] { ctx->TryCancel(); });
+}
+
+grpc::Status GlimpseService::Classify(grpc::ServerContext* ctx, const v1::ClassifyRequest* request,
+                                      v1::ClassifyResponse* response) {
+  RequestLog log;
+  return Handle(ctx, "Classify", log, [&]() -> Status {
+    const auto start = options_.clock();
+    log.model = RefText(request->model().name(), request->model().version());
+    if (Status s = ValidateModelName(request->model().name()); !s.ok()) return s;
+    auto method = MethodFromProto(request->method());
+    if (!method) return method.error();
+    log.method = MethodText(*method);
+    auto cloud = CloudFromProto(request->cloud(), options_.limits.max_points_per_cloud);
+    if (!cloud) return cloud.error();
+    log.points = cloud->points.size();
+    auto loaded = cache_.Load(request->model().name(), request->model().version());
+    if (!loaded) return loaded.error();
+    log.model = RefText(loaded->record.name, loaded->record.version);
+    auto result = options_.engine.classify(*loaded->model, *cloud, *method, CancelFor(ctx));
+    if (!result) return result.error();
+    ToProto(*result, response);
+    FillRef(loaded->record, response->mutable_model());
+    response->set_model_id(static_cast<uint64_t>(loaded->record.id));
+    response->mutable_timings()->set_model_load_ms(loaded->load_ms);
+    response->mutable_timings()->set_total_ms(MsSince(start, options_.clock()));
+    log.method = MethodText(result->method);
+    return {};
+  });
+}
+
+grpc::Status GlimpseService::StreamClassify(grpc::ServerContext* ctx,
+                                            grpc::ServerReaderWriter<v1::Decision, v1::ScanChunk>* stream) {
+  RequestLog log;
+  return Handle(ctx, "StreamClassify", log, [&]() -> Status {
+    auto ticket = OpenStream(ctx);
+    if (!ticket) return ticket.error();
+    if (options_.metrics) options_.metrics->StreamOpened("StreamClassify");
+    struct Closer {
+      Metrics* m;
+      ~Closer() { if (m) m->StreamClosed("StreamClassify"); }
+    } closer{options_.metrics};
+
+    std::unique_ptr<ScanSession> session;
+    LoadedModel model;
+    Method method = Method::kFusion;
+    v1::ScanChunk chunk;
+    while (stream->Read(&chunk)) {
+      const auto start = options_.clock();
+      ++log.messages;
+      if (!session) {
+        log.model = RefText(chunk.model().name(), chunk.model().version());
+        if (Status s = ValidateModelName(chunk.model().name()); !s.ok()) return s;
+        auto m = MethodFromProto(chunk.method());
+        if (!m) return m.error();
+        auto loaded = cache_.Load(chunk.model().name(), chunk.model().version());
+        if (!loaded) return loaded.error();
+        model = std::move(*loaded);
+        method = m->value_or(model.model->default_method);
+        log.model = RefText(model.record.name, model.record.version);
+        log.method = MethodText(method);
+        SessionParams params;
+        params.method = *m;
+        params.max_points = options_.limits.max_session_points;
+        params.max_chunks = options_.limits.max_session_chunks;
+        params.max_chunk_points = options_.limits.max_points_per_cloud;
+        auto created = options_.engine.create_session(model.model, params);
+        if (!created) return created.error();
+        session = std::move(*created);
+      } else {
+        const v1::ModelRef& ref = chunk.model();
+        bool same_model = ref.name().empty() || (ref.name() == model.record.name &&
+                                                 (ref.version() == 0 || ref.version() == model.record.version));
+        auto m = MethodFromProto(chunk.method());
+        bool same_method = m.ok() && (!*m || **m == method);
+        if (!same_model || !same_method)
+          return invalid_argument("only the first chunk chooses the model and method; chunk " +
+                                  std::to_string(log.messages - 1) + " names others");
+      }
+      auto cloud = CloudFromProto(chunk.cloud(), options_.limits.max_points_per_cloud);
+      if (!cloud) return Error{cloud.error().code, "chunk " + std::to_string(log.messages - 1) + ": " + cloud.error().message};
+      log.points += cloud->points.size();
+      Decision decision;
+      if (cloud->points.empty()) {
+        decision = session->last();  // nothing new to fuse (e.g. a first chunk that only names the model)
+      } else {
+        auto added = session->add(*cloud);
+        if (!added) return added.error();
+        decision = std::move(*added);
+      }
+      v1::Decision reply;
+      ToProto(decision, &reply);
+      FillRef(model.record, reply.mutable_model());
+      reply.set_method(MethodToProto(method));
+      reply.set_latency_ms(MsSince(start, options_.clock()));
+      if (!stream->Write(reply)) break;  // the caller went away
+    }
+    if (ticket->expired())
+      return resource_exhausted("stream ran longer than the limit of " +
+                                std::to_string(options_.limits.max_stream_duration.count()) + " s");
+    if (ctx->IsCancelled()) return cancelled("the caller cancelled the stream");
+    return {};
+  });
+}
+
+grpc::Status GlimpseService::Train(grpc::ServerContext* ctx,
+                                   grpc::ServerReaderWriter<v1::TrainProgress, v1::TrainRequest>* stream) {
+  RequestLog log;
+  return Handle(ctx, "Train", log, [&]() -> Status {
+    auto ticket = OpenStream(ctx);
+    if (!ticket) return ticket.error();
+    if (options_.metrics) options_.metrics->StreamOpened("Train");
+    struct Closer {
+      Metrics* m;
+      ~Closer() { if (m) m->StreamClosed("Train"); }
+    } closer{options_.metrics};
+
+    TrainInput input;
+    v1::TrainRequest msg;
+    while (stream->Read(&msg)) {
+      ++log.messages;
+      if (Status s = AddTrainRequest(msg, options_.limits, input); !s.ok()) return s;
+      log.model = input.name;
+      log.points = input.points;
+      if (!input.clouds.empty() && input.clouds.size() % kReceivingProgressEvery == 0) {
+        v1::TrainProgress p;
+        p.set_stage("receiving");
+        p.set_clouds_received(input.clouds.size());
+        stream->Write(p);
+      }
+    }
+    if (ticket->expired())
+      return resource_exhausted("Train kept sending for longer than the limit of " +
+                                std::to_string(options_.limits.max_stream_duration.count()) + " s");
+    if (ctx->IsCancelled() || DeadlinePassed(ctx)) return cancelled("the caller cancelled Train while sending");
+    ticket->disarm();  // training itself is bounded by the caller's deadline
+    if (Status s = CheckTrainInput(input); !s.ok()) return s;
+
+    // Core may report progress from worker threads: one writer at a time, and only when it moved.
+    std::mutex write_mutex;
+    v1::TrainProgress last;
+    last.set_clouds_received(input.clouds.size());
+    auto progress = [&](const TrainProgress& p) {
+      std::lock_guard lock(write_mutex);
+      if (p.stage == "features") last.set_features_extracted(p.done);
+      if (p.stage == "codebooks") {
+        last.set_codebooks_fitted(p.done);
+        last.set_codebooks_total(p.total);
+      }
+      double percent = std::max(last.percent(), std::min(99.0, TrainPercent(p.stage, p.done, p.total)));
+      bool moved = p.stage != last.stage() || percent >= last.percent() + 1.0 || p.done == p.total;
+      last.set_stage(p.stage);
+      last.set_stage_done(p.done);
+      last.set_stage_total(p.total);
+      if (!moved) return;
+      last.set_percent(percent);
+      stream->Write(last);
+    };
+    auto record = TrainAndStore(input, options_.engine, *options_.store, progress, CancelFor(ctx));
+    if (!record) return record.error();
+    log.model = RefText(record->name, record->version);
+    std::lock_guard lock(write_mutex);
+    last.set_stage("done");
+    last.set_stage_done(1);
+    last.set_stage_total(1);
+    last.set_percent(100);
+    ToProto(*record, last.mutable_model());
+    stream->Write(last);
+    return {};
+  });
+}
+
+grpc::Status GlimpseService::ListModels(grpc::ServerContext* ctx, const v1::ListModelsRequest* request,
+                                        v1::ListModelsResponse* response) {
+  RequestLog log;
+  return Handle(ctx, "ListModels", log, [&]() -> Status {
+    log.model = request->name();
+    if (!request->name().empty())
+      if (Status s = ValidateModelName(request->name()); !s.ok()) return s;
+    auto records = options_.store->List(request->name());
+    if (!records) return records.error();
+    for (const ModelRecord& r : *records) ToProto(r, response->add_models());
+    return {};
+  });
+}
+
+grpc::Status GlimpseService::GetModel(grpc::ServerContext* ctx, const v1::GetModelRequest* request,
+                                      v1::ModelInfo* response) {
+  RequestLog log;
+  return Handle(ctx, "GetModel", log, [&]() -> Status {
+    log.model = RefText(request->model().name(), request->model().version());
+    if (Status s = ValidateModelName(request->model().name()); !s.ok()) return s;
+    auto record = options_.store->Get(request->model().name(), request->model().version());
+    if (!record) return record.error();
+    ToProto(*record, response);
+    return {};
+  });
+}
+
+grpc::Status GlimpseService::DeleteModel(grpc::ServerContext* ctx, const v1::DeleteModelRequest* request,
+                                         v1::DeleteModelResponse* response) {
+  RequestLog log;
+  return Handle(ctx, "DeleteModel", log, [&]() -> Status {
+    log.model = RefText(request->name(), request->version());
+    if (Status s = ValidateModelName(request->name()); !s.ok()) return s;
+    auto deleted = options_.store->Delete(request->name(), request->version());
+    if (!deleted) return deleted.error();
+    cache_.Sweep();
+    for (uint32_t v : *deleted) response->add_deleted_versions(v);
+    return {};
+  });
+}
+
+grpc::Status GlimpseService::SetDefaultModel(grpc::ServerContext* ctx, const v1::SetDefaultModelRequest* request,
+                                             v1::ModelInfo* response) {
+  RequestLog log;
+  return Handle(ctx, "SetDefaultModel", log, [&]() -> Status {
+    log.model = RefText(request->name(), request->version());
+    if (Status s = ValidateModelName(request->name()); !s.ok()) return s;
+    auto record = options_.store->SetDefault(request->name(), request->version());
+    if (!record) return record.error();
+    ToProto(*record, response);
+    return {};
+  });
+}
+
+}  // namespace glimpse::server

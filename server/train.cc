@@ -1,0 +1,95 @@
+#include "train.h"
+
+#include <google/protobuf/util/json_util.h>
+
+#include <algorithm>
+
+#include "convert.h"
+
+namespace glimpse::server {
+namespace {
+constexpr size_t kMaxCategoryBytes = 128;
+constexpr size_t kMaxObjectIdBytes = 256;
+}  // namespace
+
+Status AddTrainRequest(const v1::TrainRequest& msg, const Limits& limits, TrainInput& input) {
+  switch (msg.kind_case()) {
+    case v1::TrainRequest::kHeader: {
+      if (input.has_header) return invalid_argument("the Train header was sent twice");
+      auto spec = TrainSpecFromProto(msg.header());
+      if (!spec) return spec.error();
+      input.has_header = true;
+      input.name = msg.header().model_name();
+      input.description = msg.header().description();
+      input.spec = std::move(*spec);
+      return {};
+    }
+    case v1::TrainRequest::kCloud: {
+      if (!input.has_header) return invalid_argument("the first Train message must be the header");
+      const v1::LabelledCloud& lc = msg.cloud();
+      const size_t index = input.clouds.size();
+      if (lc.category().empty()) return invalid_argument("cloud " + std::to_string(index) + " has an empty category");
+      if (lc.category().size() > kMaxCategoryBytes)
+        return invalid_argument("cloud " + std::to_string(index) + ": category is longer than 128 bytes");
+      if (lc.object_id().size() > kMaxObjectIdBytes)
+        return invalid_argument("cloud " + std::to_string(index) + ": object_id is longer than 256 bytes");
+      if (index >= limits.max_train_clouds)
+        return resource_exhausted("more than " + std::to_string(limits.max_train_clouds) + " training clouds");
+      auto cloud = CloudFromProto(lc.cloud(), limits.max_points_per_cloud);
+      if (!cloud) return Error{cloud.error().code, "cloud " + std::to_string(index) + ": " + cloud.error().message};
+      if (input.points + cloud->points.size() > limits.max_train_points)
+        return resource_exhausted("training clouds exceed " + std::to_string(limits.max_train_points) + " points in total");
+      input.points += cloud->points.size();
+      // Without an object id each cloud is its own object (ids cannot clash: real ones have no '#').
+      std::string object_id = lc.object_id().empty() ? "#" + std::to_string(index) : lc.object_id();
+      input.clouds.push_back({lc.category(), std::move(object_id), std::move(*cloud)});
+      return {};
+    }
+    case v1::TrainRequest::KIND_NOT_SET: return invalid_argument("empty Train message");
+  }
+  return invalid_argument("unknown Train message");
+}
+
+Status CheckTrainInput(const TrainInput& input) {
+  if (!input.has_header) return invalid_argument("Train needs a header message first");
+  if (input.clouds.empty()) return invalid_argument("Train received no clouds");
+  return {};
+}
+
+Expected<ModelRecord> TrainAndStore(const TrainInput& input, const Engine& engine, ModelStore& store,
+                                    const ProgressFn& progress, const CancelFn& cancel) {
+  auto model = engine.train(input.clouds, input.spec, progress, cancel);
+  if (!model) return model.error();
+  if (cancel && cancel()) return cancelled("training was cancelled");
+  if (progress) progress({"storing", 0, 1});
+  NewModel row;
+  row.name = input.name;
+  row.description = input.description;
+  row.methods = model->methods;
+  row.default_method = model->default_method;
+  row.stats = model->stats;
+  if (row.stats.categories.empty()) row.stats.categories = model->categories;
+  (void)google::protobuf::util::MessageToJsonString(input.spec.parameters, &row.params);
+  row.blob = engine.serialize(*model);
+  if (row.blob.empty()) return internal_error("serialized model is empty");
+  return store.Put(row);
+}
+
+double TrainPercent(std::string_view stage, size_t done, size_t total) {
+  struct Span {
+    std::string_view stage;
+    double from, to;
+  };
+  // Rough shares of a training run; only the order and monotonicity matter to a progress bar.
+  static constexpr Span kSpans[] = {{"receiving", 0, 0},   {"features", 0, 60},  {"codebooks", 60, 80},
+                                    {"histograms", 80, 90}, {"centres", 90, 97}, {"storing", 97, 99},
+                                    {"done", 100, 100}};
+  for (const Span& s : kSpans) {
+    if (s.stage != stage) continue;
+    double f = total > 0 ? std::clamp(static_cast<double>(done) / static_cast<double>(total), 0.0, 1.0) : 0.0;
+    return s.from + f * (s.to - s.from);
+  }
+  return -1;  // unknown stage: the caller keeps its last value
+}
+
+}  // namespace glimpse::server
