@@ -8,7 +8,8 @@
 namespace glimpse {
 
 std::vector<Keypoint> characteristic_scale_keypoints(const NeighbourIndex& tree, const std::vector<LocalSurface>& surfaces,
-                                                     float r, const KeypointParams& params, KeypointStats* stats) {
+                                                     float r, const KeypointParams& params, KeypointStats* stats,
+                                                     BoundaryMemo* memo) {
   KeypointStats st;
   std::vector<Keypoint> keypoints;
   const Points& pts = tree.points();
@@ -60,26 +61,34 @@ std::vector<Keypoint> characteristic_scale_keypoints(const NeighbourIndex& tree,
     return false;
   };
 
-  std::vector<int8_t> boundary(params.exclude_boundary ? pts.size() : 0, -1);  // -1: not yet known
+  BoundaryMemo local;
+  BoundaryMemo& m = memo ? *memo : local;
+  if (params.exclude_boundary) {
+    m.boundary.resize(pts.size(), -1);
+    m.touches_boundary.resize(pts.size(), -1);
+  }
   std::vector<Neighbour> near, scratch;
   auto on_boundary = [&](uint32_t i) {
-    if (boundary[i] < 0) {
+    if (m.boundary[i] < 0) {
       const Vec3& n = surfaces[i].valid ? surfaces[i].normal : Vec3::Zero();
-      boundary[i] = is_boundary_point(tree, i, n, r, params.boundary_gap_rad, scratch) ? 1 : 0;
+      m.boundary[i] = is_boundary_point(tree, i, n, r, params.boundary_gap_rad, scratch) ? 1 : 0;
     }
-    return boundary[i] == 1;
+    return m.boundary[i] == 1;
+  };
+  auto touches_boundary = [&](uint32_t c) {
+    if (m.touches_boundary[c] < 0) {
+      tree.radius(pts[c], r, near);
+      m.touches_boundary[c] = std::any_of(near.begin(), near.end(), [&](const Neighbour& q) { return on_boundary(q.index); });
+    }
+    return m.touches_boundary[c] == 1;
   };
 
   for (uint32_t c : candidates) {
     // The keypoint claims the sphere of its characteristic radius: no other keypoint inside it (eq. 3).
     if (claimed(pts[c])) continue;
-    if (params.exclude_boundary) {
-      tree.radius(pts[c], r, near);
-      const bool touches = std::any_of(near.begin(), near.end(), [&](const Neighbour& q) { return on_boundary(q.index); });
-      if (touches) {
-        ++st.boundary_rejected;
-        continue;
-      }
+    if (params.exclude_boundary && touches_boundary(c)) {
+      ++st.boundary_rejected;
+      continue;
     }
     const LocalSurface& s = surfaces[c];
     keypoints.push_back({c, pts[c], characteristic_radius(s.lambda_min), s.lambda_min, s.lambda_max});

@@ -44,12 +44,21 @@ inline float characteristic_radius(float lambda_min) {
   return lambda_min > 0 ? 2.f / std::sqrt(lambda_min) : std::numeric_limits<float>::infinity();
 }
 
+// What keypoint selection learns about points and may keep between calls on a growing cloud: per
+// point, -1 unknown, 0 no, 1 yes. A caller that changes a point's neighbourhood resets its entries
+// (boundary: the point; touches_boundary: every point within r of it).
+struct BoundaryMemo {
+  std::vector<int8_t> boundary;
+  std::vector<int8_t> touches_boundary;
+};
+
 // Deterministic: the same surfaces give the same keypoints, in the same order (descending lambda_min,
 // ties by index), whatever the thread count.
 std::vector<Keypoint> characteristic_scale_keypoints(const NeighbourIndex& tree,
                                                      const std::vector<LocalSurface>& surfaces,
                                                      float support_radius_m,
                                                      const KeypointParams& params,
-                                                     KeypointStats* stats = nullptr);
+                                                     KeypointStats* stats = nullptr,
+                                                     BoundaryMemo* memo = nullptr);
 
 }  // namespace glimpse

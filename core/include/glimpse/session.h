@@ -16,9 +16,25 @@ namespace glimpse {
 
 struct SessionParams {
   std::optional<Method> method;      // default: the model's default method
+  // Limits: a session never grows without bound (errors: resource exhausted).
   size_t max_points = 1'000'000;     // accumulated (after duplicate removal)
   size_t max_chunks = 10'000;
   size_t max_chunk_points = 200'000;
+  // The support radius r is fixed once the scan has this many points (from their density, as
+  // extract() does for a whole cloud) unless the model fixes it. Duplicates are what extract() calls
+  // duplicates (the model's duplicate_tolerance_m; 0 = identical points), found in a voxel hash of
+  // cell r, so re-sent and overlapping chunks change nothing.
+  size_t min_points_for_radius = 300;
+  // Whole-cloud descriptors (VFH, ESF) are recomputed when the scan grew by this fraction since the
+  // last time, so their cost per chunk stays bounded (amortised) as the scan grows.
+  double global_refresh_growth = 0.1;
+  // Settling (sec. 4, "the decision is consolidating"): confidence combines the margin between the
+  // best two smoothed scores and how steadily the winner held over the last decisions.
+  double smoothing = 0.5;            // weight of the newest scores in the running average
+  int stability_window = 4;          // decisions the stability looks back on
+  double full_margin = 0.3;          // smoothed margin giving full margin confidence
+  double settle_confidence = 0.6;    // settled at or above this
+  size_t min_keypoints = 10;         // keypoint methods never settle on fewer keypoints
 };
 
 struct Decision {
@@ -33,6 +49,18 @@ struct Decision {
   bool settled = false;
   double confidence = 0;            // in [0, 1]
 };
+
+// The evolving decision on its own (a pure function of the score history, so it can be scripted):
+// each call folds one chunk's scores into the running average and updates winner, changes, held
+// chunks, confidence and settled. `keypoints_matter`: the method needs keypoints, so fewer than
+// params.min_keypoints never settle.
+struct DecisionTrack {
+  std::vector<double> smoothed;
+  std::vector<int> winners;  // every decision's winner so far
+  Decision decision;
+};
+void track_decision(DecisionTrack& track, const std::vector<double>& scores, size_t keypoints,
+                    bool keypoints_matter, const SessionParams& params);
 
 class ScanSession {
  public:
