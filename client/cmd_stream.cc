@@ -1,0 +1,143 @@
+// glimpse stream: a simulated scanner. One single view of an object is revealed chunk by chunk over
+// StreamClassify at a fixed rate, and the server's evolving decision is shown live.
+#include <chrono>
+#include <condition_variable>
+#include <mutex>
+#include <stop_token>
+#include <thread>
+
+#include "client/cloud_convert.h"
+#include "client/commands.h"
+#include "client/parse.h"
+#include "client/render.h"
+#include "client/scan.h"
+#include "glimpse/views.h"
+#include "glimpse/zoo.h"
+
+namespace glimpse::client {
+namespace {
+
+// The single view to reveal: a zoo shape or a mesh seen from one paper viewpoint (hidden point
+// removal); a cloud file that already carries its sensor is a view as it is.
+Expected<Cloud> TakeView(const StreamOptions& o) {
+  Cloud full;
+  if (!o.zoo_category.empty()) {
+    auto mesh = make_zoo_shape(o.zoo_category, o.seed);
+    if (!mesh) return mesh.error();
+    full = mesh_vertices(*mesh);
+  } else {
+    auto file = LoadFile(o.file);
+    if (!file) return file.error();
+    if (!file->is_mesh && file->cloud.sensor) {
+      RemoveNonFinite(file->cloud);
+      return std::move(file->cloud);
+    }
+    if (file->is_mesh) {
+      auto sampled = SampleMesh(file->mesh, o.views.mesh_points, o.views.seed);
+      if (!sampled) return Error{sampled.error().code, o.file + ": " + sampled.error().message};
+      full = std::move(*sampled);
+    } else {
+      full = std::move(file->cloud);
+    }
+  }
+  RemoveNonFinite(full);
+  return SingleView(full, o.viewpoint, o.views.hpr_radius_factor);
+}
+
+// Prints decisions: a panel redrawn in place on a terminal, else one line (or JSON object) each.
+class DecisionView {
+ public:
+  DecisionView(size_t chunks, bool json) : chunks_(chunks), json_(json), tty_(!json && IsTerminal(stdout)) {}
+  void Show(const v1::Decision& d) {
+    if (json_) {
+      PrintOut(DecisionJson(d, chunks_) + "\n");
+    } else if (!tty_) {
+      PrintOut(DecisionLine(d, chunks_) + "\n");
+    } else {
+      const std::string panel = DecisionPanel(d, chunks_, previous_);
+      // Back to the panel's first line, clear to the end of the screen, draw again.
+      PrintOut((lines_ ? "\x1b[" + std::to_string(lines_) + "A\r\x1b[J" : std::string()) + panel);
+      lines_ = LineCount(panel);
+    }
+    if (!d.winner().empty()) previous_ = d.winner();
+  }
+
+ private:
+  size_t chunks_;
+  bool json_, tty_;
+  int lines_ = 0;
+  std::string previous_;
+};
+
+}  // namespace
+
+int RunStream(const ConnectionOptions& conn, const StreamOptions& o) {
+  const std::string what = "stream " + (o.zoo_category.empty() ? o.file : "--zoo " + o.zoo_category);
+  auto order = ParseRevealOrder(o.order);
+  if (!order) {
+    PrintError(what, order.error().message);
+    return kExitUsage;
+  }
+  auto view = TakeView(o);
+  if (!view) {
+    PrintError(what, view.error().message);
+    return kExitError;
+  }
+  const Cloud scan = Reordered(*view, RevealSequence(*view, *order, o.seed));
+  const std::vector<size_t> ends = ChunkEnds(scan.points.size(), o.chunks, o.chunk_points);
+  if (ends.empty()) {
+    PrintError(what, "the view has no points");
+    return kExitError;
+  }
+  auto stub = ConnectGlimpse(conn, what);
+  if (!stub) return kExitError;
+
+  grpc::ClientContext context;
+  const double scan_s = o.rate_hz > 0 ? static_cast<double>(ends.size()) / o.rate_hz : 0.0;
+  PrepareContext(context, conn, 120 + scan_s);
+  auto stream = stub->StreamClassify(&context);
+
+  // The scanner: chunks go out at the given rate whatever the server's pace, as a sensor's would.
+  std::mutex mu;
+  std::condition_variable_any wake;
+  std::jthread scanner([&](std::stop_token stop) {
+    const auto start = std::chrono::steady_clock::now();
+    v1::ScanChunk chunk;
+    if (!o.model.empty()) *chunk.mutable_model() = *ParseModelRef(o.model);
+    if (!o.method.empty()) chunk.set_method(*ParseMethod(o.method));
+    for (size_t i = 0; i < ends.size(); ++i) {
+      if (o.rate_hz > 0 && i > 0) {
+        const auto due = start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                     std::chrono::duration<double>(static_cast<double>(i) / o.rate_hz));
+        std::unique_lock lock(mu);
+        if (wake.wait_until(lock, stop, due, [] { return false; }), stop.stop_requested()) return;
+      }
+      ToProto(scan, i == 0 ? 0 : ends[i - 1], ends[i], chunk.mutable_cloud());
+      if (!stream->Write(chunk)) return;  // the call ended; Finish tells why
+      if (i == 0) {
+        chunk.clear_model();
+        chunk.clear_method();
+      }
+    }
+    stream->WritesDone();
+  });
+
+  DecisionView shown(ends.size(), o.json);
+  v1::Decision decision;
+  while (stream->Read(&decision)) shown.Show(decision);
+  scanner.request_stop();  // wakes it from the rate wait; a pending Write fails now the call is over
+  scanner.join();
+  const grpc::Status status = stream->Finish();
+  if (!status.ok()) {
+    PrintError(what, FormatStatus(status));
+    return kExitError;
+  }
+  if (decision.chunk_index() + 1 < ends.size()) {
+    PrintError(what, "the server answered " + std::to_string(decision.chunk_index() + 1) + " of " +
+                         std::to_string(ends.size()) + " chunks");
+    return kExitError;
+  }
+  return kExitOk;
+}
+
+}  // namespace glimpse::client

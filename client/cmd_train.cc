@@ -1,0 +1,143 @@
+// glimpse train: labelled clouds (from DIR or the procedural zoo) streamed over Train, with the
+// server's progress shown on stderr, and the stored model printed at the end.
+#include <atomic>
+#include <cstdio>
+#include <functional>
+#include <thread>
+
+#include "client/cloud_convert.h"
+#include "client/commands.h"
+#include "client/parse.h"
+#include "client/render.h"
+#include "glimpse/views.h"
+#include "glimpse/zoo.h"
+
+namespace glimpse::client {
+namespace {
+
+constexpr double kTimeoutS = 3600;  // training a large set takes a while
+
+// Calls emit(category, object_id, cloud) for every training cloud; stops at the first error or
+// when emit returns false.
+using Emit = std::function<bool(const std::string&, const std::string&, const Cloud&)>;
+
+Status EmitDir(const TrainOptions& o, const Emit& emit) {
+  auto files = ListTrainDir(o.dir);
+  if (!files) return files.error();
+  for (const TrainFile& f : *files) {
+    auto clouds = TrainingClouds(f.path, o.views);
+    if (!clouds) return clouds.error();
+    for (const Cloud& c : *clouds)
+      if (!emit(f.category, f.object_id, c)) return {};
+  }
+  return {};
+}
+
+Status EmitZoo(const TrainOptions& o, const Emit& emit) {
+  for (const LabelledMesh& m : make_zoo(o.per_category, o.seed)) {
+    Cloud full = mesh_vertices(m.mesh);  // evenly tessellated: vertices are a usable cloud
+    RemoveNonFinite(full);
+    const std::string object_id = m.category + "/zoo-" + std::to_string(m.seed);
+    for (const Cloud& c : SingleViews(full, o.views.views, o.views.hpr_radius_factor))
+      if (!emit(m.category, object_id, c)) return {};
+  }
+  return {};
+}
+
+// Shows TrainProgress on stderr: a bar redrawn in place on a terminal, else a line per stage and
+// per 10 %.
+class ProgressView {
+ public:
+  explicit ProgressView(bool quiet) : quiet_(quiet), tty_(IsTerminal(stderr)) {}
+  void Show(const v1::TrainProgress& p) {
+    if (quiet_) return;
+    if (tty_) {
+      std::fprintf(stderr, "\r%s\x1b[K", ProgressBar(p).c_str());
+      drawn_ = true;
+    } else if (p.stage() != stage_ || static_cast<int>(p.percent() / 10) != decile_ || p.has_model()) {
+      std::fprintf(stderr, "%s\n", ProgressLine(p).c_str());
+    }
+    std::fflush(stderr);
+    stage_ = p.stage();
+    decile_ = static_cast<int>(p.percent() / 10);
+  }
+  void End() {
+    if (drawn_) std::fputc('\n', stderr);
+    drawn_ = false;
+  }
+
+ private:
+  bool quiet_, tty_, drawn_ = false;
+  std::string stage_;
+  int decile_ = -1;
+};
+
+}  // namespace
+
+int RunTrain(const ConnectionOptions& conn, const TrainOptions& o) {
+  const std::string what = "train " + (o.zoo ? std::string("--zoo") : o.dir);
+  auto methods = ParseMethodList(o.methods);
+  if (!methods) {
+    PrintError(what, methods.error().message);
+    return kExitUsage;
+  }
+  auto stub = ConnectGlimpse(conn, what);
+  if (!stub) return kExitError;
+
+  grpc::ClientContext context;
+  PrepareContext(context, conn, kTimeoutS);
+  auto stream = stub->Train(&context);
+
+  // Progress is read while clouds are still being written: the server reports as it receives,
+  // and an unread stream would eventually stall both sides.
+  ProgressView view(o.quiet);
+  v1::ModelInfo model;
+  std::thread reader([&] {
+    v1::TrainProgress p;
+    while (stream->Read(&p)) {
+      view.Show(p);
+      if (p.has_model()) model = p.model();
+    }
+  });
+
+  v1::TrainRequest header;
+  header.mutable_header()->set_model_name(o.name);
+  for (v1::Method m : *methods) header.mutable_header()->add_methods(m);
+  header.mutable_header()->set_description(o.description);
+  if (o.train_seed) header.mutable_header()->mutable_parameters()->set_seed(*o.train_seed);
+  bool open = stream->Write(header);
+
+  v1::TrainRequest request;
+  const Emit emit = [&](const std::string& category, const std::string& object_id, const Cloud& cloud) {
+    if (!open) return false;
+    v1::LabelledCloud* lc = request.mutable_cloud();
+    lc->set_category(category);
+    lc->set_object_id(object_id);
+    ToProto(cloud, lc->mutable_cloud());
+    open = stream->Write(request);
+    return open;
+  };
+  const Status loaded = open ? (o.zoo ? EmitZoo(o, emit) : EmitDir(o, emit)) : Status{};
+  if (!loaded.ok()) context.TryCancel();  // a failed call stores nothing
+  if (open && loaded.ok()) stream->WritesDone();
+  reader.join();
+  const grpc::Status status = stream->Finish();
+  view.End();
+
+  if (!loaded.ok()) {
+    PrintError(what, loaded.error().message);
+    return kExitError;
+  }
+  if (!status.ok()) {
+    PrintError(what, FormatStatus(status));
+    return kExitError;
+  }
+  if (model.name().empty()) {
+    PrintError(what, "the server ended training without reporting a stored model");
+    return kExitError;
+  }
+  PrintOut((o.json ? ModelJson(model) : TrainSummary(model)) + "\n");
+  return kExitOk;
+}
+
+}  // namespace glimpse::client

@@ -1,0 +1,33 @@
+// Small parsers and names shared by the commands: model references ("chair:3"), method names
+// ("bok,bog"), gRPC status code names. Pure functions, no I/O.
+#pragma once
+
+#include <grpcpp/support/status.h>
+
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "glimpse/expected.h"
+#include "glimpse/v1/glimpse.pb.h"
+
+namespace glimpse::client {
+
+// "NAME" or "NAME:VERSION" (VERSION a positive integer, or "latest" = 0 = the name's default).
+// Names are 1-128 characters from [A-Za-z0-9._-], as in the proto.
+Expected<v1::ModelRef> ParseModelRef(std::string_view text);
+// "name:3", or just "name" for version 0.
+std::string FormatModelRef(const v1::ModelRef& ref);
+
+// "bok", "bog", "kgh", "vfh", "esf", "fusion" (case-insensitive).
+Expected<v1::Method> ParseMethod(std::string_view name);
+// Comma-separated, e.g. "bok,bog"; blanks around names ignored; no duplicates; empty text -> empty list.
+Expected<std::vector<v1::Method>> ParseMethodList(std::string_view text);
+// "bok" ... "fusion"; "default" for METHOD_UNSPECIFIED.
+std::string MethodName(v1::Method method);
+std::vector<std::string> MethodNames();  // the names ParseMethod accepts, in enum order
+
+// "NOT_FOUND", "DEADLINE_EXCEEDED", ... as in grpc/status.h and every other gRPC client.
+const char* StatusCodeName(grpc::StatusCode code);
+
+}  // namespace glimpse::client

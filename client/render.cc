@@ -1,0 +1,310 @@
+#include "client/render.h"
+
+#include <google/protobuf/util/json_util.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+
+#include "client/parse.h"
+
+namespace glimpse::client {
+namespace {
+
+// Display width: UTF-8 code points (continuation bytes 10xxxxxx do not count).
+size_t Width(std::string_view s) {
+  return static_cast<size_t>(std::count_if(s.begin(), s.end(), [](char c) { return (c & 0xC0) != 0x80; }));
+}
+
+std::string Pad(std::string s, size_t width) {
+  const size_t w = Width(s);
+  if (w < width) s.append(width - w, ' ');
+  return s;
+}
+
+std::string Fixed(double v, int decimals) {
+  if (!std::isfinite(v)) return "nan";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+  return buf;
+}
+
+std::string JsonNumber(double v) {
+  if (!std::isfinite(v)) return "null";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+
+template <class Scores>
+std::string JsonScores(const Scores& scores) {
+  std::string out = "{";
+  for (const v1::CategoryScore& s : scores) {
+    if (out.size() > 1) out += ",";
+    out += JsonString(s.category());
+    out += ":";
+    out += JsonNumber(s.score());
+  }
+  return out + "}";
+}
+
+double WinnerScore(const v1::Decision& d) {
+  if (d.winner_index() < 0 || d.winner_index() >= d.scores_size()) return 0.0;
+  return d.scores(d.winner_index()).score();
+}
+
+std::string Join(const std::vector<std::string>& items, std::string_view sep) {
+  std::string out;
+  for (const std::string& s : items) out += (out.empty() ? "" : std::string(sep)) + s;
+  return out;
+}
+
+std::string Methods(const v1::ModelInfo& m) {
+  std::vector<std::string> names;
+  for (int method : m.methods()) names.push_back(MethodName(static_cast<v1::Method>(method)));
+  return Join(names, ",");
+}
+
+std::string YesNo(bool b) { return b ? "yes" : "no"; }
+
+}  // namespace
+
+std::string Bar(double fraction, int width) {
+  static const char* const kEighths[] = {"", "▏", "▎", "▍", "▌", "▋", "▊", "▉"};
+  if (width <= 0) return "";
+  if (!std::isfinite(fraction)) fraction = 0.0;
+  const int eighths = static_cast<int>(std::lround(std::clamp(fraction, 0.0, 1.0) * width * 8));
+  const int full = eighths / 8, part = eighths % 8;
+  std::string out;
+  for (int i = 0; i < full; ++i) out += "█";
+  out += kEighths[part];
+  out.append(static_cast<size_t>(width - full - (part ? 1 : 0)), ' ');
+  return out;
+}
+
+std::string Score(double score) { return Fixed(score, 3); }
+
+std::string JsonString(std::string_view text) {
+  std::string out = "\"";
+  for (unsigned char c : text) {
+    switch (c) {
+      case '"': out += "\\\""; break;
+      case '\\': out += "\\\\"; break;
+      case '\n': out += "\\n"; break;
+      case '\r': out += "\\r"; break;
+      case '\t': out += "\\t"; break;
+      default:
+        if (c < 0x20) {
+          char buf[8];
+          std::snprintf(buf, sizeof buf, "\\u%04x", c);
+          out += buf;
+        } else {
+          out += static_cast<char>(c);
+        }
+    }
+  }
+  return out + "\"";
+}
+
+std::string FormatTimestamp(const google::protobuf::Timestamp& t) {
+  if (t.seconds() == 0 && t.nanos() == 0) return "-";
+  const std::time_t s = static_cast<std::time_t>(t.seconds());
+  std::tm tm{};
+  gmtime_r(&s, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%d %H:%M:%SZ", &tm);
+  return buf;
+}
+
+std::string FormatBytes(uint64_t bytes) {
+  if (bytes < 1024) return std::to_string(bytes) + " B";
+  const char* units[] = {"KiB", "MiB", "GiB", "TiB"};
+  double v = static_cast<double>(bytes);
+  int u = -1;
+  while (v >= 1024.0 && u < 3) {
+    v /= 1024.0;
+    ++u;
+  }
+  return Fixed(v, 1) + " " + units[u];
+}
+
+std::string Table(const std::vector<std::vector<std::string>>& rows) {
+  std::vector<size_t> widths;
+  for (const auto& row : rows) {
+    widths.resize(std::max(widths.size(), row.size()), 0);
+    for (size_t c = 0; c < row.size(); ++c) widths[c] = std::max(widths[c], Width(row[c]));
+  }
+  std::string out;
+  for (const auto& row : rows) {
+    std::string line;
+    for (size_t c = 0; c < row.size(); ++c) line += c + 1 < row.size() ? Pad(row[c], widths[c]) + "  " : row[c];
+    out += line + "\n";
+  }
+  return out;
+}
+
+// ---- classify ----
+
+std::string ClassifyTable(const std::vector<ClassifyRow>& rows) {
+  std::vector<std::string> categories;  // union, in first-seen order (one model: its order)
+  for (const ClassifyRow& r : rows)
+    for (const v1::CategoryScore& s : r.response.scores())
+      if (std::find(categories.begin(), categories.end(), s.category()) == categories.end())
+        categories.push_back(s.category());
+  std::vector<std::vector<std::string>> table;
+  std::vector<std::string> header = {"FILE", "WINNER"};
+  header.insert(header.end(), categories.begin(), categories.end());
+  header.insert(header.end(), {"POINTS", "KEYPOINTS", "MS"});
+  table.push_back(header);
+  for (const ClassifyRow& r : rows) {
+    std::vector<std::string> line = {r.file, r.response.winner().empty() ? "-" : r.response.winner()};
+    for (const std::string& c : categories) {
+      std::string cell = "-";
+      for (const v1::CategoryScore& s : r.response.scores())
+        if (s.category() == c) cell = Score(s.score());
+      line.push_back(cell);
+    }
+    line.push_back(std::to_string(r.response.points()));
+    line.push_back(std::to_string(r.response.keypoints()));
+    line.push_back(Fixed(r.response.timings().total_ms(), 1));
+    table.push_back(std::move(line));
+  }
+  return Table(table);
+}
+
+std::string ClassifyJson(const ClassifyRow& row) {
+  const v1::ClassifyResponse& r = row.response;
+  return "{\"file\":" + JsonString(row.file) + ",\"model\":" + JsonString(r.model().name()) +
+         ",\"version\":" + std::to_string(r.model().version()) + ",\"method\":" + JsonString(MethodName(r.method())) +
+         ",\"winner\":" + JsonString(r.winner()) + ",\"scores\":" + JsonScores(r.scores()) +
+         ",\"points\":" + std::to_string(r.points()) + ",\"keypoints\":" + std::to_string(r.keypoints()) +
+         ",\"total_ms\":" + JsonNumber(r.timings().total_ms()) + "}";
+}
+
+// ---- stream ----
+
+std::string DecisionLine(const v1::Decision& d, size_t chunks_total) {
+  std::string winner = d.winner().empty() ? "-" : d.winner() + " " + Score(WinnerScore(d));
+  return "chunk " + std::to_string(d.chunk_index() + 1) + "/" + std::to_string(chunks_total) + " points " +
+         std::to_string(d.points()) + " keypoints " + std::to_string(d.keypoints()) + " winner " + winner +
+         " changes " + std::to_string(d.category_changes()) + " settled " + YesNo(d.settled()) + " confidence " +
+         Fixed(d.confidence(), 2);
+}
+
+std::string DecisionPanel(const v1::Decision& d, size_t chunks_total, std::string_view previous_winner,
+                          int bar_width) {
+  std::string out = "model " + FormatModelRef(d.model()) + " (" + MethodName(d.method()) + ")   chunk " +
+                    std::to_string(d.chunk_index() + 1) + "/" + std::to_string(chunks_total) + "   points " +
+                    std::to_string(d.points()) + "   keypoints " + std::to_string(d.keypoints()) + "   " +
+                    Fixed(d.latency_ms(), 1) + " ms\n";
+  if (d.winner().empty()) {
+    out += "winner -   (not enough points yet)\n";
+  } else {
+    out += "winner " + d.winner() + " " + Score(WinnerScore(d));
+    if (!previous_winner.empty() && previous_winner != d.winner())
+      out += "   (was " + std::string(previous_winner) + ")";
+    out += "   changes " + std::to_string(d.category_changes()) + "   held " + std::to_string(d.winner_held_chunks()) +
+           "   settled " + YesNo(d.settled()) + "   confidence " + Fixed(d.confidence(), 2) + "\n";
+  }
+  size_t name_width = 0;
+  for (const v1::CategoryScore& s : d.scores()) name_width = std::max(name_width, Width(s.category()));
+  for (int i = 0; i < d.scores_size(); ++i) {
+    const v1::CategoryScore& s = d.scores(i);
+    out += (i == d.winner_index() ? "> " : "  ") + Pad(s.category(), name_width) + "  " + Bar(s.score(), bar_width) +
+           "  " + Score(s.score()) + "\n";
+  }
+  return out;
+}
+
+std::string DecisionJson(const v1::Decision& d, size_t chunks_total) {
+  return "{\"chunk\":" + std::to_string(d.chunk_index() + 1) + ",\"chunks\":" + std::to_string(chunks_total) +
+         ",\"points\":" + std::to_string(d.points()) + ",\"keypoints\":" + std::to_string(d.keypoints()) +
+         ",\"winner\":" + JsonString(d.winner()) + ",\"scores\":" + JsonScores(d.scores()) +
+         ",\"changes\":" + std::to_string(d.category_changes()) + ",\"held\":" + std::to_string(d.winner_held_chunks()) +
+         ",\"settled\":" + (d.settled() ? "true" : "false") + ",\"confidence\":" + JsonNumber(d.confidence()) +
+         ",\"model\":" + JsonString(d.model().name()) + ",\"version\":" + std::to_string(d.model().version()) +
+         ",\"method\":" + JsonString(MethodName(d.method())) + ",\"latency_ms\":" + JsonNumber(d.latency_ms()) + "}";
+}
+
+// ---- train ----
+
+namespace {
+std::string StageText(const v1::TrainProgress& p) {
+  std::string out = p.stage().empty() ? "starting" : p.stage();
+  if (p.stage() == "receiving") return out + " " + std::to_string(p.clouds_received()) + " clouds";
+  if (p.stage_total() > 0) {
+    out += ' ';
+    out += std::to_string(p.stage_done());
+    out += '/';
+    out += std::to_string(p.stage_total());
+  }
+  return out;
+}
+}  // namespace
+
+std::string ProgressBar(const v1::TrainProgress& p, int bar_width) {
+  std::string pct = Fixed(std::clamp(p.percent(), 0.0, 100.0), 0) + "%";
+  if (pct.size() < 4) pct.insert(0, 4 - pct.size(), ' ');
+  std::string out = "[";
+  out += Bar(p.percent() / 100.0, bar_width);
+  return out + "] " + pct + "  " + StageText(p);
+}
+
+std::string ProgressLine(const v1::TrainProgress& p) {
+  return "train: " + Fixed(p.percent(), 0) + "% " + StageText(p) + " (clouds " + std::to_string(p.clouds_received()) + ")";
+}
+
+std::string TrainSummary(const v1::ModelInfo& m) {
+  return "trained " + m.name() + ":" + std::to_string(m.version()) + (m.is_default() ? " (default)" : "") + ": " +
+         std::to_string(m.categories_size()) + " categories, " + std::to_string(m.stats().clouds()) + " clouds, " +
+         std::to_string(m.stats().keypoints()) + " keypoints, " + Fixed(m.stats().seconds(), 1) + " s, " +
+         FormatBytes(m.size_bytes());
+}
+
+// ---- models ----
+
+std::string ModelsTable(const v1::ListModelsResponse& list) {
+  if (list.models().empty()) return "no models\n";
+  std::vector<std::vector<std::string>> table = {
+      {"NAME", "VERSION", "DEFAULT", "CREATED", "METHODS", "CATEGORIES", "CLOUDS", "SIZE"}};
+  for (const v1::ModelInfo& m : list.models())
+    table.push_back({m.name(), std::to_string(m.version()), m.is_default() ? "*" : "", FormatTimestamp(m.created()),
+                     Methods(m), std::to_string(m.categories_size()), std::to_string(m.stats().clouds()),
+                     FormatBytes(m.size_bytes())});
+  return Table(table);
+}
+
+std::string ModelDetails(const v1::ModelInfo& m) {
+  std::vector<std::string> categories;
+  for (const v1::CategoryCount& c : m.stats().categories())
+    categories.push_back(c.category() + " (" + std::to_string(c.clouds()) + ")");
+  if (categories.empty()) categories.assign(m.categories().begin(), m.categories().end());
+  std::vector<std::vector<std::string>> rows = {
+      {"name:", m.name()},
+      {"version:", std::to_string(m.version()) + (m.is_default() ? " (default)" : "")},
+      {"id:", std::to_string(m.id())},
+      {"created:", FormatTimestamp(m.created())},
+      {"description:", m.description().empty() ? "-" : m.description()},
+      {"methods:", Methods(m) + " (default " + MethodName(m.default_method()) + ")"},
+      {"categories:", Join(categories, ", ")},
+      {"trained on:", std::to_string(m.stats().clouds()) + " clouds of " + std::to_string(m.stats().objects()) +
+                          " objects, " + std::to_string(m.stats().keypoints()) + " keypoints, " +
+                          Fixed(m.stats().seconds(), 1) + " s"},
+      {"size:", FormatBytes(m.size_bytes())},
+      {"sha256:", m.sha256().empty() ? "-" : m.sha256()},
+  };
+  return Table(rows);
+}
+
+std::string ModelJson(const v1::ModelInfo& m) {
+  google::protobuf::util::JsonPrintOptions options;
+  options.preserve_proto_field_names = true;
+  std::string out;
+  if (!google::protobuf::util::MessageToJsonString(m, &out, options).ok()) return "{}";
+  return out;
+}
+
+int LineCount(std::string_view text) { return static_cast<int>(std::count(text.begin(), text.end(), '\n')); }
+
+}  // namespace glimpse::client

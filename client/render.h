@@ -1,0 +1,75 @@
+// Everything the client prints, as pure functions from messages to text: score tables, bars, the
+// live scan panel, progress bars, model listings, and JSON lines for scripts. No I/O here.
+#pragma once
+
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "glimpse/v1/glimpse.pb.h"
+
+namespace glimpse::client {
+
+// ---- building blocks ----
+
+// A horizontal bar `width` cells wide, filled `fraction` (clamped to [0, 1]) with Unicode blocks in
+// eighths of a cell, padded with spaces.
+std::string Bar(double fraction, int width);
+// "0.820"; "nan" for non-finite.
+std::string Score(double score);
+// A JSON string literal (quotes, backslashes and control characters escaped).
+std::string JsonString(std::string_view text);
+// "2024-05-01 12:00:03Z" (UTC); "-" when unset.
+std::string FormatTimestamp(const google::protobuf::Timestamp& t);
+// "512 B", "1.2 KiB", "3.4 MiB".
+std::string FormatBytes(uint64_t bytes);
+// Columns separated by two spaces, each as wide as its widest cell; the first row is the header.
+std::string Table(const std::vector<std::vector<std::string>>& rows);
+
+// ---- classify ----
+
+struct ClassifyRow {
+  std::string file;
+  v1::ClassifyResponse response;
+};
+// One row per file: FILE WINNER <category...> POINTS KEYPOINTS MS, categories in the model's order.
+std::string ClassifyTable(const std::vector<ClassifyRow>& rows);
+// {"file":..,"model":..,"version":..,"method":..,"winner":..,"scores":{cat:score,..},"points":..,
+//  "keypoints":..,"total_ms":..}
+std::string ClassifyJson(const ClassifyRow& row);
+
+// ---- stream ----
+
+// "chunk 3/20 points 1234 keypoints 17 winner chair 0.820 changes 1 settled no confidence 0.41"
+// (chunk is 1-based; winner "-" while undecided).
+std::string DecisionLine(const v1::Decision& d, size_t chunks_total);
+// The live panel redrawn on a terminal: position, winner (and the previous one when it just changed),
+// settled state, and one bar per category. Ends with a newline; LineCount() tells how many.
+std::string DecisionPanel(const v1::Decision& d, size_t chunks_total, std::string_view previous_winner,
+                          int bar_width = 30);
+// {"chunk":3,"chunks":20,"points":..,"keypoints":..,"winner":..,"scores":{..},"changes":..,
+//  "held":..,"settled":false,"confidence":..,"latency_ms":..}
+std::string DecisionJson(const v1::Decision& d, size_t chunks_total);
+
+// ---- train ----
+
+// "[██████▍        ]  43%  features 12/30" (no newline; the caller redraws it with \r).
+std::string ProgressBar(const v1::TrainProgress& p, int bar_width = 30);
+// "train: 43% features 12/30 (clouds 30)"
+std::string ProgressLine(const v1::TrainProgress& p);
+// "trained zoo:2 (default): 5 categories, 60 clouds, 1234 keypoints, 12.3 s, 1.2 MiB"
+std::string TrainSummary(const v1::ModelInfo& m);
+
+// ---- models ----
+
+// NAME VERSION DEFAULT CREATED METHODS CATEGORIES CLOUDS SIZE; "no models" when empty.
+std::string ModelsTable(const v1::ListModelsResponse& list);
+// "name: zoo\nversion: 2\n..." every field a person wants, one per line.
+std::string ModelDetails(const v1::ModelInfo& m);
+// The message as one line of JSON with the proto's field names.
+std::string ModelJson(const v1::ModelInfo& m);
+
+// Counts '\n' in text.
+int LineCount(std::string_view text);
+
+}  // namespace glimpse::client

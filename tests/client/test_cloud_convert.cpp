@@ -1,0 +1,93 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "client/cloud_convert.h"
+
+namespace glimpse::client {
+namespace {
+
+TEST(CloudConvert, EmptyCloudGivesEmptyBytesAndNoSensor) {
+  const v1::PointCloud proto = ToProto(Cloud{});
+  EXPECT_TRUE(proto.xyz().empty());
+  EXPECT_FALSE(proto.has_sensor());
+  auto back = FromProto(proto);
+  ASSERT_TRUE(back.ok());
+  EXPECT_TRUE(back->points.empty());
+  EXPECT_FALSE(back->sensor.has_value());
+}
+
+TEST(CloudConvert, PacksLittleEndianFloat32Triples) {
+  Cloud cloud;
+  cloud.points = {Vec3(1.0f, -2.0f, 0.5f)};
+  const std::string xyz = ToProto(cloud).xyz();
+  ASSERT_EQ(xyz.size(), 12u);
+  // 1.0f = 0x3f800000, -2.0f = 0xc0000000, 0.5f = 0x3f000000, least significant byte first.
+  const unsigned char expected[12] = {0, 0, 0x80, 0x3f, 0, 0, 0, 0xc0, 0, 0, 0, 0x3f};
+  for (int i = 0; i < 12; ++i) EXPECT_EQ(static_cast<unsigned char>(xyz[i]), expected[i]) << "byte " << i;
+}
+
+TEST(CloudConvert, RoundTripIsBitExactWithSensor) {
+  Cloud cloud;
+  cloud.points = {Vec3(0.1f, 0.2f, 0.3f), Vec3(-1e-20f, 3.4e38f, -0.0f), Vec3(7, 8, 9)};
+  cloud.sensor = Vec3(0.0f, -2.5f, 1.25f);
+  auto back = FromProto(ToProto(cloud));
+  ASSERT_TRUE(back.ok());
+  ASSERT_EQ(back->points.size(), cloud.points.size());
+  for (size_t i = 0; i < cloud.points.size(); ++i)
+    for (int k = 0; k < 3; ++k)
+      EXPECT_EQ(std::signbit(back->points[i][k]), std::signbit(cloud.points[i][k]));
+  for (size_t i = 0; i < cloud.points.size(); ++i) EXPECT_EQ(back->points[i], cloud.points[i]);
+  ASSERT_TRUE(back->sensor.has_value());
+  EXPECT_EQ(*back->sensor, *cloud.sensor);
+}
+
+TEST(CloudConvert, RangePacksOnlyThatChunkAndClampsBounds) {
+  Cloud cloud;
+  for (int i = 0; i < 10; ++i) cloud.points.push_back(Vec3(float(i), 0, 0));
+  v1::PointCloud proto;
+  ToProto(cloud, 3, 6, &proto);
+  auto chunk = FromProto(proto);
+  ASSERT_TRUE(chunk.ok());
+  ASSERT_EQ(chunk->points.size(), 3u);
+  EXPECT_EQ(chunk->points[0].x(), 3.0f);
+  EXPECT_EQ(chunk->points[2].x(), 5.0f);
+  ToProto(cloud, 8, 100, &proto);  // reuse: the previous content is replaced
+  EXPECT_EQ(proto.xyz().size(), 24u);
+  ToProto(cloud, 20, 30, &proto);
+  EXPECT_TRUE(proto.xyz().empty());
+}
+
+TEST(CloudConvert, ReusedMessageLosesAnOldSensor) {
+  Cloud with;
+  with.points = {Vec3(1, 2, 3)};
+  with.sensor = Vec3(0, 0, 1);
+  v1::PointCloud proto;
+  ToProto(with, &proto);
+  ToProto(Cloud{with.points, std::nullopt}, &proto);
+  EXPECT_FALSE(proto.has_sensor());
+}
+
+TEST(CloudConvert, RejectsBytesNotAMultipleOfTwelve) {
+  v1::PointCloud proto;
+  proto.set_xyz(std::string(13, '\0'));
+  auto cloud = FromProto(proto);
+  ASSERT_FALSE(cloud.ok());
+  EXPECT_EQ(cloud.error().code, ErrorCode::kInvalidArgument);
+  EXPECT_NE(cloud.error().message.find("13"), std::string::npos);
+}
+
+TEST(CloudConvert, RemoveNonFiniteDropsNanAndInfPoints) {
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  Cloud cloud;
+  cloud.points = {Vec3(1, 1, 1), Vec3(nan, 0, 0), Vec3(2, 2, 2), Vec3(0, -inf, 0), Vec3(0, 0, nan)};
+  EXPECT_EQ(RemoveNonFinite(cloud), 3u);
+  ASSERT_EQ(cloud.points.size(), 2u);
+  EXPECT_EQ(cloud.points[1], Vec3(2, 2, 2));
+  Cloud empty;
+  EXPECT_EQ(RemoveNonFinite(empty), 0u);
+}
+
+}  // namespace
+}  // namespace glimpse::client

@@ -1,0 +1,63 @@
+#include <gtest/gtest.h>
+
+#include "client/parse.h"
+
+namespace glimpse::client {
+namespace {
+
+TEST(ParseModelRef, NameAloneMeansDefaultVersion) {
+  auto ref = ParseModelRef("zoo");
+  ASSERT_TRUE(ref.ok());
+  EXPECT_EQ(ref->name(), "zoo");
+  EXPECT_EQ(ref->version(), 0u);
+  EXPECT_EQ(FormatModelRef(*ref), "zoo");
+}
+
+TEST(ParseModelRef, NameAndVersion) {
+  auto ref = ParseModelRef("shrec-07.v2_a:12");
+  ASSERT_TRUE(ref.ok());
+  EXPECT_EQ(ref->name(), "shrec-07.v2_a");
+  EXPECT_EQ(ref->version(), 12u);
+  EXPECT_EQ(FormatModelRef(*ref), "shrec-07.v2_a:12");
+  auto latest = ParseModelRef("zoo:latest");
+  ASSERT_TRUE(latest.ok());
+  EXPECT_EQ(latest->version(), 0u);
+}
+
+TEST(ParseModelRef, RejectsBadNamesAndVersions) {
+  for (const char* bad : {"", ":3", "a b", "zoo:", "zoo:0", "zoo:-1", "zoo:1x", "zoo:99999999999", "zo/o",
+                          "zoo:1:2"})
+    EXPECT_FALSE(ParseModelRef(bad).ok()) << bad;
+  EXPECT_TRUE(ParseModelRef(std::string(128, 'a')).ok());
+  EXPECT_FALSE(ParseModelRef(std::string(129, 'a')).ok());
+}
+
+TEST(ParseMethod, NamesAreCaseInsensitiveAndErrorsListValidOnes) {
+  EXPECT_EQ(*ParseMethod("bok"), v1::METHOD_BOK);
+  EXPECT_EQ(*ParseMethod(" FUSION "), v1::METHOD_FUSION);
+  auto bad = ParseMethod("svm");
+  ASSERT_FALSE(bad.ok());
+  EXPECT_NE(bad.error().message.find("bok, bog, kgh, vfh, esf, fusion"), std::string::npos);
+  for (const std::string& name : MethodNames()) EXPECT_EQ(MethodName(*ParseMethod(name)), name);
+  EXPECT_EQ(MethodName(v1::METHOD_UNSPECIFIED), "default");
+}
+
+TEST(ParseMethodList, CommaSeparatedWithoutDuplicates) {
+  auto list = ParseMethodList("bok, bog,esf");
+  ASSERT_TRUE(list.ok());
+  EXPECT_EQ(*list, (std::vector<v1::Method>{v1::METHOD_BOK, v1::METHOD_BOG, v1::METHOD_ESF}));
+  EXPECT_TRUE(ParseMethodList("")->empty());
+  EXPECT_FALSE(ParseMethodList("bok,bok").ok());
+  EXPECT_FALSE(ParseMethodList("bok,").ok());
+  EXPECT_FALSE(ParseMethodList("bok,nope").ok());
+}
+
+TEST(StatusCodeName, MatchesGrpcNames) {
+  EXPECT_STREQ(StatusCodeName(grpc::StatusCode::NOT_FOUND), "NOT_FOUND");
+  EXPECT_STREQ(StatusCodeName(grpc::StatusCode::DEADLINE_EXCEEDED), "DEADLINE_EXCEEDED");
+  EXPECT_STREQ(StatusCodeName(grpc::StatusCode::UNAVAILABLE), "UNAVAILABLE");
+  EXPECT_STREQ(StatusCodeName(grpc::StatusCode::OK), "OK");
+}
+
+}  // namespace
+}  // namespace glimpse::client
