@@ -1,0 +1,222 @@
+// The paper's evaluation protocol (sec. 3.4, 4, 5): single HPR views of whole objects, a progressive
+// top-to-bottom exploration of each view, stratified cross-validation by object, accuracy and
+// confusion per method per stage, category changes along the exploration, and a report a person can
+// read (markdown tables, a CSV of every decision, SVG evolution curves like Figures 5-6).
+//
+// The pure pieces (folds, stage cuts, metrics, change counting, writers) are free functions over
+// plain data so tests can call them with hand-made inputs; run_evaluation strings them together.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "glimpse/cloud.h"
+#include "glimpse/expected.h"
+#include "glimpse/model.h"
+#include "glimpse/train_params.h"
+
+namespace glimpse {
+
+// ---- Objects ---------------------------------------------------------------------------------------
+
+struct EvalObject {
+  std::string category;
+  std::string id;
+  Mesh mesh;  // upright (+z), real-life size, on the ground
+};
+
+// Every object of a dataset folder (scan_dataset + load_object with `seed`), at most
+// `max_per_category` per category (0 = all; the first ones in manifest order). Loaded in parallel.
+Expected<std::vector<EvalObject>> load_dataset_objects(const std::string& dir, uint64_t seed,
+                                                       size_t max_per_category = 0, int threads = 0);
+// make_zoo(per_category, seed): the procedural stand-in for the dataset.
+std::vector<EvalObject> zoo_objects(size_t per_category, uint64_t seed);
+
+// The categories of `objects` in the paper's order (human, chair, table, mechanic, fourleg) when
+// they are among them, then any others sorted by name.
+std::vector<std::string> paper_category_order(const std::vector<EvalObject>& objects);
+
+// ---- Stages of the top-down exploration (sec. 4) ---------------------------------------------------
+
+enum class StageKind : uint8_t {
+  kFull,       // the whole single view
+  kKeypoints,  // the top prefix in which `value` keypoints are visible (paper: 10, 25, 55)
+  kFraction,   // the top prefix holding `value` x the FULL 3D cloud's point count (0.10, 0.20)
+};
+
+struct Stage {
+  StageKind kind = StageKind::kFull;
+  double value = 0;
+  bool operator==(const Stage&) const = default;
+};
+
+// "full", "10kp", "10%".
+std::string stage_name(const Stage& stage);
+// full, 10kp, 25kp, 55kp, 10%, 20%.
+std::vector<Stage> paper_stages();
+
+// Prefix length (points, top-down) in which the k highest of the view's keypoints are visible: all
+// points at or above (k-th highest keypoint height - margin_m). The keypoints are those found on the
+// FULL view; re-extracting on the prefix finds nearly the same ones above the cut (selection is greedy
+// by curvature, so a keypoint can change when a stronger one below the cut disappears) and none within
+// the boundary margin of the cut, which is why `margin_m` is about a support radius. Fewer than k
+// keypoints: the whole view.
+size_t keypoint_prefix(const Points& view, std::vector<float> keypoint_heights, size_t k, float margin_m);
+// round(fraction x full_cloud_points), at most the view's size.
+size_t fraction_prefix(size_t view_points, size_t full_cloud_points, double fraction);
+// Keypoint counts at which the exploration's decisions are sampled: 1, step, 2 step, ... up to
+// max_keypoints (included). step 1 gives the paper's every-keypoint sequence.
+std::vector<size_t> exploration_grid(size_t max_keypoints, size_t step);
+
+// ---- Cross-validation -------------------------------------------------------------------------------
+
+// Fold (0..folds-1) of every object: per category, the objects are shuffled (seeded) and dealt round
+// robin, so each fold holds floor or ceil(n / folds) objects of every category.
+std::vector<int> stratified_folds(const std::vector<std::string>& object_categories, int folds, uint64_t seed);
+
+// ---- Decisions and metrics --------------------------------------------------------------------------
+
+struct Decision {
+  int fold = 0;
+  int object = 0;  // index into the evaluated objects
+  int view = 0;
+  std::string stage;
+  Method method = Method::kFusion;
+  double visible_fraction = 0;  // prefix points / full 3D cloud points
+  size_t points = 0;            // prefix points
+  size_t keypoints = 0;         // keypoints found on the prefix
+  int truth = 0;                // index into the report's categories
+  int winner = -1;              // -1: no decision (features failed, e.g. too few points)
+  std::vector<double> scores;   // per category, same order; empty without a decision
+};
+
+struct Tally {
+  size_t correct = 0;
+  size_t total = 0;
+  double percent() const { return total ? 100.0 * double(correct) / double(total) : 0.0; }
+};
+
+// Decisions of one stage and method, pooled over folds. A missing decision counts as wrong.
+Tally accuracy(std::span<const Decision> decisions, std::string_view stage, Method method);
+// Rows: truth (query), columns: winner (result), percent of the row's decisions (missing ones are in
+// the row's total but in no column, so such a row sums to less than 100).
+std::vector<std::vector<double>> confusion_percent(std::span<const Decision> decisions, std::string_view stage,
+                                                   Method method, size_t categories);
+
+// Number of times the decision changes along a sequence (a missing decision, -1, is a category too).
+size_t category_changes(std::span<const int> winners);
+
+// One test view's exploration: the decisions at the grid's keypoint stages, in order.
+struct ExplorationTrace {
+  int fold = 0, object = 0, view = 0;
+  int truth = 0;
+  int final_winner = -1;  // the decision on the full view
+  std::vector<size_t> grid;             // keypoint counts
+  std::vector<int> winners;             // decision at each
+  std::vector<double> visible_fraction; // at each
+  double full_visible_fraction = 0;
+  bool correct() const { return final_winner == truth; }
+};
+// Traces of `method` from decisions whose stage is stage_name({kKeypoints, g}) for g in grid (plus
+// "full" for the final decision); views without a full-view decision are skipped.
+std::vector<ExplorationTrace> exploration_traces(std::span<const Decision> decisions, Method method,
+                                                 const std::vector<size_t>& grid);
+
+struct ChangeRow {
+  size_t up_to_keypoints = 0;
+  double mean_correct = 0, mean_incorrect = 0;  // mean changes over finally-correct / -incorrect views
+  size_t views_correct = 0, views_incorrect = 0;
+};
+// Changes among the grid decisions at keypoint counts <= up_to, for each entry of up_to.
+std::vector<ChangeRow> change_summary(const std::vector<ExplorationTrace>& traces,
+                                      const std::vector<size_t>& up_to);
+
+// ---- The protocol ------------------------------------------------------------------------------------
+
+struct EvalParams {
+  size_t points_per_object = 6000;  // 0: mesh vertices as points (the paper); else area-weighted samples
+  size_t views_per_object = 6;      // the first n of paper_viewpoints (azimuth 0, 60, ..., 300 deg)
+  double hpr_radius_factor = 100;
+  std::vector<Stage> stages = paper_stages();
+  float cut_margin_supports = 1.5f;  // keypoint cut margin in support radii (see keypoint_prefix)
+  int folds = 5;
+  std::vector<Method> methods = {std::begin(kAllMethods), std::end(kAllMethods)};
+  bool train_on_partial = true;                         // add top-down prefixes of the training views
+  std::vector<double> train_prefixes = {0.1, 0.2, 0.4}; // fractions of the training VIEW's points
+  size_t explore_max_keypoints = 55;
+  size_t explore_step = 5;
+  std::vector<size_t> change_up_to = {10, 25, 55};
+  int threads = 0;  // 0 = all cores; results do not depend on it
+  uint64_t seed = 42;
+  TrainParams train;  // threads and seed are taken from the fields above
+};
+
+struct PhaseTiming {
+  std::string phase;
+  double seconds = 0;
+  std::string detail;
+};
+
+// Mean over views, per category and stage.
+struct StageStats {
+  std::string stage;
+  std::vector<double> keypoints;        // per category
+  std::vector<double> visible_percent;  // per category
+  std::vector<size_t> failed;           // per category: clouds whose features failed
+  double mean_keypoints = 0, mean_visible_percent = 0;
+  double feature_seconds = 0;           // CPU time spent extracting this stage's clouds (distinct prefixes)
+};
+
+struct EvalResult {
+  EvalParams params;
+  std::string source;  // "SHREC 2007 at DIR" / "procedural zoo, N per category"
+  std::vector<std::string> categories;
+  std::vector<std::string> object_ids;      // "category/id" per object
+  std::vector<int> object_truth;
+  std::vector<int> object_fold;
+  std::vector<size_t> object_points;        // full 3D cloud size
+  std::vector<Decision> decisions;
+  std::vector<StageStats> stage_stats;      // main stages then the exploration grid
+  std::vector<size_t> grid;
+  Method change_method = Method::kFusion;   // best method by mean accuracy over the main stages
+  std::vector<ChangeRow> changes;
+  std::vector<ExplorationTrace> traces;     // of change_method
+  std::vector<PhaseTiming> timings;
+  double total_seconds = 0;
+  int threads = 1;
+  std::vector<std::string> notes;           // anything that looks wrong
+};
+
+struct EvalProgress {
+  std::string phase;
+  size_t done = 0, total = 0;
+};
+using EvalProgressFn = std::function<void(const EvalProgress&)>;
+
+Expected<EvalResult> run_evaluation(const std::vector<EvalObject>& objects, const EvalParams& params,
+                                    std::string source, const EvalProgressFn& progress = {});
+
+// ---- Report ------------------------------------------------------------------------------------------
+
+// The paper's figures: accuracy (%) by method and stage ("full", "10%", "20%"; the paper equates
+// 10 kp with ~10 % and 25 kp with ~20 %), NaN where the paper gives none.
+double paper_accuracy(Method method, std::string_view stage);
+
+std::string markdown_report(const EvalResult& result);
+std::string decisions_csv(const EvalResult& result);
+// Figures 5-6: decided category against visible % of the full cloud, one polyline per view, one
+// panel per true category; `correct` picks the finally-correct or finally-incorrect views.
+std::string evolution_svg(const std::vector<ExplorationTrace>& traces, const std::vector<std::string>& categories,
+                          bool correct, std::string_view title);
+// A short plain-text accuracy table (method x main stage) for a terminal.
+std::string summary_table(const EvalResult& result);
+
+// report.md, decisions.csv, evolution_correct.svg, evolution_incorrect.svg in `dir` (created).
+Status write_report(const EvalResult& result, const std::string& dir);
+
+}  // namespace glimpse
