@@ -1,0 +1,23 @@
+// glimpse-lab: offline tools over the core library. Each subcommand lives in its own lab_*.cpp and
+// registers itself here.
+#include <CLI/CLI.hpp>
+
+namespace glimpse::lab {
+void add_eval_command(CLI::App& app);   // lab_eval.cpp
+void add_views_command(CLI::App& app);  // lab_views.cpp
+}  // namespace glimpse::lab
+
+int main(int argc, char** argv) {
+  CLI::App app{"glimpse-lab: offline tools for Glimpse (evaluation protocol, single views)"};
+  app.require_subcommand(1);
+  glimpse::lab::add_eval_command(app);
+  glimpse::lab::add_views_command(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::RuntimeError& e) {  // a subcommand failed; it printed why
+    return e.get_exit_code();
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  return 0;
+}
