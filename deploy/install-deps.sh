@@ -10,7 +10,7 @@ build_pkgs=(
   libeigen3-dev libpcl-dev libnanoflann-dev libqhull-dev
   libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc
   libsqlite3-dev sqlite3
-  libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev libcli11-dev
+  libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev
   prometheus-cpp-dev
   python3 python3-grpcio python3-grpc-tools
 )
