@@ -1,0 +1,81 @@
+// Per-chunk latency of a ScanSession (issue 6): 1k-point chunks of one object revealed top-down, from
+// the 1st to the 50th chunk. The cost of a chunk must depend on the chunk, not on what was
+// accumulated. Goal: the 50th chunk <= 1.5x the 5th (compare the medians of one run).
+#include <benchmark/benchmark.h>
+
+#include "../core/synthetic.h"
+#include "glimpse/session.h"
+#include "glimpse/train_params.h"
+#include "glimpse/views.h"
+#include "glimpse/zoo.h"
+
+#include <Eigen/Geometry>
+
+namespace glimpse {
+namespace {
+
+constexpr size_t kChunkPoints = 1000;
+constexpr size_t kChunks = 50;
+
+// A dense single view of a procedural chair, tilted by 10 degrees so that its seat is not one
+// horizontal plane revealed all at once: at least 50k points, revealed top-down.
+const std::vector<Cloud>& chunks() {
+  static const std::vector<Cloud> c = [] {
+    Mesh mesh = *make_zoo_shape("chair", 7);
+    const Eigen::Matrix3f tilt = Eigen::AngleAxisf(0.17f, Vec3::UnitX()).toRotationMatrix();
+    for (Vec3& v : mesh.vertices) v = tilt * v;
+    const Cloud full = sample_surface(mesh, 60000.0 / std::max(1e-6, surface_area(mesh)) * 2.5, 7);
+    const Cloud view = hidden_point_removal(full.points, paper_viewpoints(full.points)[1]);
+    const std::vector<uint32_t> order = top_down_order(view.points);
+    std::vector<Cloud> out(std::min(kChunks, order.size() / kChunkPoints));
+    for (size_t i = 0; i < out.size() * kChunkPoints; ++i) {
+      out[i / kChunkPoints].sensor = view.sensor;
+      out[i / kChunkPoints].points.push_back(view.points[order[i]]);
+    }
+    return out;
+  }();
+  return c;
+}
+
+std::shared_ptr<const Model> model(Method method) {
+  TrainParams p;
+  p.bok_clusters = 12;
+  p.bog_keypoint_clusters = 3;
+  p.bog_volume_clusters = 2;
+  p.kgh_clusters = 3;
+  p.kgh_distance_bins = 4;
+  p.methods = {method};
+  p.default_method = method;
+  auto m = train(test::synthetic_views(4, 2, 3), p);
+  return m.ok() ? std::make_shared<const Model>(std::move(*m)) : nullptr;
+}
+
+// Latency of chunk number state.range(0) (1-based), after feeding the ones before it untimed.
+void BM_SessionChunk(benchmark::State& state, Method method) {
+  static std::shared_ptr<const Model> bok = model(Method::kBoK), fusion = model(Method::kFusion);
+  const auto& m = method == Method::kBoK ? bok : fusion;
+  const size_t k = static_cast<size_t>(state.range(0));
+  if (!m || chunks().size() < k) {
+    state.SkipWithError("no model or too few chunks");
+    return;
+  }
+  size_t points = 0, keypoints = 0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    auto session = *ScanSession::create(m);
+    for (size_t i = 0; i + 1 < k; ++i) (void)session->add(chunks()[i]);
+    state.ResumeTiming();
+    auto d = session->add(chunks()[k - 1]);
+    benchmark::DoNotOptimize(d);
+    points = d->points, keypoints = d->keypoints;
+  }
+  state.counters["points"] = static_cast<double>(points);
+  state.counters["keypoints"] = static_cast<double>(keypoints);
+}
+BENCHMARK_CAPTURE(BM_SessionChunk, bok, Method::kBoK)->Arg(1)->Arg(5)->Arg(25)->Arg(50)->Iterations(5)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_SessionChunk, fusion, Method::kFusion)->Arg(5)->Arg(50)->Iterations(5)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+}  // namespace glimpse
+
+BENCHMARK_MAIN();
