@@ -38,13 +38,16 @@ void AddConnectionOptions(CLI::App& app, ConnectionOptions& conn) {
                                   "deadline of every call in seconds [health 5, models 30, classify 60 per file, "
                                   "stream 120 + scan time, train 3600]")
       ->check(CLI::PositiveNumber)->group("Connection");
-  app.add_flag("--tls", conn.tls, "connect with TLS")->group("Connection");
-  app.add_option("--ca", conn.ca_file, "PEM CA certificate(s) to trust (default: system roots); needs --tls")
-      ->check(CLI::ExistingFile)->group("Connection");
-  app.add_option("--cert", conn.cert_file, "PEM client certificate (mutual TLS); needs --tls and --key")
-      ->check(CLI::ExistingFile)->group("Connection");
-  app.add_option("--key", conn.key_file, "PEM client private key; needs --tls and --cert")
-      ->check(CLI::ExistingFile)->group("Connection");
+  auto* tls = app.add_flag("--tls", conn.tls, "connect with TLS")->group("Connection");
+  auto* ca = app.add_option("--ca", conn.ca_file, "PEM CA certificate(s) to trust (default: system roots)")
+                 ->check(CLI::ExistingFile)->group("Connection");
+  auto* cert = app.add_option("--cert", conn.cert_file, "PEM client certificate for mutual TLS (with --key)")
+                   ->check(CLI::ExistingFile)->group("Connection");
+  auto* key = app.add_option("--key", conn.key_file, "PEM private key of --cert")
+                  ->check(CLI::ExistingFile)->group("Connection");
+  ca->needs(tls);
+  cert->needs(tls)->needs(key);
+  key->needs(tls)->needs(cert);
   app.add_option("--token", conn.token, "bearer token sent as 'authorization: Bearer <token>'")
       ->envname("GLIMPSE_TOKEN")->group("Connection");
 }

@@ -69,6 +69,9 @@ run 2 train --zoo
 run 2 train --name x
 run 2 models
 run 2 models set-default "tiny:zero"
+run 2 health --ca "$GLIMPSE_TEST_TMP/no-such-ca.pem" --tls
+run 2 health --ca "$BOX"          # --ca needs --tls
+run 2 health --tls --cert "$BOX"  # --cert needs --key
 run 0 --help && out_has "stream" && out_has "--server"
 for sub in health models train classify stream "models list" "models show" "models delete" "models set-default"; do
   # shellcheck disable=SC2086
@@ -82,6 +85,8 @@ start_server "$SERVER" "$GLIMPSE" || { echo "FAIL: could not start $SERVER" >&2;
 
 run 0 health && out_has "^SERVING$"
 run 0 health --token secret-token  # metadata the server may ignore
+run 1 health --tls --timeout 3 && err_has "^glimpse: health .*: UNAVAILABLE"  # a plaintext server
+run 0 --version && out_has "^glimpse "
 run 0 models list && out_has "^no models$"
 
 # ---- train ----
