@@ -53,6 +53,13 @@ bool StreamRegistry::Ticket::expired() const {
   return it != registry_->slots_.end() && it->second.expired;
 }
 
+bool StreamRegistry::Ticket::over_time() const {
+  std::lock_guard lock(registry_->mutex_);
+  auto it = registry_->slots_.find(id_);
+  return it != registry_->slots_.end() && it->second.armed &&
+         registry_->clock_() - it->second.start > registry_->max_duration_;
+}
+
 void StreamRegistry::Ticket::disarm() {
   std::lock_guard lock(registry_->mutex_);
   if (auto it = registry_->slots_.find(id_); it != registry_->slots_.end()) it->second.armed = false;

@@ -36,7 +36,8 @@ class StreamRegistry {
     Ticket(Ticket&& other) noexcept : registry_(other.registry_), id_(other.id_) { other.registry_ = nullptr; }
     Ticket& operator=(Ticket&&) = delete;
     ~Ticket();
-    bool expired() const;  // the stream was cancelled for running too long
+    bool expired() const;   // the watchdog cancelled the stream for running too long
+    bool over_time() const;  // armed and older than the limit (checked at every message)
     void disarm();         // from now on, no duration limit (Train once all clouds are in)
 
    private:
@@ -48,7 +49,9 @@ class StreamRegistry {
 
   // RESOURCE_EXHAUSTED when max_streams are open. `cancel` stops the stream (ServerContext::TryCancel).
   Expected<Ticket> Admit(std::function<void()> cancel);
-  // Cancels armed streams older than max_duration; returns how many. Called by a watchdog thread.
+  // Cancels armed streams older than max_duration; returns how many. Called by a watchdog thread for
+  // streams that sit idle (a stream that keeps sending is stopped at its next message instead, with
+  // RESOURCE_EXHAUSTED; a cancelled one only tells its client CANCELLED).
   size_t Reap();
   size_t active() const;
 

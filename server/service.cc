@@ -12,8 +12,6 @@
 namespace glimpse::server {
 namespace {
 
-constexpr size_t kReceivingProgressEvery = 256;  // clouds between "receiving" progress messages
-
 double MsSince(std::chrono::steady_clock::time_point start, std::chrono::steady_clock::time_point now) {
   return std::chrono::duration<double, std::milli>(now - start).count();
 }
@@ -27,6 +25,11 @@ const char* MethodText(const std::optional<Method>& m) {
   if (!m) return "default";
   auto i = static_cast<size_t>(*m);
   return i < std::size(kNames) ? kNames[i] : "unknown";
+}
+
+Error StreamTooLong(const Limits& limits) {
+  return resource_exhausted("the stream ran longer than the limit of " +
+                            std::to_string(limits.max_stream_duration.count()) + " s");
 }
 
 void FillRef(const ModelRecord& r, v1::ModelRef* ref) {
@@ -69,6 +72,7 @@ template <class Body>
 grpc::Status GlimpseService::Handle(grpc::ServerContext* ctx, std::string_view rpc, RequestLog& log, Body&& body) {
   const auto start = options_.clock();
   log.rpc = std::string(rpc);
+  log.peer = ctx->peer();
   Status result;
   try {
     result = body();
@@ -146,6 +150,7 @@ grpc::Status GlimpseService::StreamClassify(grpc::ServerContext* ctx,
     while (stream->Read(&chunk)) {
       const auto start = options_.clock();
       ++log.messages;
+      if (ticket->over_time()) return StreamTooLong(options_.limits);
       if (!session) {
         log.model = RefText(chunk.model().name(), chunk.model().version());
         if (Status s = ValidateModelName(chunk.model().name()); !s.ok()) return s;
@@ -193,9 +198,7 @@ grpc::Status GlimpseService::StreamClassify(grpc::ServerContext* ctx,
       reply.set_latency_ms(MsSince(start, options_.clock()));
       if (!stream->Write(reply)) break;  // the caller went away
     }
-    if (ticket->expired())
-      return resource_exhausted("stream ran longer than the limit of " +
-                                std::to_string(options_.limits.max_stream_duration.count()) + " s");
+    if (ticket->expired()) return StreamTooLong(options_.limits);
     if (ctx->IsCancelled()) return cancelled("the caller cancelled the stream");
     return {};
   });
@@ -217,19 +220,14 @@ grpc::Status GlimpseService::Train(grpc::ServerContext* ctx,
     v1::TrainRequest msg;
     while (stream->Read(&msg)) {
       ++log.messages;
+      if (ticket->over_time()) return StreamTooLong(options_.limits);
       if (Status s = AddTrainRequest(msg, options_.limits, input); !s.ok()) return s;
       log.model = input.name;
       log.points = input.points;
-      if (!input.clouds.empty() && input.clouds.size() % kReceivingProgressEvery == 0) {
-        v1::TrainProgress p;
-        p.set_stage("receiving");
-        p.set_clouds_received(input.clouds.size());
-        stream->Write(p);
-      }
+      // No progress while receiving: a client that writes everything before reading would block a
+      // server Write (always, on an in-process channel), and the server would stop reading.
     }
-    if (ticket->expired())
-      return resource_exhausted("Train kept sending for longer than the limit of " +
-                                std::to_string(options_.limits.max_stream_duration.count()) + " s");
+    if (ticket->expired()) return StreamTooLong(options_.limits);
     if (ctx->IsCancelled() || DeadlinePassed(ctx)) return cancelled("the caller cancelled Train while sending");
     ticket->disarm();  // training itself is bounded by the caller's deadline
     if (Status s = CheckTrainInput(input); !s.ok()) return s;
@@ -237,7 +235,9 @@ grpc::Status GlimpseService::Train(grpc::ServerContext* ctx,
     // Core may report progress from worker threads: one writer at a time, and only when it moved.
     std::mutex write_mutex;
     v1::TrainProgress last;
+    last.set_stage("received");
     last.set_clouds_received(input.clouds.size());
+    stream->Write(last);
     auto progress = [&](const TrainProgress& p) {
       std::lock_guard lock(write_mutex);
       if (p.stage == "features") last.set_features_extracted(p.done);

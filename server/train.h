@@ -32,7 +32,7 @@ Expected<ModelRecord> TrainAndStore(const TrainInput& input, const Engine& engin
                                     const ProgressFn& progress, const CancelFn& cancel);
 
 // Share of the whole call done, 0-100, for a core stage ("features", "codebooks", ...) or one of the
-// server's ("receiving", "storing", "done").
+// server's ("received", "storing", "done").
 double TrainPercent(std::string_view stage, size_t done, size_t total);
 
 }  // namespace glimpse::server
