@@ -273,7 +273,16 @@ Expected<EvalResult> run_evaluation(const std::vector<EvalObject>& objects, cons
       st.mean_visible_percent += visible;
       ++n[c], ++total_ok;
       if (counted.insert(id).second) st.feature_seconds += slots[id].seconds;
+      if (stages[s].kind == StageKind::kKeypoints && slots[v].features.positions.size() >= stages[s].value) {
+        const size_t k = slots[id].features.positions.size();
+        st.cut_min_keypoints = st.cut_views ? std::min(st.cut_min_keypoints, k) : k;
+        st.cut_max_keypoints = std::max(st.cut_max_keypoints, k);
+        st.cut_mean_keypoints += double(k);
+        st.cut_visible_percent += visible;
+        ++st.cut_views;
+      }
     }
+    if (st.cut_views) st.cut_mean_keypoints /= double(st.cut_views), st.cut_visible_percent /= double(st.cut_views);
     for (size_t c = 0; c < n_cat; ++c)
       if (n[c]) st.keypoints[c] /= double(n[c]), st.visible_percent[c] /= double(n[c]);
     if (total_ok) st.mean_keypoints /= double(total_ok), st.mean_visible_percent /= double(total_ok);

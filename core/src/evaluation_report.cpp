@@ -242,6 +242,18 @@ void write_keypoints(std::ostringstream& o, const EvalResult& r) {
     o << " " << pct(st.mean_keypoints, 1) << " | " << pct(st.mean_visible_percent, 1) << " | " << failed << " | "
       << fmt("%.1f", st.feature_seconds) << " |\n";
   }
+  o << "\nKeypoint stage cuts, over the views whose full view has at least k keypoints (elsewhere the stage is the "
+       "whole view): keypoints re-extraction finds on the prefix cut below the k-th highest full-view keypoint.\n\n"
+       "| stage | views with >= k keypoints | prefix keypoints mean (min-max) | visible % |\n|---|---:|---:|---:|\n";
+  for (const StageStats& st : r.stage_stats) {
+    if (st.stage.size() < 3 || st.stage.substr(st.stage.size() - 2) != "kp") continue;
+    o << "| " << st.stage << " | " << st.cut_views << " | ";
+    if (st.cut_views)
+      o << pct(st.cut_mean_keypoints, 1) << " (" << st.cut_min_keypoints << "-" << st.cut_max_keypoints << ") | "
+        << pct(st.cut_visible_percent, 1) << " |\n";
+    else
+      o << "– | – |\n";
+  }
   o << "\n";
 }
 

@@ -150,6 +150,8 @@ int run_eval(const EvalOptions& o) {
     std::fprintf(stderr, "glimpse-lab eval: %s\n", s.error().message.c_str());
     return 1;
   }
+  for (const PhaseTiming& t : result->timings)
+    std::fprintf(stderr, "  %-24s %7.1f s  %s\n", t.phase.c_str(), t.seconds, t.detail.c_str());
   std::printf("accuracy %% (paper in brackets), %zu objects, %d folds:\n%s", objects.size(), params->folds,
               summary_table(*result).c_str());
   std::printf("category changes (%s), finally correct / incorrect:", method_name(result->change_method));

@@ -170,6 +170,11 @@ struct StageStats {
   std::vector<size_t> failed;           // per category: clouds whose features failed
   double mean_keypoints = 0, mean_visible_percent = 0;
   double feature_seconds = 0;           // CPU time spent extracting this stage's clouds (distinct prefixes)
+  // Keypoint stages only, over the views whose full view has at least k keypoints (the cut is real):
+  // how many keypoints re-extraction finds on the prefix, which checks the cut's approximation.
+  size_t cut_views = 0;
+  double cut_mean_keypoints = 0, cut_visible_percent = 0;
+  size_t cut_min_keypoints = 0, cut_max_keypoints = 0;
 };
 
 struct EvalResult {
