@@ -1,0 +1,321 @@
+// The real recogniser behind gRPC: Train then Classify (and StreamClassify) over the service give
+// exactly the scores of calling core directly with the same parameters. A tiny synthetic problem:
+// partial views of spheres, boxes and cylinders of a few sizes.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "fakes.h"
+#include "glimpse/train_params.h"
+
+namespace glimpse::server {
+namespace {
+
+// Surface samples (point, outward normal) of a shape centred at the origin.
+struct Surfel {
+  Vec3 p, n;
+};
+
+Vec3 RandomUnit(std::mt19937& rng) {
+  std::normal_distribution<float> g(0, 1);
+  Vec3 d(g(rng), g(rng), g(rng));
+  return d.normalized();
+}
+
+std::vector<Surfel> Sphere(float r, int n, std::mt19937& rng) {
+  std::vector<Surfel> s;
+  for (int i = 0; i < n; ++i) {
+    Vec3 d = RandomUnit(rng);
+    s.push_back({r * d, d});
+  }
+  return s;
+}
+
+std::vector<Surfel> Box(Vec3 size, int n, std::mt19937& rng) {
+  std::uniform_real_distribution<float> u(-0.5f, 0.5f);
+  const float areas[3] = {size.y() * size.z(), size.x() * size.z(), size.x() * size.y()};
+  const float total = areas[0] + areas[1] + areas[2];
+  std::vector<Surfel> s;
+  for (int axis = 0; axis < 3; ++axis)
+    for (int side = 0; side < 2; ++side)
+      for (int i = 0; i < int(n * areas[axis] / total / 2); ++i) {
+        Vec3 p(u(rng) * size.x(), u(rng) * size.y(), u(rng) * size.z()), normal = Vec3::Zero();
+        p[axis] = (side ? 0.5f : -0.5f) * size[axis];
+        normal[axis] = side ? 1.f : -1.f;
+        s.push_back({p, normal});
+      }
+  return s;
+}
+
+std::vector<Surfel> Cylinder(float r, float h, int n, std::mt19937& rng) {
+  std::uniform_real_distribution<float> u(0, 1);
+  const float side_area = 2 * float(M_PI) * r * h, cap_area = float(M_PI) * r * r;
+  std::vector<Surfel> s;
+  for (int i = 0; i < n; ++i) {
+    float pick = u(rng) * (side_area + 2 * cap_area), a = 2 * float(M_PI) * u(rng);
+    if (pick < side_area) {
+      Vec3 normal(std::cos(a), std::sin(a), 0);
+      s.push_back({Vec3(r * normal.x(), r * normal.y(), (u(rng) - 0.5f) * h), normal});
+    } else {
+      float rr = r * std::sqrt(u(rng)), z = pick < side_area + cap_area ? h / 2 : -h / 2;
+      s.push_back({Vec3(rr * std::cos(a), rr * std::sin(a), z), Vec3(0, 0, z > 0 ? 1.f : -1.f)});
+    }
+  }
+  return s;
+}
+
+// A 2.5D view: the surfels facing a sensor 2 m away in a random direction (back-face culled).
+Cloud View(const std::vector<Surfel>& surfels, std::mt19937& rng) {
+  Vec3 dir = RandomUnit(rng);
+  dir.z() = std::abs(dir.z()) + 0.3f;  // from above-ish
+  const Vec3 sensor = 2.0f * dir.normalized();
+  Cloud c;
+  c.sensor = sensor;
+  for (const Surfel& s : surfels)
+    if (s.n.dot(sensor - s.p) > 0) c.points.push_back(s.p);
+  return c;
+}
+
+LabelledCloud Sample(const std::string& category, int object, int view) {
+  std::mt19937 rng(static_cast<unsigned>(1000 * object + 17 * view + category.size()));
+  const float scale = 0.8f + 0.1f * float(object);
+  std::vector<Surfel> surfels;
+  if (category == "sphere") surfels = Sphere(0.25f * scale, 3000, rng);
+  if (category == "box") surfels = Box(Vec3(0.5f, 0.35f, 0.25f) * scale, 3000, rng);
+  if (category == "cylinder") surfels = Cylinder(0.15f * scale, 0.6f * scale, 3000, rng);
+  return {category, category + std::to_string(object), View(surfels, rng)};
+}
+
+std::vector<LabelledCloud> Dataset() {
+  std::vector<LabelledCloud> data;
+  for (const char* category : {"box", "cylinder", "sphere"})
+    for (int object = 0; object < 3; ++object)
+      for (int view = 0; view < 2; ++view) data.push_back(Sample(category, object, view));
+  return data;
+}
+
+v1::TrainHeader Header() {
+  v1::TrainHeader h;
+  h.set_model_name("shapes");
+  h.mutable_parameters()->set_bok_codebook_size(6);
+  h.mutable_parameters()->set_bog_keypoint_clusters(3);
+  h.mutable_parameters()->set_bog_volume_clusters(2);
+  h.mutable_parameters()->set_bog_pca_dims(8);
+  h.mutable_parameters()->set_kgh_keypoint_clusters(3);
+  h.mutable_parameters()->set_seed(11);
+  return h;
+}
+
+class CoreEngineTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    data_ = new std::vector<LabelledCloud>(Dataset());
+    auto spec = TrainSpecFromProto(Header());
+    ASSERT_TRUE(spec.ok()) << spec.error().message;
+    auto params = ToTrainParams(*spec);
+    ASSERT_TRUE(params.ok());
+    auto model = glimpse::train(*data_, *params);
+    ASSERT_TRUE(model.ok()) << model.error().message;
+    direct_ = new std::shared_ptr<const Model>(std::make_shared<const Model>(std::move(*model)));
+  }
+  static void TearDownTestSuite() {
+    delete data_;
+    delete direct_;
+  }
+
+  void SetUp() override {
+    ASSERT_TRUE(direct_ && *direct_) << "direct training failed";
+    harness_ = std::make_unique<testing::Harness>(Limits{}, [](ServiceOptions& o) { o.engine = CoreEngine(); });
+    grpc::ClientContext ctx;
+    auto stream = harness_->stub->Train(&ctx);
+    v1::TrainRequest header;
+    *header.mutable_header() = Header();
+    ASSERT_TRUE(stream->Write(header));
+    for (const LabelledCloud& lc : *data_) {
+      v1::TrainRequest req;
+      req.mutable_cloud()->set_category(lc.category);
+      req.mutable_cloud()->set_object_id(lc.object_id);
+      *req.mutable_cloud()->mutable_cloud() = CloudToProto(lc.cloud);
+      ASSERT_TRUE(stream->Write(req));
+    }
+    stream->WritesDone();
+    for (v1::TrainProgress p; stream->Read(&p);) trained_ = p;
+    grpc::Status s = stream->Finish();
+    ASSERT_TRUE(s.ok()) << s.error_message();
+  }
+
+  static std::vector<LabelledCloud>* data_;
+  static std::shared_ptr<const Model>* direct_;
+  std::unique_ptr<testing::Harness> harness_;
+  v1::TrainProgress trained_;
+};
+
+std::vector<LabelledCloud>* CoreEngineTest::data_ = nullptr;
+std::shared_ptr<const Model>* CoreEngineTest::direct_ = nullptr;
+
+TEST_F(CoreEngineTest, TrainOverGrpcStoresWhatCoreTrains) {
+  const Model& direct = **direct_;
+  const v1::ModelInfo& m = trained_.model();
+  EXPECT_EQ(trained_.stage(), "done");
+  EXPECT_EQ(m.version(), 1u);
+  EXPECT_THAT(m.categories(), ::testing::ElementsAre("box", "cylinder", "sphere"));
+  EXPECT_EQ(m.categories_size(), int(direct.categories.size()));
+  EXPECT_EQ(m.methods_size(), int(direct.methods.size()));
+  EXPECT_EQ(m.default_method(), MethodToProto(direct.default_method));
+  EXPECT_EQ(m.stats().clouds(), 18u);
+  EXPECT_EQ(m.stats().objects(), 9u);
+  EXPECT_EQ(m.stats().keypoints(), direct.stats.keypoints);
+  // The stored bytes are core's format: they load, and hold the same model (the bytes themselves
+  // differ only in the training time they record, which the classification tests make up for).
+  auto blob = harness_->store->Blob(int64_t(m.id()));
+  ASSERT_TRUE(blob.ok());
+  auto stored = glimpse::deserialize(*blob);
+  ASSERT_TRUE(stored.ok()) << stored.error().message;
+  EXPECT_EQ(stored->categories, direct.categories);
+  EXPECT_EQ(stored->methods, direct.methods);
+  EXPECT_EQ(stored->stats.clouds_per_category, direct.stats.clouds_per_category);
+  EXPECT_EQ(stored->stats.keypoints, direct.stats.keypoints);
+  EXPECT_EQ(blob->size(), glimpse::serialize(direct).size());
+}
+
+TEST_F(CoreEngineTest, ClassifyOverGrpcGivesExactlyCoresScores) {
+  for (const char* category : {"box", "cylinder", "sphere"}) {
+    const LabelledCloud test = Sample(category, 7, 3);  // an unseen object and view
+    for (Method method : (*direct_)->methods) {
+      auto direct = glimpse::classify(**direct_, test.cloud, method);
+      ASSERT_TRUE(direct.ok()) << direct.error().message;
+      grpc::ClientContext ctx;
+      v1::ClassifyRequest req;
+      req.mutable_model()->set_name("shapes");
+      req.set_method(MethodToProto(method));
+      *req.mutable_cloud() = CloudToProto(test.cloud);
+      v1::ClassifyResponse resp;
+      grpc::Status s = harness_->stub->Classify(&ctx, req, &resp);
+      ASSERT_TRUE(s.ok()) << s.error_message();
+      ASSERT_EQ(resp.scores_size(), int(direct->scores.size()));
+      for (size_t i = 0; i < direct->scores.size(); ++i) {
+        EXPECT_EQ(resp.scores(int(i)).category(), direct->categories[i]);
+        EXPECT_EQ(resp.scores(int(i)).score(), direct->scores[i]) << category << " " << method_name(method);
+      }
+      EXPECT_EQ(resp.winner_index(), direct->winner);
+      EXPECT_EQ(resp.method(), MethodToProto(method));
+      EXPECT_EQ(resp.points(), direct->points);
+      EXPECT_EQ(resp.keypoints(), direct->keypoints);
+    }
+  }
+}
+
+TEST_F(CoreEngineTest, StreamClassifyOverGrpcGivesExactlyTheSessionsDecisions) {
+  const LabelledCloud scan = Sample("cylinder", 8, 5);
+  auto session = ScanSession::create(*direct_, SessionParams{});
+  ASSERT_TRUE(session.ok()) << session.error().message;
+  grpc::ClientContext ctx;
+  auto stream = harness_->stub->StreamClassify(&ctx);
+  const size_t chunks = 4, per = (scan.cloud.points.size() + chunks - 1) / chunks;
+  v1::Decision last;
+  for (size_t c = 0; c < chunks; ++c) {
+    Cloud chunk;
+    for (size_t i = c * per; i < std::min(scan.cloud.points.size(), (c + 1) * per); ++i)
+      chunk.points.push_back(scan.cloud.points[i]);
+    auto direct = (*session)->add(chunk);
+    v1::ScanChunk msg;
+    if (c == 0) msg.mutable_model()->set_name("shapes");
+    *msg.mutable_cloud() = CloudToProto(chunk);
+    ASSERT_TRUE(stream->Write(msg));
+    ASSERT_TRUE(direct.ok()) << direct.error().message;
+    v1::Decision d;
+    ASSERT_TRUE(stream->Read(&d));
+    last = d;
+    EXPECT_EQ(d.chunk_index(), direct->chunk_index);
+    EXPECT_EQ(d.points(), direct->points);
+    EXPECT_EQ(d.keypoints(), direct->keypoints);
+    EXPECT_EQ(d.winner_index(), direct->winner);
+    EXPECT_EQ(d.settled(), direct->settled);
+    EXPECT_EQ(d.confidence(), direct->confidence);
+    EXPECT_EQ(int(d.category_changes()), direct->category_changes);
+    ASSERT_EQ(d.scores_size(), int(direct->scores.size()));
+    for (size_t i = 0; i < direct->scores.size(); ++i) EXPECT_EQ(d.scores(int(i)).score(), direct->scores[i]);
+  }
+  stream->WritesDone();
+  EXPECT_TRUE(stream->Finish().ok());
+  EXPECT_EQ(last.chunk_index(), chunks - 1);
+  EXPECT_GE(last.winner_index(), 0);
+  EXPECT_GT(last.keypoints(), 0u);
+}
+
+TEST_F(CoreEngineTest, CoreRejectionsComeBackAsInvalidArgument) {
+  grpc::ClientContext ctx;
+  v1::ClassifyRequest req;
+  req.mutable_model()->set_name("shapes");
+  Cloud few;
+  few.points = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};  // below core's min_points
+  *req.mutable_cloud() = CloudToProto(few);
+  v1::ClassifyResponse resp;
+  EXPECT_EQ(harness_->stub->Classify(&ctx, req, &resp).error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+}
+
+TEST(CoreEngine, SingleCategoryTrainingIsRejected) {
+  testing::Harness h(Limits{}, [](ServiceOptions& o) { o.engine = CoreEngine(); });
+  grpc::ClientContext ctx;
+  auto stream = h.stub->Train(&ctx);
+  v1::TrainRequest header;
+  *header.mutable_header() = Header();
+  stream->Write(header);
+  for (int i = 0; i < 2; ++i) {
+    LabelledCloud lc = Sample("box", i, 0);
+    v1::TrainRequest req;
+    req.mutable_cloud()->set_category(lc.category);
+    *req.mutable_cloud()->mutable_cloud() = CloudToProto(lc.cloud);
+    stream->Write(req);
+  }
+  stream->WritesDone();
+  for (v1::TrainProgress p; stream->Read(&p);) {
+  }
+  grpc::Status s = stream->Finish();
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_THAT(s.error_message(), ::testing::HasSubstr("2 categories"));
+  EXPECT_TRUE(h.store->List()->empty());
+}
+
+TEST(CoreEngine, ParametersReachCoresTrainParams) {
+  v1::TrainHeader h = Header();
+  h.add_methods(v1::METHOD_BOK);
+  h.add_methods(v1::METHOD_VFH);
+  h.mutable_parameters()->set_support_radius_m(0.04);
+  h.mutable_parameters()->set_decision(v1::DECISION_KIND_CENTRES);
+  h.mutable_parameters()->set_centres_per_category(2);
+  h.mutable_parameters()->set_neighbours(3);
+  h.mutable_parameters()->set_kgh_distance_bins(9);
+  h.mutable_parameters()->set_normalise_histograms(false);
+  auto spec = TrainSpecFromProto(h);
+  ASSERT_TRUE(spec.ok());
+  auto p = ToTrainParams(*spec);
+  ASSERT_TRUE(p.ok());
+  EXPECT_EQ(p->methods, (std::vector<Method>{Method::kBoK, Method::kVFH}));
+  EXPECT_EQ(p->default_method, Method::kBoK);  // fusion was not asked for
+  EXPECT_FLOAT_EQ(p->features.surface.support_radius_m, 0.04f);
+  EXPECT_EQ(p->bok_clusters, 6);
+  EXPECT_EQ(p->bog_keypoint_clusters, 3);
+  EXPECT_EQ(p->bog_volume_clusters, 2);
+  EXPECT_EQ(p->bog_pca_dims, 8);
+  EXPECT_EQ(p->kgh_clusters, 3);
+  EXPECT_EQ(p->kgh_distance_bins, 9);
+  EXPECT_EQ(p->decision.kind, DecisionKind::kCentres);
+  EXPECT_EQ(p->decision.centres_per_category, 2);
+  EXPECT_EQ(p->decision.neighbours, 3);
+  EXPECT_FALSE(p->normalise_histograms);
+  EXPECT_EQ(p->seed, 11u);
+
+  auto defaults = ToTrainParams(TrainSpec{});
+  ASSERT_TRUE(defaults.ok());
+  const TrainParams core_defaults;
+  EXPECT_EQ(defaults->methods, core_defaults.methods);
+  EXPECT_EQ(defaults->default_method, core_defaults.default_method);
+  EXPECT_EQ(defaults->bok_clusters, core_defaults.bok_clusters);
+  EXPECT_EQ(defaults->decision.kind, core_defaults.decision.kind);
+  EXPECT_EQ(defaults->seed, core_defaults.seed);
+}
+
+}  // namespace
+}  // namespace glimpse::server
