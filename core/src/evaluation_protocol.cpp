@@ -5,6 +5,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <cctype>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -388,6 +389,34 @@ Expected<EvalResult> run_evaluation(const std::vector<EvalObject>& objects, cons
       r.notes.push_back("stage " + st.stage + ": " + std::to_string(short_views) + " of " + std::to_string(views.size()) +
                         " views have fewer than " + stage_name(stage).substr(0, stage_name(stage).size() - 2) +
                         " keypoints on the full view, so the stage is the full view for them.");
+  }
+  // Feature errors grouped by their message with the numbers blanked out; the first one shown in full.
+  struct ErrorGroup {
+    size_t clouds = 0;
+    std::string example;
+    std::set<std::string> objects;
+  };
+  std::map<std::string, ErrorGroup> errors;
+  for (const FeatureSlot& slot : slots) {
+    if (slot.ok) continue;
+    std::string key;
+    for (char c : slot.error) {
+      const bool digit = std::isdigit(static_cast<unsigned char>(c));
+      if (!digit) key += c;
+      else if (key.empty() || key.back() != '#') key += '#';
+    }
+    ErrorGroup& g = errors[key];
+    const std::string& object = r.object_ids[views[slot.view].object];
+    if (g.clouds++ == 0)
+      g.example = object + " view " + std::to_string(views[slot.view].view) + ", " + std::to_string(slot.count) +
+                  " points: " + slot.error;
+    g.objects.insert(object);
+  }
+  for (const auto& [key, g] : errors) {
+    std::string list;
+    for (const std::string& o : g.objects) list += (list.empty() ? "" : ", ") + o;
+    r.notes.push_back("features failed on " + std::to_string(g.clouds) + " clouds (views and prefixes) of " +
+                      std::to_string(g.objects.size()) + " objects (" + list + "), e.g. " + g.example);
   }
   size_t no_keypoints = 0;
   for (size_t v = 0; v < views.size(); ++v) no_keypoints += slots[v].ok && slots[v].features.positions.empty();
