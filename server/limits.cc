@@ -1,6 +1,5 @@
 #include "limits.h"
 
-#include <vector>
 
 namespace glimpse::server {
 
@@ -20,20 +19,19 @@ Expected<StreamRegistry::Ticket> StreamRegistry::Admit(std::function<void()> can
 }
 
 size_t StreamRegistry::Reap() {
-  std::vector<std::function<void()>> to_cancel;
-  {
-    std::lock_guard lock(mutex_);
-    const auto now = clock_();
-    for (auto& [id, slot] : slots_) {
-      if (slot.armed && !slot.expired && now - slot.start > max_duration_) {
-        slot.expired = true;
-        to_cancel.push_back(slot.cancel);
-      }
+  // Cancels under the lock: a slot's ServerContext lives until its Ticket is destroyed, which takes
+  // this lock, so a context is never cancelled after its call returned. TryCancel does not call back.
+  std::lock_guard lock(mutex_);
+  const auto now = clock_();
+  size_t cancelled = 0;
+  for (auto& [id, slot] : slots_) {
+    if (slot.armed && !slot.expired && now - slot.start > max_duration_) {
+      slot.expired = true;
+      if (slot.cancel) slot.cancel();
+      ++cancelled;
     }
   }
-  for (auto& cancel : to_cancel)
-    if (cancel) cancel();  // outside the lock: TryCancel may run callbacks
-  return to_cancel.size();
+  return cancelled;
 }
 
 size_t StreamRegistry::active() const {

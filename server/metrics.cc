@@ -32,9 +32,9 @@ namespace {
 const prometheus::Histogram::BucketBoundaries kLatencyBuckets = {
     0.001, 0.0025, 0.005, 0.01, 0.025, 0.05, 0.1, 0.25, 0.5, 1, 2.5, 5, 10, 25, 60, 120};
 
-double Value(const prometheus::Family<prometheus::Counter>& f, const prometheus::Labels& labels) {
-  if (!f.Has(labels)) return 0;
-  return const_cast<prometheus::Family<prometheus::Counter>&>(f).Add(labels).Value();
+template <class T>
+double Value(prometheus::Family<T>& family, const prometheus::Labels& labels) {
+  return family.Has(labels) ? family.Add(labels).Value() : 0;  // Add returns the existing series
 }
 }  // namespace
 
@@ -78,9 +78,7 @@ double Metrics::RequestCount(std::string_view rpc, grpc::StatusCode code) const 
 }
 
 double Metrics::ActiveStreams(std::string_view rpc) const {
-  prometheus::Labels labels{{"method", std::string(rpc)}};
-  if (!active_streams_.Has(labels)) return 0;
-  return active_streams_.Add(labels).Value();
+  return Value(active_streams_, {{"method", std::string(rpc)}});
 }
 
 double Metrics::ModelsLoaded() const { return models_loaded_.Value(); }

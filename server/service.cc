@@ -40,7 +40,7 @@ void FillRef(const ModelRecord& r, v1::ModelRef* ref) {
 }  // namespace
 
 CancelFn CancelFor(const grpc::ServerContext* ctx) {
-  return [ctx] { return const_cast<grpc::ServerContext*>(ctx)->IsCancelled() || DeadlinePassed(ctx); };
+  return [ctx] { return ctx->IsCancelled() || DeadlinePassed(ctx); };
 }
 
 bool DeadlinePassed(const grpc::ServerContext* ctx) {

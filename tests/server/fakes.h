@@ -35,9 +35,9 @@ struct FakeBehaviour {
 // "cats=a,b;methods=0,5;default=5" as bytes.
 inline std::vector<uint8_t> FakeSerialize(const Model& m) {
   std::string s = "fake-model;cats=";
-  for (size_t i = 0; i < m.categories.size(); ++i) s += (i ? "," : "") + m.categories[i];
+  for (size_t i = 0; i < m.categories.size(); ++i) s.append(i ? "," : "").append(m.categories[i]);
   s += ";methods=";
-  for (size_t i = 0; i < m.methods.size(); ++i) s += (i ? "," : "") + std::to_string(int(m.methods[i]));
+  for (size_t i = 0; i < m.methods.size(); ++i) s.append(i ? "," : "").append(std::to_string(int(m.methods[i])));
   s += ";default=" + std::to_string(int(m.default_method));
   return {s.begin(), s.end()};
 }
