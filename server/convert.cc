@@ -13,6 +13,9 @@ namespace {
 constexpr size_t kBytesPerPoint = 12;
 constexpr size_t kMaxNameLength = 128;
 constexpr size_t kMaxDescriptionBytes = 4096;
+// Clouds are in metres; beyond 1000 km float32 has no centimetres left, and core's voxel keys and
+// kd-tree splits overflow near float's range (a cloud at 3e38 m aborted the server in PCL's kd-tree).
+constexpr float kMaxAbsCoordinateM = 1e6f;
 
 float ReadFloatLE(const char* p) {
   uint32_t u = 0;
@@ -37,6 +40,9 @@ Status Unpack(const std::string& bytes, std::string_view what, Points& points) {
     Vec3 v(ReadFloatLE(p), ReadFloatLE(p + 4), ReadFloatLE(p + 8));
     if (!v.allFinite())
       return invalid_argument(std::string(what) + ": point " + std::to_string(i) + " is not finite");
+    if (v.cwiseAbs().maxCoeff() > kMaxAbsCoordinateM)
+      return invalid_argument(std::string(what) + ": point " + std::to_string(i) +
+                              " has a coordinate beyond +-1e6 m (clouds are in metres)");
     points[i] = v;
   }
   return {};
@@ -60,6 +66,8 @@ Expected<Cloud> CloudFromProto(const v1::PointCloud& msg, size_t max_points) {
   if (msg.has_sensor()) {
     Vec3 sensor(msg.sensor().x(), msg.sensor().y(), msg.sensor().z());
     if (!sensor.allFinite()) return invalid_argument("sensor position is not finite");
+    if (sensor.cwiseAbs().maxCoeff() > kMaxAbsCoordinateM)
+      return invalid_argument("sensor position has a coordinate beyond +-1e6 m (clouds are in metres)");
     cloud.sensor = sensor;
   }
   return cloud;

@@ -14,8 +14,8 @@
 namespace glimpse::server {
 
 // Unpacks xyz (little-endian float32 triples), the sensor and normals. INVALID_ARGUMENT for a byte
-// length that is not a multiple of 12, normals that do not match xyz, or a NaN/Inf value (naming the
-// first bad point's index); RESOURCE_EXHAUSTED above max_points.
+// length that is not a multiple of 12, normals that do not match xyz, or a NaN/Inf value or a
+// coordinate beyond +-1e6 m (naming the first bad point's index); RESOURCE_EXHAUSTED above max_points.
 Expected<Cloud> CloudFromProto(const v1::PointCloud& msg, size_t max_points);
 // The inverse, for clients and tests.
 v1::PointCloud CloudToProto(const Cloud& cloud);

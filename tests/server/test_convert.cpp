@@ -27,7 +27,7 @@ TEST(CloudFromProto, EmptyCloudIsValidAndEmpty) {
 
 TEST(CloudFromProto, RoundTripsPointsAndSensorExactly) {
   Cloud in;
-  in.points = {Vec3(1, 2, 3), Vec3(-0.5f, 1e-7f, 3.4e38f), Vec3(0, -0.0f, 123.456f)};
+  in.points = {Vec3(1, 2, 3), Vec3(-0.5f, 1e-7f, 1e6f), Vec3(0, -0.0f, -123.456f)};  // 1e6 m: the largest allowed
   in.sensor = Vec3(0.1f, 0.2f, -3);
   auto out = CloudFromProto(CloudToProto(in), 10);
   ASSERT_TRUE(out.ok());
@@ -69,6 +69,24 @@ TEST(CloudFromProto, NanOrInfNamesTheFirstBadPoint) {
     EXPECT_EQ(cloud.error().code, ErrorCode::kInvalidArgument);
     EXPECT_NE(cloud.error().message.find("point 7 "), std::string::npos) << cloud.error().message;
   }
+}
+
+// Regression: a cloud at 3e38 m aborted glimpse-server in PCL's kd-tree (flann middleSplit assertion),
+// and core's voxel keys overflow long before that; the service refuses such coordinates.
+TEST(CloudFromProto, CoordinatesBeyondAMillionMetresAreInvalid) {
+  for (float huge : {3e38f, -1e30f, 1.0001e6f}) {
+    Points points(10, Vec3(1, 1, 1));
+    points[3] = Vec3(0, 0, huge);
+    auto cloud = CloudFromProto(Packed(points), 100);
+    ASSERT_FALSE(cloud.ok());
+    EXPECT_EQ(cloud.error().code, ErrorCode::kInvalidArgument);
+    EXPECT_NE(cloud.error().message.find("point 3 has a coordinate beyond"), std::string::npos) << cloud.error().message;
+  }
+  Points edge(10, Vec3(1e6f, -1e6f, 0));
+  EXPECT_TRUE(CloudFromProto(Packed(edge), 100).ok());
+  v1::PointCloud far = Packed(edge);
+  far.mutable_sensor()->set_x(2e6f);
+  EXPECT_EQ(CloudFromProto(far, 100).error().code, ErrorCode::kInvalidArgument);
 }
 
 TEST(CloudFromProto, TooManyPointsIsResourceExhausted) {
