@@ -10,6 +10,7 @@ namespace {
 struct Option {
   const char* flag;  // without "--"
   const char* env;
+  const char* value;  // placeholder in --help: N, S, FILE
   const char* help;
   std::function<Status(ServerConfig&, const std::string&)> set;
 };
@@ -43,44 +44,82 @@ std::function<Status(ServerConfig&, const std::string&)> Seconds(std::chrono::se
   };
 }
 
+// A non-empty string field (a path).
+std::function<Status(ServerConfig&, const std::string&)> Text(std::string* (*get)(ServerConfig&)) {
+  return [get](ServerConfig& c, const std::string& v) {
+    if (v.empty()) return Status(invalid_argument("empty value"));
+    *get(c) = v;
+    return Status{};
+  };
+}
+
+// Flags that only make sense together.
+Status CheckCombinations(const ServerConfig& c) {
+  if (c.tls.cert.empty() != c.tls.key.empty()) return invalid_argument("--tls-cert and --tls-key go together");
+  if (!c.tls.client_ca.empty() && c.tls.cert.empty())
+    return invalid_argument("--tls-client-ca (mutual TLS) needs --tls-cert and --tls-key");
+  return {};
+}
+
 const std::vector<Option>& Options() {
   static const std::vector<Option> options = {
-      {"address", "GLIMPSE_ADDRESS", "gRPC listen address [0.0.0.0:50051]",
+      {"address", "GLIMPSE_ADDRESS", "S", "gRPC listen address [0.0.0.0:50051]",
        [](ServerConfig& c, const std::string& v) {
          if (v.empty()) return Status(invalid_argument("empty address"));
          c.address = v;
          return Status{};
        }},
-      {"db", "GLIMPSE_DB", "SQLite model store; its folder is created [./var/glimpse.db]",
+      {"db", "GLIMPSE_DB", "FILE", "SQLite model store; its folder is created [./var/glimpse.db]",
        [](ServerConfig& c, const std::string& v) {
          if (v.empty()) return Status(invalid_argument("empty database path"));
          c.db_path = v;
          return Status{};
        }},
-      {"metrics-port", "GLIMPSE_METRICS_PORT", "Prometheus /metrics HTTP port, 0 disables [9464]",
+      {"metrics-port", "GLIMPSE_METRICS_PORT", "N", "Prometheus /metrics HTTP port, 0 disables [9464]",
        Number(&ServerConfig::metrics_port, 0)},
-      {"threads", "GLIMPSE_THREADS", "gRPC worker threads, 0 = max streams + 2 per core [0]",
+      {"threads", "GLIMPSE_THREADS", "N", "gRPC worker threads, 0 = max streams + 2 per core [0]",
        Number(&ServerConfig::threads, 0)},
-      {"shutdown-grace-seconds", "GLIMPSE_SHUTDOWN_GRACE_SECONDS",
+      {"shutdown-grace-seconds", "GLIMPSE_SHUTDOWN_GRACE_SECONDS", "N",
        "how long in-flight calls may finish after SIGTERM/SIGINT [10]",
        Seconds([](ServerConfig& c) { return &c.shutdown_grace; })},
-      {"max-message-bytes", "GLIMPSE_MAX_MESSAGE_BYTES", "largest gRPC message [67108864]",
+      {"max-message-bytes", "GLIMPSE_MAX_MESSAGE_BYTES", "N", "largest gRPC message [67108864]",
        Limit(&Limits::max_message_bytes, size_t{1024})},
-      {"max-points", "GLIMPSE_MAX_POINTS", "points per cloud or chunk [1000000]",
+      {"max-points", "GLIMPSE_MAX_POINTS", "N", "points per cloud or chunk [1000000]",
        Limit(&Limits::max_points_per_cloud, size_t{1})},
-      {"max-streams", "GLIMPSE_MAX_STREAMS", "concurrent Train/StreamClassify calls [64]",
+      {"max-streams", "GLIMPSE_MAX_STREAMS", "N", "concurrent Train/StreamClassify calls [64]",
        Limit(&Limits::max_concurrent_streams, size_t{1})},
-      {"max-stream-seconds", "GLIMPSE_MAX_STREAM_SECONDS",
+      {"max-stream-seconds", "GLIMPSE_MAX_STREAM_SECONDS", "N",
        "longest StreamClassify call, and Train while receiving [600]",
        Seconds([](ServerConfig& c) { return &c.limits.max_stream_duration; })},
-      {"max-train-clouds", "GLIMPSE_MAX_TRAIN_CLOUDS", "clouds per Train call [100000]",
+      {"max-train-clouds", "GLIMPSE_MAX_TRAIN_CLOUDS", "N", "clouds per Train call [100000]",
        Limit(&Limits::max_train_clouds, size_t{1})},
-      {"max-train-points", "GLIMPSE_MAX_TRAIN_POINTS", "points summed over a Train call [50000000]",
+      {"max-train-points", "GLIMPSE_MAX_TRAIN_POINTS", "N", "points summed over a Train call [50000000]",
        Limit(&Limits::max_train_points, size_t{1})},
-      {"max-session-points", "GLIMPSE_MAX_SESSION_POINTS", "points accumulated by one scan session [1000000]",
+      {"max-session-points", "GLIMPSE_MAX_SESSION_POINTS", "N", "points accumulated by one scan session [1000000]",
        Limit(&Limits::max_session_points, size_t{1})},
-      {"max-cached-models", "GLIMPSE_MAX_CACHED_MODELS", "deserialized models kept in memory [16]",
+      {"max-cached-models", "GLIMPSE_MAX_CACHED_MODELS", "N", "deserialized models kept in memory [16]",
        Limit(&Limits::max_cached_models, size_t{1})},
+      {"tls-cert", "GLIMPSE_TLS_CERT", "FILE", "PEM server certificate (chain); with --tls-key serves TLS only",
+       Text([](ServerConfig& c) { return &c.tls.cert; })},
+      {"tls-key", "GLIMPSE_TLS_KEY", "FILE", "PEM private key of --tls-cert", Text([](ServerConfig& c) { return &c.tls.key; })},
+      {"tls-client-ca", "GLIMPSE_TLS_CLIENT_CA", "FILE",
+       "PEM CA: mutual TLS, every client must present a certificate it signed",
+       Text([](ServerConfig& c) { return &c.tls.client_ca; })},
+      {"auth-token", "GLIMPSE_AUTH_TOKEN", "S",
+       "bearer token Train/DeleteModel/SetDefaultModel require (prefer the file: flags show in ps)",
+       [](ServerConfig& c, const std::string& v) {
+         if (Status s = ValidateToken(v); !s.ok()) return s;
+         c.auth_token = v;
+         c.auth_token_file.clear();  // the later setting wins (flags over environment)
+         return Status{};
+       }},
+      {"auth-token-file", "GLIMPSE_AUTH_TOKEN_FILE", "FILE", "file whose first line is the bearer token",
+       [](ServerConfig& c, const std::string& v) {
+         if (v.empty()) return Status(invalid_argument("empty value"));
+         c.auth_token_file = v;
+         c.auth_token.clear();
+         return Status{};
+       }},
   };
   return options;
 }
@@ -125,6 +164,7 @@ Expected<ServerConfig> ParseConfig(const std::vector<std::string>& args, const E
     }
     if (Status s = option->set(config, value); !s.ok()) return invalid_argument("--" + name + ": " + s.error().message);
   }
+  if (Status s = CheckCombinations(config); !s.ok()) return s.error();
   return config;
 }
 
@@ -135,14 +175,17 @@ std::string Usage() {
       "usage: glimpse-server [--flag=value ...]\n\n"
       "Every flag can also be set by its environment variable; flags win.\n\n";
   for (const Option& o : Options()) {
-    std::string left = "  --" + std::string(o.flag) + "=N";
-    if (std::string_view(o.flag) == "address" || std::string_view(o.flag) == "db") left = "  --" + std::string(o.flag) + "=S";
+    std::string left = "  --" + std::string(o.flag) + "=" + o.value;
     left.resize(std::max<size_t>(left.size() + 1, 28), ' ');
     std::string env = o.env;
     env.resize(std::max<size_t>(env.size() + 1, 32), ' ');
     out += left + env + o.help + "\n";
   }
-  out += "  --help                      this text\n\nSIGTERM/SIGINT: stop accepting calls, let in-flight ones finish (up to the grace period), close the store.\n";
+  out += "  --help                      this text\n\n"
+         "SIGTERM/SIGINT: stop accepting calls, let in-flight ones finish (up to the grace period), close the store.\n"
+         "With a token, Train, DeleteModel and SetDefaultModel need the metadata 'authorization: Bearer <token>'\n"
+         "(else UNAUTHENTICATED); Classify, StreamClassify, ListModels, GetModel and health stay open. Send the\n"
+         "token over TLS only: on a plaintext port anyone on the path can read it.\n";
   return out;
 }
 

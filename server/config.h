@@ -9,6 +9,7 @@
 
 #include "glimpse/expected.h"
 #include "limits.h"
+#include "security.h"
 #include "store.h"
 
 namespace glimpse::server {
@@ -20,14 +21,18 @@ struct ServerConfig {
   int threads = 0;           // gRPC worker threads; 0: max streams + 2 per core (at least 4)
   std::chrono::seconds shutdown_grace{10};  // in-flight calls get this long after SIGTERM/SIGINT
   Limits limits;
+  TlsFiles tls;                 // --tls-cert/--tls-key [/--tls-client-ca]; empty: plaintext
+  std::string auth_token;       // required on Train/DeleteModel/SetDefaultModel; empty: open
+  std::string auth_token_file;  // read at startup (main.cc); excludes auth_token
   bool help = false;
 };
 
 using EnvFn = std::function<std::optional<std::string>(const std::string&)>;
 EnvFn ProcessEnv();  // std::getenv
 
-// args excludes argv[0]. Flags: --name=value or --name value. Unknown flags and bad numbers are
-// INVALID_ARGUMENT, naming the flag or variable.
+// args excludes argv[0]. Flags: --name=value or --name value. Unknown flags, bad numbers and flags
+// that need each other (--tls-cert with --tls-key, ...) are INVALID_ARGUMENT, naming the flag or
+// variable (never a token's value).
 Expected<ServerConfig> ParseConfig(const std::vector<std::string>& args, const EnvFn& env);
 std::string Usage();
 int EffectiveThreads(const ServerConfig& config);

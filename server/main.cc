@@ -12,6 +12,7 @@
 #include "engine.h"
 #include "log.h"
 #include "metrics.h"
+#include "security.h"
 #include "server.h"
 #include "service.h"
 #include "store.h"
@@ -21,6 +22,21 @@ using namespace glimpse::server;
 namespace {
 
 int Run(const ServerConfig& config, const sigset_t& signals) {
+  // Secrets first: a bad certificate or token file stops the server before it opens anything.
+  auto credentials = LoadServerCredentials(config.tls);
+  if (!credentials) {
+    std::fprintf(stderr, "glimpse-server: %s\n", credentials.error().message.c_str());
+    return 1;
+  }
+  std::string token = config.auth_token;
+  if (!config.auth_token_file.empty()) {
+    auto read = ReadTokenFile(config.auth_token_file);
+    if (!read) {
+      std::fprintf(stderr, "glimpse-server: %s\n", read.error().message.c_str());
+      return 1;
+    }
+    token = std::move(*read);
+  }
   auto store = ModelStore::Open(config.db_path);
   if (!store) {
     std::fprintf(stderr, "glimpse-server: cannot open the model store: %s\n", store.error().message.c_str());
@@ -43,12 +59,14 @@ int Run(const ServerConfig& config, const sigset_t& signals) {
   options.engine = CoreEngine();
   options.limits = config.limits;
   options.metrics = &metrics;
+  options.auth_token = token;
   GlimpseService service(std::move(options));
 
   GrpcServerOptions grpc_options;
   grpc_options.address = config.address;
   grpc_options.threads = EffectiveThreads(config);
   grpc_options.max_message_bytes = config.limits.max_message_bytes;
+  grpc_options.credentials = *credentials;
   auto running = StartGrpcServer(grpc_options, &service);
   if (!running) {
     std::fprintf(stderr, "glimpse-server: %s\n", running.error().message.c_str());
@@ -56,7 +74,9 @@ int Run(const ServerConfig& config, const sigset_t& signals) {
   }
   LogEvent("info", "serving glimpse.v1.Glimpse on " + config.address + " (port " + std::to_string(running->port) +
                        "), store " + config.db_path + ", metrics port " + std::to_string(config.metrics_port) +
-                       ", " + std::to_string(grpc_options.threads) + " threads");
+                       ", " + std::to_string(grpc_options.threads) + " threads, " +
+                       (config.tls.enabled() ? (config.tls.client_ca.empty() ? "TLS" : "mutual TLS") : "plaintext") +
+                       (token.empty() ? ", model changes open to every caller" : ", model changes need the bearer token"));
 
   int signal = 0;
   sigwait(&signals, &signal);

@@ -16,7 +16,8 @@ Expected<RunningServer> StartGrpcServer(const GrpcServerOptions& options, grpc::
 
   grpc::ServerBuilder builder;
   RunningServer running;
-  builder.AddListeningPort(options.address, grpc::InsecureServerCredentials(), &running.port);
+  builder.AddListeningPort(options.address,
+                           options.credentials ? options.credentials : grpc::InsecureServerCredentials(), &running.port);
   builder.RegisterService(service);
   const int max_bytes = static_cast<int>(std::min<size_t>(options.max_message_bytes, INT_MAX));
   builder.SetMaxReceiveMessageSize(max_bytes);

@@ -3,6 +3,7 @@
 // by the end-to-end tests.
 #pragma once
 
+#include <grpcpp/security/server_credentials.h>
 #include <grpcpp/server.h>
 
 #include <memory>
@@ -19,6 +20,7 @@ struct GrpcServerOptions {
   std::string address = "0.0.0.0:50051";  // "127.0.0.1:0" picks a free port
   int threads = 16;
   size_t max_message_bytes = 64u << 20;
+  std::shared_ptr<grpc::ServerCredentials> credentials;  // LoadServerCredentials (security.h); null: plaintext
 };
 
 struct RunningServer {

@@ -50,6 +50,7 @@ bool DeadlinePassed(const grpc::ServerContext* ctx) {
 
 GlimpseService::GlimpseService(ServiceOptions options)
     : options_(std::move(options)),
+      token_(options_.auth_token),
       cache_(*options_.store, options_.engine.deserialize, options_.limits.max_cached_models),
       streams_(options_.limits.max_concurrent_streams, options_.limits.max_stream_duration, options_.clock) {
   if (!options_.clock) options_.clock = [] { return std::chrono::steady_clock::now(); };
@@ -69,19 +70,27 @@ GlimpseService::GlimpseService(ServiceOptions options)
 GlimpseService::~GlimpseService() = default;  // jthread: stop + join
 
 template <class Body>
-grpc::Status GlimpseService::Handle(grpc::ServerContext* ctx, std::string_view rpc, RequestLog& log, Body&& body) {
+grpc::Status GlimpseService::Handle(grpc::ServerContext* ctx, std::string_view rpc, Access access, RequestLog& log,
+                                    Body&& body) {
   const auto start = options_.clock();
   log.rpc = std::string(rpc);
   log.peer = ctx->peer();
-  Status result;
-  try {
-    result = body();
-  } catch (const std::exception& e) {
-    result = internal_error(std::string("unexpected exception: ") + e.what());
-  } catch (...) {
-    result = internal_error("unexpected exception");
+  grpc::Status status;
+  if (access == Access::kMutating && !token_.Accepts(ctx->client_metadata())) {
+    // Before any work or store access; the message never echoes what was presented.
+    status = grpc::Status(grpc::StatusCode::UNAUTHENTICATED,
+                          std::string(rpc) + " needs the metadata 'authorization: Bearer <token>' with the server's token");
+  } else {
+    Status result;
+    try {
+      result = body();
+    } catch (const std::exception& e) {
+      result = internal_error(std::string("unexpected exception: ") + e.what());
+    } catch (...) {
+      result = internal_error("unexpected exception");
+    }
+    status = result.ok() ? grpc::Status::OK : ToGrpcStatus(result.error(), DeadlinePassed(ctx));
   }
-  grpc::Status status = result.ok() ? grpc::Status::OK : ToGrpcStatus(result.error(), DeadlinePassed(ctx));
   try {
     const double ms = MsSince(start, options_.clock());
     if (options_.metrics) {
@@ -106,7 +115,7 @@ Expected<StreamRegistry::Ticket> GlimpseService::OpenStream(grpc::ServerContext*
 grpc::Status GlimpseService::Classify(grpc::ServerContext* ctx, const v1::ClassifyRequest* request,
                                       v1::ClassifyResponse* response) {
   RequestLog log;
-  return Handle(ctx, "Classify", log, [&]() -> Status {
+  return Handle(ctx, "Classify", Access::kOpen, log, [&]() -> Status {
     const auto start = options_.clock();
     log.model = RefText(request->model().name(), request->model().version());
     if (Status s = ValidateModelName(request->model().name()); !s.ok()) return s;
@@ -119,6 +128,8 @@ grpc::Status GlimpseService::Classify(grpc::ServerContext* ctx, const v1::Classi
     auto loaded = cache_.Load(request->model().name(), request->model().version());
     if (!loaded) return loaded.error();
     log.model = RefText(loaded->record.name, loaded->record.version);
+    // Core polls the CancelFn only after feature extraction: do not start work nobody waits for.
+    if (CancelFor(ctx)()) return cancelled("the caller cancelled or the deadline passed before classification");
     auto result = options_.engine.classify(*loaded->model, *cloud, *method, CancelFor(ctx));
     if (!result) return result.error();
     ToProto(*result, response);
@@ -134,7 +145,7 @@ grpc::Status GlimpseService::Classify(grpc::ServerContext* ctx, const v1::Classi
 grpc::Status GlimpseService::StreamClassify(grpc::ServerContext* ctx,
                                             grpc::ServerReaderWriter<v1::Decision, v1::ScanChunk>* stream) {
   RequestLog log;
-  return Handle(ctx, "StreamClassify", log, [&]() -> Status {
+  return Handle(ctx, "StreamClassify", Access::kOpen, log, [&]() -> Status {
     auto ticket = OpenStream(ctx);
     if (!ticket) return ticket.error();
     if (options_.metrics) options_.metrics->StreamOpened("StreamClassify");
@@ -207,7 +218,7 @@ grpc::Status GlimpseService::StreamClassify(grpc::ServerContext* ctx,
 grpc::Status GlimpseService::Train(grpc::ServerContext* ctx,
                                    grpc::ServerReaderWriter<v1::TrainProgress, v1::TrainRequest>* stream) {
   RequestLog log;
-  return Handle(ctx, "Train", log, [&]() -> Status {
+  return Handle(ctx, "Train", Access::kMutating, log, [&]() -> Status {
     auto ticket = OpenStream(ctx);
     if (!ticket) return ticket.error();
     if (options_.metrics) options_.metrics->StreamOpened("Train");
@@ -271,7 +282,7 @@ grpc::Status GlimpseService::Train(grpc::ServerContext* ctx,
 grpc::Status GlimpseService::ListModels(grpc::ServerContext* ctx, const v1::ListModelsRequest* request,
                                         v1::ListModelsResponse* response) {
   RequestLog log;
-  return Handle(ctx, "ListModels", log, [&]() -> Status {
+  return Handle(ctx, "ListModels", Access::kOpen, log, [&]() -> Status {
     log.model = request->name();
     if (!request->name().empty())
       if (Status s = ValidateModelName(request->name()); !s.ok()) return s;
@@ -285,7 +296,7 @@ grpc::Status GlimpseService::ListModels(grpc::ServerContext* ctx, const v1::List
 grpc::Status GlimpseService::GetModel(grpc::ServerContext* ctx, const v1::GetModelRequest* request,
                                       v1::ModelInfo* response) {
   RequestLog log;
-  return Handle(ctx, "GetModel", log, [&]() -> Status {
+  return Handle(ctx, "GetModel", Access::kOpen, log, [&]() -> Status {
     log.model = RefText(request->model().name(), request->model().version());
     if (Status s = ValidateModelName(request->model().name()); !s.ok()) return s;
     auto record = options_.store->Get(request->model().name(), request->model().version());
@@ -298,7 +309,7 @@ grpc::Status GlimpseService::GetModel(grpc::ServerContext* ctx, const v1::GetMod
 grpc::Status GlimpseService::DeleteModel(grpc::ServerContext* ctx, const v1::DeleteModelRequest* request,
                                          v1::DeleteModelResponse* response) {
   RequestLog log;
-  return Handle(ctx, "DeleteModel", log, [&]() -> Status {
+  return Handle(ctx, "DeleteModel", Access::kMutating, log, [&]() -> Status {
     log.model = RefText(request->name(), request->version());
     if (Status s = ValidateModelName(request->name()); !s.ok()) return s;
     auto deleted = options_.store->Delete(request->name(), request->version());
@@ -312,7 +323,7 @@ grpc::Status GlimpseService::DeleteModel(grpc::ServerContext* ctx, const v1::Del
 grpc::Status GlimpseService::SetDefaultModel(grpc::ServerContext* ctx, const v1::SetDefaultModelRequest* request,
                                              v1::ModelInfo* response) {
   RequestLog log;
-  return Handle(ctx, "SetDefaultModel", log, [&]() -> Status {
+  return Handle(ctx, "SetDefaultModel", Access::kMutating, log, [&]() -> Status {
     log.model = RefText(request->name(), request->version());
     if (Status s = ValidateModelName(request->name()); !s.ok()) return s;
     auto record = options_.store->SetDefault(request->name(), request->version());

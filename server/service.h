@@ -14,6 +14,7 @@
 #include "log.h"
 #include "metrics.h"
 #include "model_cache.h"
+#include "security.h"
 #include "store.h"
 
 namespace glimpse::server {
@@ -28,6 +29,9 @@ struct ServiceOptions {
   // How often a watchdog cancels streams past limits.max_stream_duration; 0: no watchdog thread
   // (tests call streams().Reap()).
   std::chrono::milliseconds reap_interval{1000};
+  // Non-empty: Train, DeleteModel and SetDefaultModel need `authorization: Bearer <auth_token>`
+  // (UNAUTHENTICATED otherwise); the other RPCs stay open.
+  std::string auth_token;
 };
 
 class GlimpseService final : public v1::Glimpse::Service {
@@ -54,12 +58,15 @@ class GlimpseService final : public v1::Glimpse::Service {
   ModelCache& cache() { return cache_; }
 
  private:
-  // The RPC boundary: runs body, catches anything thrown, maps the status, records metrics and logs.
+  enum class Access { kOpen, kMutating };
+  // The RPC boundary: checks the caller may make a mutating call, runs body, catches anything
+  // thrown, maps the status, records metrics and logs.
   template <class Body>
-  grpc::Status Handle(grpc::ServerContext* ctx, std::string_view rpc, RequestLog& log, Body&& body);
+  grpc::Status Handle(grpc::ServerContext* ctx, std::string_view rpc, Access access, RequestLog& log, Body&& body);
   Expected<StreamRegistry::Ticket> OpenStream(grpc::ServerContext* ctx);
 
   ServiceOptions options_;
+  BearerToken token_;
   ModelCache cache_;
   StreamRegistry streams_;
   std::jthread watchdog_;
