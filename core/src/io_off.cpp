@@ -68,7 +68,7 @@ Expected<Mesh> read_off(const std::string& path, std::string_view text) {
       return text_error(path, lines.line_no(), "truncated: expected " + std::to_string(nf) +
                                                    " faces, found " + std::to_string(i));
     uint64_t n = 0;
-    if (!parse_u64(tok[0], n) || n < 3 || n + 1 > tok.size())
+    if (!parse_u64(tok[0], n) || n < 3 || n >= tok.size())  // not n + 1 > size: n + 1 wraps at 2^64 - 1
       return text_error(path, lines.line_no(), "expected a face 'n i1 ... in' with n >= 3");
     polygon.clear();
     for (uint64_t k = 0; k < n; ++k) {

@@ -128,7 +128,9 @@ Expected<Cloud> read_pcd(const std::string& path, std::string_view text) {
     return text_error(path, lines.line_no(), "FIELDS lacks x, y or z");
   const size_t data_line = lines.line_no();
   const uint64_t min_bytes = binary ? offset : 2 * column;
-  if (points > kMaxPoints || points > (lines.remaining() + 1) / min_bytes)
+  // Ascii: the last line may lack its newline. Binary: every record is whole (no +1, or the last one
+  // would be read a byte past the end).
+  if (points > kMaxPoints || points > (lines.remaining() + (binary ? 0 : 1)) / min_bytes)
     return text_error(path, data_line, "POINTS " + std::to_string(points) + " exceeds what the file can hold");
   cloud.points.reserve(points);
   if (binary) {

@@ -324,5 +324,28 @@ TEST_F(IoTest, MalformedInputsGiveErrorsNamingFileAndPlace) {
   }
 }
 
+// ---- regressions found by fuzzing (tests/fuzz) ----
+
+// A face count of 2^64 - 1 wrapped the "n + 1 tokens" check to 0 and read past the face's tokens.
+TEST_F(IoTest, OffFaceCountThatWrapsIsAnError) {
+  const std::string p = write("wrap.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n18446744073709551615 0 1 2\n");
+  Expected<Mesh> m = read_mesh(p);
+  ASSERT_FALSE(m.ok());
+  EXPECT_NE(m.error().message.find("wrap.off:6: expected a face"), std::string::npos) << m.error().message;
+}
+
+// A binary body one byte short of POINTS records passed the size check (it allowed for a missing
+// newline, as ascii may) and the last record was read one byte past the end of the data.
+TEST_F(IoTest, PcdBinaryBodyOneByteShortIsAnError) {
+  std::string s = "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA binary\n";
+  for (float v : {1.f, 2.f, 3.f, 4.f, 5.f}) put(s, v, false);
+  s += "ab1";  // 23 of the 24 bytes
+  Expected<Cloud> c = read_cloud(write("short.pcd", s));
+  ASSERT_FALSE(c.ok());
+  EXPECT_NE(c.error().message.find("exceeds what the file can hold"), std::string::npos) << c.error().message;
+  s.push_back('2');
+  EXPECT_TRUE(read_cloud(write("whole.pcd", s)).ok());
+}
+
 }  // namespace
 }  // namespace glimpse
