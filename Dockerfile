@@ -14,9 +14,10 @@ COPY proto /src/proto
 COPY server /src/server
 COPY client /src/client
 RUN cmake -S /src -B /build -G Ninja -DCMAKE_BUILD_TYPE=Release \
-          -DGLIMPSE_BUILD_TESTS=OFF -DGLIMPSE_BUILD_BENCH=OFF -DCMAKE_INSTALL_PREFIX=/opt/glimpse \
- && cmake --build /build --target glimpse-server glimpse -j "$(nproc)" \
- && cmake --install /build --strip
+          -DGLIMPSE_BUILD_TESTS=OFF -DGLIMPSE_BUILD_BENCH=OFF \
+ && cmake --build /build --target glimpse-server glimpse -j "$(nproc)"
+# Just the two executables (cmake --install would also want glimpse-lab, which is not built here).
+RUN install -D -s -m 0755 -t /opt/glimpse/bin /build/server/glimpse-server /build/client/glimpse
 
 # ---- runtime: shared libraries only, a non-root user, the model store on a volume --------------
 FROM debian:bookworm
