@@ -1,0 +1,63 @@
+// Writes the deserializer's seed corpus: the payloads (the bytes between the 20-byte frame header and
+// the CRC) of small models trained on one view of each zoo shape, one model per method mix.
+//   fuzz_make_model_seeds OUT_DIR
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "glimpse/model.h"
+#include "glimpse/train_params.h"
+#include "glimpse/views.h"
+#include "glimpse/zoo.h"
+
+int main(int argc, char** argv) {
+  using namespace glimpse;
+  if (argc != 2) {
+    std::fprintf(stderr, "usage: fuzz_make_model_seeds OUT_DIR\n");
+    return 2;
+  }
+  std::vector<LabelledCloud> data;
+  ZooOptions zoo;
+  zoo.target_vertices = 1500;
+  for (const LabelledMesh& m : make_zoo(1, 3, zoo)) {
+    const Cloud full = mesh_vertices(m.mesh);
+    const auto cameras = paper_viewpoints(full.points);
+    for (size_t v : {size_t{0}, size_t{3}})
+      data.push_back({m.category, m.category, hidden_point_removal(full.points, cameras[v])});
+  }
+  struct Mix {
+    const char* name;
+    std::vector<Method> methods;
+    Method default_method;
+  };
+  const Mix mixes[] = {{"bok", {Method::kBoK}, Method::kBoK},
+                       {"esf", {Method::kESF}, Method::kESF},
+                       {"vfh-kgh", {Method::kVFH, Method::kKGH}, Method::kKGH},
+                       {"fusion", {Method::kBoK, Method::kESF, Method::kFusion}, Method::kFusion}};
+  std::filesystem::create_directories(argv[1]);
+  for (const Mix& mix : mixes) {
+    TrainParams p;
+    p.methods = mix.methods;
+    p.default_method = mix.default_method;
+    p.fusion_of = {Method::kBoK, Method::kESF};
+    p.bok_clusters = 2;
+    p.bog_keypoint_clusters = 2;
+    p.bog_volume_clusters = 1;
+    p.bog_pca_dims = 2;
+    p.kgh_clusters = 2;
+    p.kgh_distance_bins = 2;
+    p.seed = 1;
+    auto model = train(data, p);
+    if (!model) {
+      std::fprintf(stderr, "%s: %s\n", mix.name, model.error().message.c_str());
+      return 1;
+    }
+    const std::vector<uint8_t> bytes = serialize(*model);
+    const std::string path = std::string(argv[1]) + "/" + mix.name;
+    std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(bytes.data() + 20),
+                                                static_cast<std::streamsize>(bytes.size() - 24));
+    std::printf("%s: %zu payload bytes\n", path.c_str(), bytes.size() - 24);
+  }
+  return 0;
+}
