@@ -156,6 +156,8 @@ else
   mkdir -p "$WORK"
   $SUDO debootstrap --variant=minbase bookworm "$rootfs" "$mirror" >"$WORK/debootstrap.log" 2>&1 ||
     fail "debootstrap failed; see $WORK/debootstrap.log"
+  # As Docker's official image: no downloaded .debs, no package lists (every build runs apt-get update).
+  $SUDO find "$rootfs/var/cache/apt/archives" "$rootfs/var/lib/apt/lists" -type f -delete
   $SUDO tar -C "$rootfs" -c . | podman import - "$BASE" >/dev/null 2>"$WORK/import.log" ||
     fail "podman import failed: $(tail -n 3 "$WORK/import.log")"
   $SUDO rm -rf "$rootfs"
