@@ -330,6 +330,13 @@ def check_k8s(k8s_dir, files, kustomization, df, errors):
             e("%s: GLIMPSE_DB %s is on no volume mount of the server" % (where, db))
         elif store.get("readOnly"):
             e("%s: the store %s is mounted read-only; the server writes it" % (where, db))
+        # Replicas refuse model changes: a token (that nobody is given) from a Secret.
+        token = env.get("GLIMPSE_AUTH_TOKEN_FILE")
+        token_mount = mount_of(server, token) if token else None
+        if token_mount is None:
+            e("%s: GLIMPSE_AUTH_TOKEN_FILE is not set to a mounted file; replicas would accept Train/DeleteModel" % where)
+        elif "secret" not in volumes.get(token_mount["name"], {}) or not token_mount.get("readOnly"):
+            e("%s: the token file %s is not on a read-only Secret mount" % (where, token))
         grace = int(env.get("GLIMPSE_SHUTDOWN_GRACE_SECONDS", 10))
         if pod.get("terminationGracePeriodSeconds", 30) <= grace:
             e("%s: terminationGracePeriodSeconds %s is not above the server's drain of %s s" %
@@ -558,6 +565,10 @@ def faults():
         c = find(d, "Job")["spec"]["template"]["spec"]["containers"][0]
         c["args"] = [a.replace("/published/glimpse.db", "/tmp/glimpse.db") for a in c["args"]]
 
+    def replicas_writable(d):
+        c = server_container(d)
+        c["env"] = [v for v in c["env"] if v["name"] != "GLIMPSE_AUTH_TOKEN_FILE"]
+
     def dockerignore(d):
         d["dockerignore"] = d["dockerignore"].replace(".git\n", "")
 
@@ -579,6 +590,7 @@ def faults():
         ("published PVC one node only", pvc_single_node, "allow one node only"),
         ("Job publishes elsewhere", publish_elsewhere, "publishes to /tmp/glimpse.db"),
         (".dockerignore keeps .git", dockerignore, "does not exclude .git"),
+        ("replicas accept model changes", replicas_writable, "replicas would accept Train"),
     ]
 
 
