@@ -288,7 +288,11 @@ phase "hot reload: replica pulls a published snapshot"
 # The Kubernetes layout (deploy/k8s): the trainer publishes a snapshot, a replica with its own store
 # mounts it read-only and pulls it into its live store.
 podman exec "$NAME" glimpse-model-sync publish /var/lib/glimpse/glimpse.db /var/lib/glimpse/published/glimpse.db
+# Locked like the k8s replicas: a token nobody is given guards Train/DeleteModel/SetDefaultModel.
+head -c 24 /dev/urandom | base64 >"$WORK/data/lock-token"
+chmod 0644 "$WORK/data/lock-token"
 podman run -d --name "$REPLICA" "${RUN_FLAGS[@]}" --mount "type=volume,src=$VOLUME,dst=/models,ro=true" \
+  -v "$WORK/data/lock-token:/etc/glimpse/lock/token:ro" -e GLIMPSE_AUTH_TOKEN_FILE=/etc/glimpse/lock/token \
   "$IMAGE" >/dev/null 2>"$WORK/run.err" || fail "podman run (replica): $(cat "$WORK/run.err")"
 wait_healthy 30 podman exec "$REPLICA" glimpse health
 before=$(podman exec "$REPLICA" glimpse models list --json)
@@ -297,8 +301,10 @@ podman exec "$REPLICA" glimpse-model-sync pull /models/published/glimpse.db /var
 out=$(podman exec "$REPLICA" glimpse models list smoke --json)
 [[ $(grep -c '"name":"smoke"' <<<"$out") -eq 2 ]] || fail "the replica does not serve both pulled versions: $out"
 podman exec "$REPLICA" glimpse stream --zoo chair --model smoke --rate 0 >/dev/null || fail "the replica cannot classify"
+if err=$(podman exec "$REPLICA" glimpse models delete smoke:1 2>&1); then fail "the locked replica deleted a model"; fi
+[[ $err == *UNAUTHENTICATED* ]] || fail "the locked replica refused a delete without saying UNAUTHENTICATED: $err"
 podman rm -f -t 5 "$REPLICA" >/dev/null 2>&1
-echo "    the replica serves smoke:1 and smoke:2 without a restart"
+echo "    the replica serves smoke:1 and smoke:2 without a restart, and refuses model changes"
 
 phase "restart: models survive on the volume"
 podman restart -t 15 "$NAME" >/dev/null 2>"$WORK/run.err" || fail "podman restart: $(cat "$WORK/run.err")"
