@@ -5,6 +5,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <nanoflann.hpp>
 #include <numbers>
@@ -30,8 +31,7 @@ struct CellHash {
   }
 };
 CellKey cell_of(const Vec3& p, float cell) {
-  return {static_cast<int64_t>(std::floor(p.x() / cell)), static_cast<int64_t>(std::floor(p.y() / cell)),
-          static_cast<int64_t>(std::floor(p.z() / cell))};
+  return {grid_cell<int64_t>(p.x(), cell), grid_cell<int64_t>(p.y(), cell), grid_cell<int64_t>(p.z(), cell)};
 }
 
 }  // namespace
@@ -149,7 +149,7 @@ size_t VoxelIndex::KeyHash::operator()(const Key& k) const {
 }
 
 VoxelIndex::Key VoxelIndex::key(const Vec3& p) const {
-  auto c = [&](float v) { return static_cast<int32_t>(std::floor(v / cell_)); };
+  auto c = [&](float v) { return grid_cell<int32_t>(v, cell_); };
   return {c(p.x()), c(p.y()), c(p.z())};
 }
 
@@ -339,17 +339,22 @@ LocalSurface local_surface(const NeighbourIndex& tree, uint32_t index, float r,
 }
 
 std::vector<LocalSurface> local_surfaces(const NeighbourIndex& tree, float r, const std::optional<Vec3>& viewpoint,
-                                         const SurfaceParams& params) {
+                                         const SurfaceParams& params, const CancelFn& cancel) {
   const size_t n = tree.points().size();
   std::vector<LocalSurface> out(n);
   const int threads = resolve_threads(params.threads);
+  std::atomic<bool> stop = false;
 #pragma omp parallel num_threads(threads)
   {
     std::vector<Neighbour> scratch;
 #pragma omp for schedule(dynamic, 256)
-    for (int64_t i = 0; i < static_cast<int64_t>(n); ++i)
+    for (int64_t i = 0; i < static_cast<int64_t>(n); ++i) {
+      if (i % 256 == 0 && cancel && cancel()) stop = true;
+      if (stop) continue;
       out[i] = local_surface(tree, static_cast<uint32_t>(i), r, viewpoint, params.min_neighbours, scratch);
+    }
   }
+  if (stop) return out;
   if (!viewpoint) orient_normals_propagated(tree, out);
   return out;
 }

@@ -41,8 +41,8 @@ std::vector<Keypoint> characteristic_scale_keypoints(const NeighbourIndex& tree,
     }
   };
   auto cell_of = [&](const Vec3& p) {
-    return Cell{static_cast<int32_t>(std::floor(p.x() / claim_max)), static_cast<int32_t>(std::floor(p.y() / claim_max)),
-                static_cast<int32_t>(std::floor(p.z() / claim_max))};
+    return Cell{grid_cell<int32_t>(p.x(), claim_max), grid_cell<int32_t>(p.y(), claim_max),
+                grid_cell<int32_t>(p.z(), claim_max)};
   };
   std::unordered_map<Cell, std::vector<uint32_t>, CellHash> accepted;  // cell -> keypoint slots
   auto claimed = [&](const Vec3& p) {

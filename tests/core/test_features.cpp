@@ -312,6 +312,33 @@ TEST(Extract, BadInput) {
   EXPECT_LE(m->cloud.points.size(), finite);
 }
 
+TEST(Extract, RefusesCoordinatesBeyondAScan) {
+  Cloud far{test::cube(0.2f, 0.01f), std::nullopt};
+  far.points[5].x() = 3e7f;  // 30,000 km: grid keys of the cleaning stage would overflow
+  auto r = extract(far);
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().code, ErrorCode::kInvalidArgument);
+  EXPECT_NE(r.error().message.find("point 5"), std::string::npos) << r.error().message;
+}
+
+TEST(Extract, StopsWhenCancelled) {
+  const Cloud cube{test::cube(0.2f, 0.005f), std::nullopt};
+  int polls = 0;
+  auto r = extract(cube, {}, [&] { return ++polls > 3; });
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().code, ErrorCode::kCancelled);
+  EXPECT_TRUE(extract(cube, {}, [] { return false; }).ok());
+}
+
+TEST(GridCell, ClampsInsteadOfOverflowing) {
+  EXPECT_EQ(grid_cell<int32_t>(2.5f, 1.f), 2);
+  EXPECT_EQ(grid_cell<int32_t>(-0.5f, 1.f), -1);
+  EXPECT_EQ(grid_cell<int32_t>(1e30f, 1e-9f), grid_cell<int32_t>(3e38f, 1e-9f));
+  EXPECT_GT(grid_cell<int32_t>(1e30f, 1e-9f), 2'000'000'000);
+  EXPECT_LT(grid_cell<int64_t>(-3e38f, 1e-6f), -4'000'000'000'000'000'000LL);
+  EXPECT_EQ(grid_cell<int32_t>(NAN, 1.f), 0);
+}
+
 TEST(Clean, VoxelDownsampleAveragesEachCell) {
   Cloud c{{Vec3(0.01f, 0.01f, 0.01f), Vec3(0.03f, 0.03f, 0.03f), Vec3(0.51f, 0, 0)}, std::nullopt};
   Cloud d = voxel_downsample(c, 0.1f);

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cassert>
+#include <functional>
 #include <string>
 #include <utility>
 #include <variant>
@@ -33,6 +34,10 @@ inline Error failed_precondition(std::string m) { return {ErrorCode::kFailedPrec
 inline Error data_loss(std::string m) { return {ErrorCode::kDataLoss, std::move(m)}; }
 inline Error cancelled(std::string m) { return {ErrorCode::kCancelled, std::move(m)}; }
 inline Error internal_error(std::string m) { return {ErrorCode::kInternal, std::move(m)}; }
+
+// Long work polls one of these (thread-safe) and stops with kCancelled when it returns true: a client
+// that went away or a deadline that passed. An empty function never cancels.
+using CancelFn = std::function<bool()>;
 
 template <class T>
 class [[nodiscard]] Expected {

@@ -3,7 +3,10 @@
 // eigenvalues of Sipiran & Bustos ("principal Harris curvatures", eq. 2), and 2.5D boundary points.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <span>
@@ -14,6 +17,16 @@
 #include "glimpse/expected.h"
 
 namespace glimpse {
+
+// The index of the grid cell holding coordinate `v` for cells of size `cell`, clamped to Int's range,
+// so huge coordinates or tiny cells share an edge cell (slower, still correct) instead of overflowing.
+template <class Int>
+Int grid_cell(float v, float cell) {
+  const double c = std::floor(static_cast<double>(v) / static_cast<double>(cell));
+  constexpr double lo = static_cast<double>(std::numeric_limits<Int>::lowest());
+  const double hi = std::ldexp(1.0, std::numeric_limits<Int>::digits) - 1024.0;  // below max, exact
+  return c != c ? Int{0} : static_cast<Int>(std::clamp(c, lo, hi));
+}
 
 // ---- Cleaning ------------------------------------------------------------------------------------
 
@@ -130,10 +143,11 @@ Eigen::Vector2f harris_eigenvalues(float p1, float p2, float p3, float p4, float
 Eigen::Vector2f principal_curvatures(float p1, float p2, float p3, float p4, float p5);
 
 // One surface per point, all neighbourhoods of radius r. Normals are oriented towards `viewpoint`
-// when given, else by propagation (orient_normals_propagated).
+// when given, else by propagation (orient_normals_propagated). `cancel` is polled every few hundred
+// points; once it returns true the remaining surfaces are left invalid (the caller checks it again).
 std::vector<LocalSurface> local_surfaces(const NeighbourIndex& tree, float r,
                                          const std::optional<Vec3>& viewpoint,
-                                         const SurfaceParams& params);
+                                         const SurfaceParams& params, const CancelFn& cancel = {});
 
 // The surface of one point (the work unit of local_surfaces; also used for incremental updates).
 // The normal is oriented towards `viewpoint` when given, else left as PCA gives it.
