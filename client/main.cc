@@ -112,7 +112,7 @@ int Main(int argc, char** argv) {
   train->add_option("--seed", t.seed, "zoo shapes and surface sampling seed")->capture_default_str();
   train->add_option("--name", t.name, "model name ([A-Za-z0-9._-], 1-128)")->required()
       ->check(Checked([](const std::string& s) { return ParseModelRef(s + ":latest"); }, "NAME"));
-  train->add_option("--methods", t.methods, "comma-separated: bok,bog,kgh,vfh,esf,fusion (default: the server's)")
+  train->add_option("--methods", t.methods, "comma-separated: bok,bog,kgh,vfh,esf,ush,fusion (default: the server's)")
       ->check(kMethodList);
   train->add_option("--description", t.description, "free text stored with the model");
   train->add_option("--views", t.views.views, "single views (HPR) per mesh or zoo shape, 0 = the whole cloud")
@@ -129,7 +129,7 @@ int Main(int argc, char** argv) {
   ClassifyOptions c;
   classify->add_option("FILE", c.files, "clouds (.pcd .ply .xyz) or meshes (.off .obj .ply)")->required();
   classify->add_option("--model", c.model, "NAME[:VERSION]")->envname("GLIMPSE_MODEL")->required()->check(kModelRef);
-  classify->add_option("--method", c.method, "bok|bog|kgh|vfh|esf|fusion (default: the model's)")->check(kMethod);
+  classify->add_option("--method", c.method, "bok|bog|kgh|vfh|esf|ush|fusion (default: the model's)")->check(kMethod);
   classify->add_flag("--json", c.json, "one JSON object per file instead of a table");
   AddMeshOptions(*classify, c.views);
   classify->callback([&] { run = [&] { return RunClassify(conn, c); }; });
@@ -143,7 +143,7 @@ int Main(int argc, char** argv) {
   file->excludes(zoo_shape);
   stream->add_option("--seed", s.seed, "zoo shape and random order seed")->capture_default_str();
   stream->add_option("--model", s.model, "NAME[:VERSION]")->envname("GLIMPSE_MODEL")->required()->check(kModelRef);
-  stream->add_option("--method", s.method, "bok|bog|kgh|vfh|esf|fusion (default: the model's)")->check(kMethod);
+  stream->add_option("--method", s.method, "bok|bog|kgh|vfh|esf|ush|fusion (default: the model's)")->check(kMethod);
   auto* chunks = stream->add_option("--chunks", s.chunks, "number of chunks")->capture_default_str()
                      ->check(CLI::Range(size_t{1}, size_t{100000}));
   stream->add_option("--chunk-points", s.chunk_points, "points per chunk instead of --chunks")

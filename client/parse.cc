@@ -31,7 +31,8 @@ struct MethodEntry {
   v1::Method method;
 };
 constexpr MethodEntry kMethods[] = {{"bok", v1::METHOD_BOK}, {"bog", v1::METHOD_BOG}, {"kgh", v1::METHOD_KGH},
-                                    {"vfh", v1::METHOD_VFH}, {"esf", v1::METHOD_ESF}, {"fusion", v1::METHOD_FUSION}};
+                                    {"vfh", v1::METHOD_VFH}, {"esf", v1::METHOD_ESF}, {"ush", v1::METHOD_USH},
+                                    {"fusion", v1::METHOD_FUSION}};
 
 }  // namespace
 

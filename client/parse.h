@@ -19,7 +19,7 @@ Expected<v1::ModelRef> ParseModelRef(std::string_view text);
 // "name:3", or just "name" for version 0.
 std::string FormatModelRef(const v1::ModelRef& ref);
 
-// "bok", "bog", "kgh", "vfh", "esf", "fusion" (case-insensitive).
+// "bok", "bog", "kgh", "vfh", "esf", "ush", "fusion" (case-insensitive).
 Expected<v1::Method> ParseMethod(std::string_view name);
 // Comma-separated, e.g. "bok,bog"; blanks around names ignored; no duplicates; empty text -> empty list.
 Expected<std::vector<v1::Method>> ParseMethodList(std::string_view text);

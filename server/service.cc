@@ -21,10 +21,7 @@ std::string RefText(std::string_view name, uint32_t version) {
 }
 
 const char* MethodText(const std::optional<Method>& m) {
-  static constexpr const char* kNames[] = {"bok", "bog", "kgh", "vfh", "esf", "fusion"};
-  if (!m) return "default";
-  auto i = static_cast<size_t>(*m);
-  return i < std::size(kNames) ? kNames[i] : "unknown";
+  return m ? method_name(*m) : "default";
 }
 
 Error StreamTooLong(const Limits& limits) {

@@ -66,17 +66,12 @@ constexpr const char* kMigrations[] = {
 };
 constexpr int kSchemaVersion = static_cast<int>(std::size(kMigrations));
 
-constexpr std::array<const char*, 6> kMethodNames = {"bok", "bog", "kgh", "vfh", "esf", "fusion"};
-
-std::string MethodToken(Method m) {
-  auto i = static_cast<size_t>(m);
-  return i < kMethodNames.size() ? kMethodNames[i] : "unknown";
-}
+std::string MethodToken(Method m) { return method_name(m); }
 
 Expected<Method> ParseMethodToken(std::string_view token) {
-  for (size_t i = 0; i < kMethodNames.size(); ++i)
-    if (token == kMethodNames[i]) return static_cast<Method>(i);
-  return data_loss("stored model names an unknown method '" + std::string(token) + "'");
+  auto m = parse_method(token);
+  if (!m.ok()) return data_loss("stored model names an unknown method '" + std::string(token) + "'");
+  return *m;
 }
 
 std::string JoinMethods(const std::vector<Method>& methods) {

@@ -100,6 +100,7 @@ std::string method_label(Method m) {
     case Method::kKGH: return "KGH";
     case Method::kVFH: return "VFH";
     case Method::kESF: return "ESF";
+    case Method::kUSH: return "USH";
     case Method::kFusion: return "Fusion";
   }
   return "?";

@@ -13,9 +13,16 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
 }
 }  // namespace
 
-Expected<Features> extract(const Cloud& input, const FeatureParams& params) {
+Expected<Features> extract(const Cloud& input, const FeatureParams& params, const CancelFn& cancel) {
   if (input.points.empty()) return invalid_argument("the cloud is empty");
   if (input.sensor && !input.sensor->allFinite()) return invalid_argument("the sensor position is not finite");
+  for (size_t i = 0; i < input.points.size(); ++i) {
+    const Vec3& p = input.points[i];
+    if (p.allFinite() && p.cwiseAbs().maxCoeff() > kMaxCoordinateM)
+      return invalid_argument("point " + std::to_string(i) + " lies beyond " + std::to_string(int(kMaxCoordinateM)) +
+                              " m of the origin: not a scan in metres");
+  }
+  auto stopped = [&] { return cancel && cancel(); };
   Features f;
   FeatureDiagnostics& diag = f.diagnostics;
   f.cloud = clean(input, params.duplicate_tolerance_m, &diag.clean);
@@ -35,7 +42,9 @@ Expected<Features> extract(const Cloud& input, const FeatureParams& params) {
     diag.note = "no support radius: every point coincides with another";
     return f;
   }
-  const std::vector<LocalSurface> surfaces = local_surfaces(tree, r, f.cloud.sensor, params.surface);
+  f.surfaces = local_surfaces(tree, r, f.cloud.sensor, params.surface, cancel);
+  if (stopped()) return cancelled("feature extraction cancelled");
+  const std::vector<LocalSurface>& surfaces = f.surfaces;
   for (const LocalSurface& s : surfaces) diag.valid_surfaces += s.valid;
   diag.surfaces_ms = ms_since(t0);
   if (diag.valid_surfaces == 0) {
@@ -43,6 +52,7 @@ Expected<Features> extract(const Cloud& input, const FeatureParams& params) {
     return f;
   }
 
+  if (stopped()) return cancelled("feature extraction cancelled");
   t0 = std::chrono::steady_clock::now();
   f.keypoints = characteristic_scale_keypoints(tree, surfaces, r, params.keypoints, &diag.keypoints);
   diag.keypoints_ms = ms_since(t0);

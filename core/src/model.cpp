@@ -10,6 +10,7 @@
 
 #include "glimpse/model.h"
 #include "glimpse/train_params.h"
+#include "glimpse/upright_histogram.h"
 #include "model_impl.h"
 #include "parallel.h"
 
@@ -22,6 +23,7 @@ const char* method_name(Method m) {
     case Method::kKGH: return "kgh";
     case Method::kVFH: return "vfh";
     case Method::kESF: return "esf";
+    case Method::kUSH: return "ush";
     case Method::kFusion: return "fusion";
   }
   return "unknown";
@@ -32,7 +34,7 @@ Expected<Method> parse_method(std::string_view name) {
   for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   for (Method m : kAllMethods)
     if (lower == method_name(m)) return m;
-  return invalid_argument("unknown method '" + std::string(name) + "' (valid: bok, bog, kgh, vfh, esf, fusion)");
+  return invalid_argument("unknown method '" + std::string(name) + "' (valid: bok, bog, kgh, vfh, esf, ush, fusion)");
 }
 
 std::vector<Method> component_methods(const ModelImpl& impl, Method method) {
@@ -56,21 +58,24 @@ bool needs(const std::vector<Method>& methods, Method m) {
 }  // namespace
 
 Expected<CloudFeatures> cloud_features(const Cloud& cloud, const TrainParams& params,
-                                       const std::vector<Method>& methods, int threads) {
+                                       const std::vector<Method>& methods, int threads, const CancelFn& cancel) {
   CloudFeatures out;
   FeatureParams fp = params.features;
   fp.surface.threads = threads;
-  auto f = extract(cloud, fp);
+  auto f = extract(cloud, fp, cancel);
   if (!f.ok()) return f.error();
+  if (cancel && cancel()) return cancelled("feature extraction cancelled");
   out.points = f->cloud.points.size();
   for (const Keypoint& k : f->keypoints) out.positions.push_back(k.position);
   out.descriptors = std::move(f->descriptors);
+  if (needs(methods, Method::kUSH)) out.ush = upright_histogram(f->cloud.points, f->surfaces, params.ush);
   if (needs(methods, Method::kVFH)) {
     GlobalDescriptorParams gp = params.global;
     gp.threads = threads;
     auto v = vfh(f->cloud, gp);
     if (!v.ok()) return v.error();
     out.vfh = std::move(*v);
+    if (cancel && cancel()) return cancelled("feature extraction cancelled");
   }
   if (needs(methods, Method::kESF)) {
     auto e = esf(f->cloud, params.seed);
@@ -93,6 +98,8 @@ Eigen::VectorXd method_histogram(const ModelImpl& impl, Method method, const Clo
                                        p.kgh_distance_bins, impl.kgh_max_distance_m, p.normalise_histograms);
     case Method::kVFH: return f.vfh ? Eigen::VectorXd(f.vfh->cast<double>()) : Eigen::VectorXd::Zero(kVfhSize);
     case Method::kESF: return f.esf ? Eigen::VectorXd(f.esf->cast<double>()) : Eigen::VectorXd::Zero(kEsfSize);
+    case Method::kUSH:
+      return f.ush ? Eigen::VectorXd(f.ush->cast<double>()) : Eigen::VectorXd::Zero(kUprightHistogramSize);
     case Method::kFusion: break;
   }
   return {};
@@ -169,7 +176,8 @@ Expected<Model> train(const std::vector<LabelledCloud>& data, const TrainParams&
     if (cancelled_now()) return cancelled("training cancelled");
     const int64_t end = static_cast<int64_t>(std::min(data.size(), begin + batch));
 #pragma omp parallel for num_threads(threads) schedule(dynamic, 1)
-    for (int64_t i = static_cast<int64_t>(begin); i < end; ++i) feats[i] = cloud_features(data[i].cloud, params, base, 1);
+    for (int64_t i = static_cast<int64_t>(begin); i < end; ++i)
+      feats[i] = cloud_features(data[i].cloud, params, base, 1, cancel);
     if (progress) progress({"features", static_cast<size_t>(end), data.size()});
   }
   std::vector<TrainingSample> samples;
@@ -304,7 +312,7 @@ Expected<Classification> classify(const Model& model, const Cloud& cloud, std::o
     return invalid_argument(std::string("the model was not trained for method '") + method_name(m) + "'");
   const ModelImpl& impl = *model.impl;
   const auto t0 = std::chrono::steady_clock::now();
-  auto f = cloud_features(cloud, impl.params, component_methods(impl, m), impl.params.threads);
+  auto f = cloud_features(cloud, impl.params, component_methods(impl, m), impl.params.threads, cancel);
   if (!f.ok()) return f.error();
   if (cancel && cancel()) return cancelled("classification cancelled");
   Classification c;

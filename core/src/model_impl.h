@@ -12,7 +12,6 @@
 
 namespace glimpse {
 
-inline constexpr int kBaseMethods = 5;  // every Method but kFusion, which combines them
 
 struct ModelImpl {
   TrainParams params;
@@ -21,7 +20,7 @@ struct ModelImpl {
   KeypointCodebook kgh;
   GraphVocabulary graphs;
   float kgh_max_distance_m = 1;
-  std::array<std::optional<DecisionStage>, kBaseMethods> stages;  // indexed by Method
+  std::array<std::optional<DecisionStage>, kMethodCount> stages;  // indexed by Method; never kFusion
 };
 
 inline bool uses_keypoints(Method m) { return m == Method::kBoK || m == Method::kBoG || m == Method::kKGH; }
@@ -32,6 +31,7 @@ struct CloudFeatures {
   std::vector<Descriptor> descriptors;   // their 12-D descriptors
   std::optional<Eigen::VectorXf> vfh;
   std::optional<Eigen::VectorXf> esf;
+  std::optional<Eigen::VectorXf> ush;
   size_t points = 0;
 };
 
@@ -40,9 +40,10 @@ std::vector<Method> component_methods(const ModelImpl& impl, Method method);
 
 // Features for the given methods; keypoint features only when one of them needs keypoints.
 Expected<CloudFeatures> cloud_features(const Cloud& cloud, const TrainParams& params,
-                                       const std::vector<Method>& methods, int threads);
+                                       const std::vector<Method>& methods, int threads,
+                                       const CancelFn& cancel = {});
 
-// The global histogram of one base method (BoK, BoG, KGH, VFH, ESF).
+// The global histogram of one base method (every method but fusion).
 Eigen::VectorXd method_histogram(const ModelImpl& impl, Method method, const CloudFeatures& f);
 
 // A training cloud whose features are already computed (train() computes them; the evaluation

@@ -5,12 +5,16 @@
 // truncated, corrupt or hostile input gives an error, never undefined behaviour.
 #include <array>
 #include <bit>
+#include <cmath>
 #include <cstring>
+#include <limits>
+#include <type_traits>
 #include <map>
 #include <string>
 
 #include "glimpse/model.h"
 #include "glimpse/train_params.h"
+#include "glimpse/upright_histogram.h"
 #include "model_impl.h"
 
 namespace glimpse {
@@ -18,7 +22,9 @@ namespace glimpse {
 namespace {
 
 constexpr char kMagic[8] = {'G', 'L', 'M', 'P', 'S', 'M', 'D', 'L'};
-constexpr uint32_t kFormatVersion = 1;
+// 1: stage slots of the first 5 methods. 2: a u8 slot count first (USH is method 6).
+constexpr uint32_t kFormatVersion = 2;
+constexpr uint32_t kOldestReadableVersion = 1;
 
 uint32_t crc32(const uint8_t* data, size_t n) {
   static const std::array<uint32_t, 256> table = [] {
@@ -143,6 +149,9 @@ void visit_params(TrainParams& p, F&& f) {
   f("descriptor.max_pfh_points", p.features.descriptor.max_pfh_points);
   f("global.normal_radius_m", p.global.normal_radius_m);
   f("global.fill_size_component", p.global.fill_size_component);
+  f("ush.max_depth_m", p.ush.max_depth_m);
+  f("ush.max_radius_m", p.ush.max_radius_m);
+  f("ush.flat_curvedness", p.ush.flat_curvedness);
   f("codebook_explained_variance", p.codebook_explained_variance);
   f("bok_clusters", p.bok_clusters);
   f("normalise_histograms", p.normalise_histograms);
@@ -165,11 +174,32 @@ double to_double(const T& v) {
   if constexpr (std::is_enum_v<T>) return static_cast<double>(static_cast<int>(v));
   else return static_cast<double>(v);
 }
+template <class T, bool = std::is_enum_v<T>>
+struct IntegerOf {
+  using type = T;
+};
 template <class T>
-void from_double(T& v, double d) {
-  if constexpr (std::is_enum_v<T>) v = static_cast<T>(static_cast<int>(d));
-  else if constexpr (std::is_same_v<T, bool>) v = d != 0;
-  else v = static_cast<T>(d);
+struct IntegerOf<T, true> {
+  using type = std::underlying_type_t<T>;
+};
+
+// False (and v unchanged) when d is not a value of T: NaN, infinite, out of range, or not whole for an
+// integer; casting those would be undefined behaviour.
+template <class T>
+bool from_double(T& v, double d) {
+  if (!std::isfinite(d)) return false;
+  if constexpr (std::is_same_v<T, bool>) {
+    v = d != 0;
+  } else if constexpr (std::is_enum_v<T> || std::is_integral_v<T>) {
+    using I = typename IntegerOf<T>::type;
+    const double upper = std::ldexp(1.0, std::numeric_limits<I>::digits);  // exclusive, exact in binary64
+    if (d != std::floor(d) || d < static_cast<double>(std::numeric_limits<I>::lowest()) || d >= upper) return false;
+    v = static_cast<T>(static_cast<I>(d));
+  } else {
+    if (std::abs(d) > static_cast<double>(std::numeric_limits<T>::max())) return false;
+    v = static_cast<T>(d);
+  }
+  return true;
 }
 
 void write_methods(Writer& w, const std::vector<Method>& ms) {
@@ -185,7 +215,7 @@ std::vector<Method> read_methods(Reader& r) {
   }
   for (uint32_t i = 0; i < n; ++i) {
     const uint8_t m = r.u8("method");
-    if (m > static_cast<uint8_t>(Method::kFusion)) r.fail("unknown method code " + std::to_string(m));
+    if (m >= kMethodCount) r.fail("unknown method code " + std::to_string(m));
     ms.push_back(static_cast<Method>(m));
   }
   return ms;
@@ -299,6 +329,7 @@ std::vector<uint8_t> serialize(const Model& model) {
     w.u32(static_cast<uint32_t>(m.graphs.types.size()));
     for (uint64_t t : m.graphs.types) w.u64(t);
     w.f64(m.kgh_max_distance_m);
+    w.u8(static_cast<uint8_t>(m.stages.size()));
     for (const auto& s : m.stages) {
       w.u8(s ? 1 : 0);
       if (s) write_stage(w, *s);
@@ -319,9 +350,9 @@ Expected<Model> deserialize(std::span<const uint8_t> bytes) {
     return data_loss("not a Glimpse model (bad magic or too short: " + std::to_string(bytes.size()) + " bytes)");
   Reader head(bytes.data() + 8, bytes.size() - 8);
   const uint32_t version = head.u32("version");
-  if (version != kFormatVersion)
+  if (version < kOldestReadableVersion || version > kFormatVersion)
     return data_loss("unsupported model format version " + std::to_string(version) + " (this build reads " +
-                     std::to_string(kFormatVersion) + ")");
+                     std::to_string(kOldestReadableVersion) + " to " + std::to_string(kFormatVersion) + ")");
   const uint64_t length = head.u64("length");
   if (length != bytes.size() - 8 - 4 - 8 - 4)
     return data_loss("model length mismatch: header says " + std::to_string(length) + " payload bytes, found " +
@@ -359,7 +390,8 @@ Expected<Model> deserialize(std::span<const uint8_t> bytes) {
     }
     // Unknown names are ignored and missing ones keep their defaults (older or newer writers).
     visit_params(p, [&](const char* name, auto& v) {
-      if (auto it = values.find(name); it != values.end()) from_double(v, it->second);
+      if (auto it = values.find(name); it != values.end() && !from_double(v, it->second))
+        r.fail(std::string("parameter ") + name + " has an impossible value");
     });
     p.methods = read_methods(r);
     p.default_method = static_cast<Method>(r.u8("default method"));
@@ -369,7 +401,6 @@ Expected<Model> deserialize(std::span<const uint8_t> bytes) {
         p.bog_keypoint_clusters > 40 || p.kgh_clusters < 2 || p.kgh_clusters > 1000 || p.kgh_distance_bins < 1 ||
         p.kgh_distance_bins > 10000 || p.bog_volume_clusters < 1 || p.bog_volume_clusters > 1000)
       r.fail("codebook sizes out of range");
-    std::vector<bool> has(kBaseMethods, false);
     auto used = [&](Method m) {
       for (Method q : p.methods)
         if (q == m) return true;
@@ -396,13 +427,20 @@ Expected<Model> deserialize(std::span<const uint8_t> bytes) {
       r.fail("inconsistent graph vocabulary");
     impl->kgh_max_distance_m = static_cast<float>(r.f64("KGH distance"));
     if (!r.failed() && !(impl->kgh_max_distance_m > 0)) r.fail("KGH distance range must be positive");
-    const Eigen::Index sizes[kBaseMethods] = {
+    const Eigen::Index sizes[kMethodCount] = {
         p.bok_clusters, static_cast<Eigen::Index>(impl->graphs.types.size()),
-        static_cast<Eigen::Index>(p.kgh_clusters) * p.kgh_clusters * p.kgh_distance_bins, kVfhSize, kEsfSize};
-    for (int m = 0; m < kBaseMethods && !r.failed(); ++m) {
-      if (r.u8("stage flag") == 1) impl->stages[m] = read_stage(r, static_cast<int>(ncat), sizes[m]);
-      if (!r.failed() && used(static_cast<Method>(m)) != impl->stages[m].has_value())
-        r.fail(std::string("decision stage of ") + method_name(static_cast<Method>(m)) + " missing or unexpected");
+        static_cast<Eigen::Index>(p.kgh_clusters) * p.kgh_clusters * p.kgh_distance_bins, kVfhSize, kEsfSize,
+        0, kUprightHistogramSize};
+    const uint32_t slots = version == 1 ? 5 : r.u8("stage slots");
+    if (!r.failed() && slots > kMethodCount) r.fail("more decision stages than methods this build knows");
+    for (int m = 0; m < kMethodCount && !r.failed(); ++m) {
+      const Method method = static_cast<Method>(m);
+      if (static_cast<uint32_t>(m) < slots && r.u8("stage flag") == 1) {
+        if (method == Method::kFusion) r.fail("fusion has no decision stage of its own");
+        else impl->stages[m] = read_stage(r, static_cast<int>(ncat), sizes[m]);
+      }
+      if (!r.failed() && method != Method::kFusion && used(method) != impl->stages[m].has_value())
+        r.fail(std::string("decision stage of ") + method_name(method) + " missing or unexpected");
     }
     model.impl = std::move(impl);
   }

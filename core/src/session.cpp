@@ -9,6 +9,7 @@
 #include "glimpse/features.h"
 #include "glimpse/geometry.h"
 #include "glimpse/keypoints.h"
+#include "glimpse/upright_histogram.h"
 #include "model_impl.h"
 
 namespace glimpse {
@@ -73,9 +74,13 @@ Status Session::check(const Cloud& chunk) const {
   if (chunk.points.size() > params_.max_chunk_points)
     return resource_exhausted("a chunk of " + std::to_string(chunk.points.size()) + " points exceeds the limit of " +
                               std::to_string(params_.max_chunk_points));
-  for (size_t i = 0; i < chunk.points.size(); ++i)
+  for (size_t i = 0; i < chunk.points.size(); ++i) {
     if (!chunk.points[i].allFinite())
       return invalid_argument("point " + std::to_string(i) + " of chunk " + std::to_string(chunks_) + " is not finite");
+    if (chunk.points[i].cwiseAbs().maxCoeff() > kMaxCoordinateM)
+      return invalid_argument("point " + std::to_string(i) + " of chunk " + std::to_string(chunks_) +
+                              " lies beyond " + std::to_string(int(kMaxCoordinateM)) + " m of the origin");
+  }
   if (chunk.sensor && !chunk.sensor->allFinite()) return invalid_argument("the chunk's sensor position is not finite");
   const size_t have = (index_ ? index_->points().size() : 0) + pending_.points.size();
   if (have >= params_.max_points)
@@ -181,6 +186,9 @@ void Session::update_keypoints(const std::vector<uint32_t>&) {
 
 void Session::update_global() {
   const size_t n = index_->points().size();
+  // USH is one pass over the surfaces already kept up to date: cheap enough for every chunk.
+  if (std::find(components_.begin(), components_.end(), Method::kUSH) != components_.end())
+    features_.ush = upright_histogram(index_->points(), surfaces_, impl_.params.ush);
   if (global_at_points_ && static_cast<double>(n) < (1.0 + params_.global_refresh_growth) * static_cast<double>(global_at_points_))
     return;
   Cloud cloud{index_->points(), sensor_};

@@ -22,9 +22,12 @@ struct EvalOptions {
   std::string points = "6000";
   size_t views = 6;
   int folds = 5;
-  std::string methods = "bok,bog,kgh,vfh,esf,fusion";
+  std::string methods = "bok,bog,kgh,vfh,esf,ush,fusion";
   std::string train_on = "partial";
+  std::string train_prefixes = "0.1,0.2,0.4";
   std::string decision = "knn";
+  std::string fusion_of;
+  int neighbours = 0;
   int threads = 0;
   uint64_t seed = 42;
   std::string out = "out/eval";
@@ -95,10 +98,30 @@ Expected<EvalParams> params_from(const EvalOptions& o) {
   if (o.train_on != "partial" && o.train_on != "full")
     return invalid_argument("--train-on must be 'full' or 'partial', not '" + o.train_on + "'");
   p.train_on_partial = o.train_on == "partial";
+  p.train_prefixes.clear();
+  std::stringstream fractions(o.train_prefixes);
+  for (std::string item; std::getline(fractions, item, ',');) {
+    char* end = nullptr;
+    const double f = std::strtod(item.c_str(), &end);
+    if (item.empty() || *end || !(f > 0 && f < 1))
+      return invalid_argument("--train-prefixes takes fractions in (0, 1), not '" + item + "'");
+    p.train_prefixes.push_back(f);
+  }
   if (o.decision == "nearest-centre") p.train.decision.kind = DecisionKind::kNearestCentre;
   else if (o.decision == "centres") p.train.decision.kind = DecisionKind::kCentres;
   else if (o.decision == "knn") p.train.decision.kind = DecisionKind::kNearestNeighbours;
   else return invalid_argument("--decision must be nearest-centre, centres or knn, not '" + o.decision + "'");
+  if (!o.fusion_of.empty()) {
+    p.train.fusion_of.clear();
+    std::stringstream parts(o.fusion_of);
+    for (std::string name; std::getline(parts, name, ',');) {
+      auto m = parse_method(name);
+      if (!m.ok()) return m.error();
+      if (*m == Method::kFusion) return invalid_argument("--fusion-of: fusion cannot be its own component");
+      p.train.fusion_of.push_back(*m);
+    }
+  }
+  if (o.neighbours > 0) p.train.decision.neighbours = o.neighbours;
   p.threads = o.threads;
   p.seed = o.seed;
   p.explore_step = o.explore_step;
@@ -177,11 +200,16 @@ void add_eval_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--views", o->views, "views per object (1-6, evenly spaced of the paper's 6)")->capture_default_str();
   cmd->add_option("--folds", o->folds, "cross-validation folds (by object, stratified)")->capture_default_str();
-  cmd->add_option("--methods", o->methods, "comma-separated: bok,bog,kgh,vfh,esf,fusion")->capture_default_str();
+  cmd->add_option("--methods", o->methods, "comma-separated: bok,bog,kgh,vfh,esf,ush,fusion")->capture_default_str();
   cmd->add_option("--train-on", o->train_on,
-                  "full: full views only (the paper); partial: plus their 10/20/40 % top-down prefixes")
+                  "full: full views only (the paper); partial: plus their top-down prefixes (--train-prefixes)")
+      ->capture_default_str();
+  cmd->add_option("--train-prefixes", o->train_prefixes,
+                  "with --train-on partial: comma-separated fractions of each training view's points")
       ->capture_default_str();
   cmd->add_option("--decision", o->decision, "nearest-centre (the paper), centres or knn")->capture_default_str();
+  cmd->add_option("--fusion-of", o->fusion_of, "comma-separated components of fusion (default: the recogniser's)");
+  cmd->add_option("--neighbours", o->neighbours, "k of the k-NN decision (0: the recogniser's default)");
   cmd->add_option("--threads", o->threads, "threads (0: all cores); results do not depend on it")->capture_default_str();
   cmd->add_option("--seed", o->seed, "seed of sizes, samples, folds, codebooks")->capture_default_str();
   cmd->add_option("--out", o->out, "report folder")->capture_default_str();

@@ -2,6 +2,8 @@
 // the model's byte format.
 #include <gtest/gtest.h>
 
+#include <fstream>
+#include <iterator>
 #include <map>
 
 #include "glimpse/classifiers.h"
@@ -195,6 +197,17 @@ TEST(Serialize, RejectsCorruptAndTruncatedBytes) {
     EXPECT_EQ(r.error().code, ErrorCode::kDataLoss);
     EXPECT_FALSE(r.error().message.empty());
   }
+}
+
+// Found by tests/fuzz: a stored parameter of 9.6e220 was cast to int (undefined behaviour).
+TEST(Serialize, RejectsParametersOutsideTheirType) {
+  const std::string path = GLIMPSE_SOURCE_DIR "/tests/fuzz/crashes/deserialize/float-cast-overflow-parameter.glmpsmdl";
+  std::ifstream in(path, std::ios::binary);
+  ASSERT_TRUE(in) << path;
+  const std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  auto r = deserialize(bytes);
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().code, ErrorCode::kDataLoss);
 }
 
 TEST(BagOfKeypoints, CountsAndNormalises) {

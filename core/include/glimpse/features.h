@@ -34,12 +34,15 @@ struct Features {
   Cloud cloud;                       // the cleaned cloud all indices refer to
   std::vector<Keypoint> keypoints;   // in selection order (descending lambda_min)
   std::vector<Descriptor> descriptors;
+  std::vector<LocalSurface> surfaces;  // one per point of `cloud` (empty when no radius was found)
   FeatureDiagnostics diagnostics;
 };
 
-// Errors: empty cloud, no finite point, fewer than min_points after cleaning (invalid argument).
+// Errors: empty cloud, no finite point, fewer than min_points after cleaning, a coordinate beyond
+// kMaxCoordinateM (invalid argument); cancelled when `cancel` returns true while it works.
 // A cloud on which no surface can be fitted (collinear points) or which is flat gives no keypoints
 // and a note saying why, not an error.
-Expected<Features> extract(const Cloud& cloud, const FeatureParams& params = {});
+inline constexpr float kMaxCoordinateM = 1e6f;  // 1000 km: beyond any scan, and grid keys stay exact
+Expected<Features> extract(const Cloud& cloud, const FeatureParams& params = {}, const CancelFn& cancel = {});
 
 }  // namespace glimpse

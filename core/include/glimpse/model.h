@@ -16,11 +16,13 @@
 
 namespace glimpse {
 
-// The recognition methods of the paper (BoK, BoG, KGH, VFH) plus ESF and a score-level fusion.
-enum class Method : uint8_t { kBoK = 0, kBoG = 1, kKGH = 2, kVFH = 3, kESF = 4, kFusion = 5 };
-inline constexpr Method kAllMethods[] = {Method::kBoK, Method::kBoG, Method::kKGH,
-                                         Method::kVFH, Method::kESF, Method::kFusion};
-const char* method_name(Method m);                       // "bok", "bog", "kgh", "vfh", "esf", "fusion"
+// The recognition methods of the paper (BoK, BoG, KGH, VFH), ESF, our upright shape histogram (USH,
+// upright_histogram.h) and a score-level fusion. The numbers are stored in model bytes: never reuse one.
+enum class Method : uint8_t { kBoK = 0, kBoG = 1, kKGH = 2, kVFH = 3, kESF = 4, kFusion = 5, kUSH = 6 };
+inline constexpr int kMethodCount = 7;
+inline constexpr Method kAllMethods[] = {Method::kBoK, Method::kBoG, Method::kKGH, Method::kVFH,
+                                         Method::kESF, Method::kUSH, Method::kFusion};
+const char* method_name(Method m);  // "bok", "bog", "kgh", "vfh", "esf", "ush", "fusion"
 Expected<Method> parse_method(std::string_view name);   // case-insensitive; error lists valid names
 
 struct LabelledCloud {
@@ -35,7 +37,6 @@ struct TrainProgress {
   size_t total = 0;
 };
 using ProgressFn = std::function<void(const TrainProgress&)>;
-using CancelFn = std::function<bool()>;  // returns true when the caller wants the work stopped
 
 struct TrainingStats {
   size_t clouds = 0;

@@ -9,6 +9,7 @@
 #include "glimpse/features.h"
 #include "glimpse/global_descriptors.h"
 #include "glimpse/model.h"
+#include "glimpse/upright_histogram.h"
 
 namespace glimpse {
 
@@ -29,8 +30,8 @@ struct DecisionParams {
 struct TrainParams {
   FeatureParams features;
   GlobalDescriptorParams global;
-  std::vector<Method> methods = {Method::kBoK, Method::kBoG, Method::kKGH,
-                                 Method::kVFH, Method::kESF, Method::kFusion};
+  UprightHistogramParams ush;
+  std::vector<Method> methods = {std::begin(kAllMethods), std::end(kAllMethods)};
   Method default_method = Method::kFusion;
 
   double codebook_explained_variance = 0.95;  // PCA of standardised descriptors (sec. 3.2.5)
