@@ -53,6 +53,7 @@ Expected<TrainParams> ToTrainParams(const TrainSpec& spec) {
     case v1::DECISION_KIND_NEAREST_CENTRE: params.decision.kind = DecisionKind::kNearestCentre; break;
     case v1::DECISION_KIND_NEAREST_NEIGHBOURS: params.decision.kind = DecisionKind::kNearestNeighbours; break;
     case v1::DECISION_KIND_CENTRES: params.decision.kind = DecisionKind::kCentres; break;
+    case v1::DECISION_KIND_NEAREST_REFERENCE: params.decision.kind = DecisionKind::kNearestReference; break;
     default: break;  // unspecified: core's default
   }
   if (p.has_seed()) params.seed = p.seed();

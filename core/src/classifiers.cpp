@@ -184,9 +184,15 @@ double median(std::vector<double> v) {
 }  // namespace
 
 Expected<DecisionStage> fit_decision(const Eigen::MatrixXd& histograms, const std::vector<int>& labels, int categories,
-                                     const DecisionParams& params, uint64_t seed, int threads) {
+                                     const DecisionParams& params, uint64_t seed, int threads,
+                                     const std::vector<int>& groups) {
   if (histograms.rows() != static_cast<Eigen::Index>(labels.size()) || histograms.rows() < 2)
     return invalid_argument("the decision stage needs at least 2 labelled training vectors");
+  if (!groups.empty() && groups.size() != labels.size())
+    return internal_error("one training object per training vector is needed");
+  auto same_object = [&](Eigen::Index i, Eigen::Index j) {
+    return !groups.empty() && groups[static_cast<size_t>(i)] == groups[static_cast<size_t>(j)];
+  };
   std::vector<int> per_category(categories, 0);
   for (int l : labels) {
     if (l < 0 || l >= categories) return internal_error("a training label is out of range");
@@ -205,15 +211,16 @@ Expected<DecisionStage> fit_decision(const Eigen::MatrixXd& histograms, const st
   const Eigen::MatrixXd y = project(st.pca, histograms);
 
   std::vector<double> scale;
-  if (params.kind == DecisionKind::kNearestNeighbours) {
+  if (params.kind == DecisionKind::kNearestNeighbours || params.kind == DecisionKind::kNearestReference) {
     st.references = y;
     st.labels = labels;
-    // Scale: the median distance from a training vector to its nearest other one.
+    // Scale: the median distance from a training vector to its nearest one of another object (the
+    // distance a new object is from the training set; another view of the same object is closer).
     for (Eigen::Index i = 0; i < y.rows(); ++i) {
       double best = INFINITY;
       for (Eigen::Index j = 0; j < y.rows(); ++j)
-        if (j != i) best = std::min(best, l1_rows(y, j, y.row(i).transpose()));
-      scale.push_back(best);
+        if (j != i && !same_object(i, j)) best = std::min(best, l1_rows(y, j, y.row(i).transpose()));
+      if (std::isfinite(best)) scale.push_back(best);
     }
   } else {
     // K-means centres of each category's training vectors (sec. 3.3.3); one per category = the paper.
@@ -266,7 +273,7 @@ Eigen::VectorXd decide(const DecisionStage& st, const Eigen::VectorXd& histogram
     for (size_t i = 0; i < k; ++i)
       scores[st.labels[static_cast<size_t>(d[i].second)]] += std::exp(-(d[i].first - d[0].first) / st.temperature);
   } else {
-    // Softmin over each category's nearest centre.
+    // Softmin over each category's nearest centre (or, for kNearestReference, training vector).
     Eigen::VectorXd best = Eigen::VectorXd::Constant(st.categories, INFINITY);
     for (const auto& [dist, i] : d) best[st.labels[static_cast<size_t>(i)]] = std::min(best[st.labels[static_cast<size_t>(i)]], dist);
     const double lo = best.minCoeff();

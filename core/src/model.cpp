@@ -11,6 +11,7 @@
 #include "glimpse/model.h"
 #include "glimpse/train_params.h"
 #include "glimpse/upright_histogram.h"
+#include "glimpse/views.h"
 #include "model_impl.h"
 #include "parallel.h"
 
@@ -168,29 +169,60 @@ Expected<Model> train(const std::vector<LabelledCloud>& data, const TrainParams&
   auto cancelled_now = [&] { return cancel && cancel(); };
   const std::vector<Method> base = base_methods(params);
 
-  // Features of every cloud, in parallel over clouds; batches keep progress and cancel responsive.
+  // The clouds to learn from: each training cloud whole, then its top-down prefixes (0 = whole).
+  struct Job {
+    size_t cloud;
+    size_t prefix;
+  };
+  std::vector<Job> jobs;
+  for (size_t i = 0; i < data.size(); ++i) {
+    jobs.push_back({i, 0});
+    const size_t n = data[i].cloud.points.size();
+    for (double f : params.partial_prefixes) {
+      const auto count = static_cast<size_t>(std::lround(f * static_cast<double>(n)));
+      if (count >= params.features.min_points && count < n) jobs.push_back({i, count});
+    }
+  }
+  // Features of every job, in parallel; batches keep progress and cancel responsive.
   const int threads = resolve_threads(params.threads);
-  std::vector<Expected<CloudFeatures>> feats(data.size(), internal_error("not computed"));
+  std::vector<Expected<CloudFeatures>> feats(jobs.size(), internal_error("not computed"));
   const size_t batch = static_cast<size_t>(threads) * 4;
-  for (size_t begin = 0; begin < data.size(); begin += batch) {
+  for (size_t begin = 0; begin < jobs.size(); begin += batch) {
     if (cancelled_now()) return cancelled("training cancelled");
-    const int64_t end = static_cast<int64_t>(std::min(data.size(), begin + batch));
+    const int64_t end = static_cast<int64_t>(std::min(jobs.size(), begin + batch));
 #pragma omp parallel for num_threads(threads) schedule(dynamic, 1)
-    for (int64_t i = static_cast<int64_t>(begin); i < end; ++i)
-      feats[i] = cloud_features(data[i].cloud, params, base, 1, cancel);
-    if (progress) progress({"features", static_cast<size_t>(end), data.size()});
+    for (int64_t j = static_cast<int64_t>(begin); j < end; ++j) {
+      const Cloud& cloud = data[jobs[j].cloud].cloud;
+      feats[j] = jobs[j].prefix ? cloud_features(reveal_top_down(cloud, jobs[j].prefix), params, base, 1, cancel)
+                                : cloud_features(cloud, params, base, 1, cancel);
+    }
+    if (progress) progress({"features", static_cast<size_t>(end), jobs.size()});
   }
   std::vector<TrainingSample> samples;
-  samples.reserve(data.size());
-  for (size_t i = 0; i < data.size(); ++i) {
-    if (!feats[i].ok())
-      return Error{feats[i].error().code, "training cloud " + std::to_string(i) + " (category '" + data[i].category +
-                                              "', object '" + data[i].object_id + "'): " + feats[i].error().message};
-    samples.push_back({data[i].category, data[i].object_id, std::move(*feats[i])});
+  samples.reserve(jobs.size());
+  for (size_t j = 0; j < jobs.size(); ++j) {
+    const LabelledCloud& d = data[jobs[j].cloud];
+    if (!feats[j].ok()) {
+      // A whole cloud must work; a prefix too small or too thin for a method is only skipped.
+      if (jobs[j].prefix && feats[j].error().code == ErrorCode::kInvalidArgument) continue;
+      return Error{feats[j].error().code, "training cloud " + std::to_string(jobs[j].cloud) + " (category '" +
+                                              d.category + "', object '" + d.object_id + "')" +
+                                              (jobs[j].prefix ? ", top " + std::to_string(jobs[j].prefix) + " points" : "") +
+                                              ": " + feats[j].error().message};
+    }
+    samples.push_back({d.category, d.object_id, std::move(*feats[j])});
   }
   feats.clear();
   auto model = train_on_features(std::move(samples), params, progress, cancel);
-  if (model.ok()) model->stats.seconds = ms_since(t0) / 1000.0;
+  if (model.ok()) {
+    // Statistics count the clouds given, not the prefixes made of them.
+    model->stats.clouds = data.size();
+    std::fill(model->stats.clouds_per_category.begin(), model->stats.clouds_per_category.end(), 0);
+    for (const LabelledCloud& d : data)
+      ++model->stats.clouds_per_category[static_cast<size_t>(
+          std::find(model->categories.begin(), model->categories.end(), d.category) - model->categories.begin())];
+    model->stats.seconds = ms_since(t0) / 1000.0;
+  }
   return model;
 }
 
@@ -212,8 +244,14 @@ Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainP
     i = static_cast<int>(model.categories.size());
     model.categories.push_back(name);
   }
-  std::vector<int> labels;
-  for (const auto& d : data) labels.push_back(index[d.category]);
+  std::vector<int> labels, object_of;
+  std::map<std::string, int> object_index;
+  for (const auto& d : data) {
+    labels.push_back(index[d.category]);
+    // A cloud without an object id is an object of its own.
+    const std::string key = d.object_id.empty() ? "#" + std::to_string(labels.size()) : d.category + "/" + d.object_id;
+    object_of.push_back(object_index.emplace(key, static_cast<int>(object_index.size())).first->second);
+  }
 
   const std::vector<Method> base = base_methods(params);
   const int threads = resolve_threads(params.threads);
@@ -276,7 +314,8 @@ Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainP
     }
     DecisionParams dp = params.decision;
     if (m == Method::kBoG) dp.max_pca_dims = params.bog_pca_dims;
-    auto stage = fit_decision(h, labels, static_cast<int>(model.categories.size()), dp, params.seed + 10 + static_cast<uint64_t>(m), threads);
+    auto stage = fit_decision(h, labels, static_cast<int>(model.categories.size()), dp,
+                              params.seed + 10 + static_cast<uint64_t>(m), threads, object_of);
     if (!stage.ok()) return with_method(m, stage.error());
     impl->stages[static_cast<int>(m)] = std::move(*stage);
     report("centres", ++done, base.size());

@@ -270,7 +270,7 @@ void write_stage(Writer& w, const DecisionStage& s) {
 DecisionStage read_stage(Reader& r, int categories, Eigen::Index histogram_size) {
   DecisionStage s;
   const uint8_t kind = r.u8("decision kind");
-  if (kind > static_cast<uint8_t>(DecisionKind::kNearestNeighbours)) r.fail("unknown decision kind");
+  if (kind > static_cast<uint8_t>(DecisionKind::kNearestReference)) r.fail("unknown decision kind");
   s.kind = static_cast<DecisionKind>(kind);
   s.categories = r.i32("decision categories");
   s.neighbours = r.i32("decision neighbours");

@@ -84,12 +84,16 @@ struct DecisionStage {
   Pca pca;                     // of the training histograms
   Eigen::MatrixXd references;  // centres or training vectors, in PCA space (rows)
   std::vector<int> labels;     // category of each reference
-  double temperature = 1;      // L1 distance scale turning distances into scores
+  double temperature = 1;      // L1 distance scale turning distances into scores (see fit_decision)
 };
 
-// `labels` in [0, categories); every category must have at least one row.
+// `labels` in [0, categories); every category must have at least one row. `groups` (optional, one per
+// row): the training object of each row. The score temperature is the median distance from a training
+// vector to the nearest one of ANOTHER object, the distance at which an unseen object is met (views
+// and prefixes of one object are far closer to each other and would make every score sound certain).
 Expected<DecisionStage> fit_decision(const Eigen::MatrixXd& histograms, const std::vector<int>& labels,
-                                     int categories, const DecisionParams& params, uint64_t seed, int threads);
+                                     int categories, const DecisionParams& params, uint64_t seed, int threads,
+                                     const std::vector<int>& groups = {});
 // Scores per category in [0, 1], summing to 1 (L1 distances, sec. 4).
 Eigen::VectorXd decide(const DecisionStage& stage, const Eigen::VectorXd& histogram);
 

@@ -17,10 +17,14 @@ enum class DecisionKind : uint8_t {
   kNearestCentre = 0,      // the paper's setting: one K-means centre per category, L1 distance (sec. 4)
   kCentres = 1,            // several K-means centres per category
   kNearestNeighbours = 2,  // k-NN over every training vector, L1 distance
+  // Every training vector a reference; each category scores by its nearest reference (softmin of L1
+  // distances): the 1-NN decision, with scores whose margin says how much closer the winner is, so
+  // a streamed decision can tell when it has settled.
+  kNearestReference = 3,
 };
 
 struct DecisionParams {
-  DecisionKind kind = DecisionKind::kNearestNeighbours;
+  DecisionKind kind = DecisionKind::kNearestReference;
   int centres_per_category = 3;     // for kCentres
   int neighbours = 5;               // for kNearestNeighbours
   double pca_explained_variance = 0.98;  // PCA of the training histograms (sec. 3.3.2)
@@ -42,7 +46,14 @@ struct TrainParams {
   int bog_pca_dims = 65;
   int kgh_clusters = 8;
   int kgh_distance_bins = 15;
-  std::vector<Method> fusion_of = {Method::kBoK, Method::kBoG, Method::kVFH, Method::kESF};
+  // Measured on the protocol (glimpse-lab eval): USH + ESF + VFH beats each alone; adding the keypoint
+  // methods, far weaker on partial views, pulls the mean down.
+  std::vector<Method> fusion_of = {Method::kUSH, Method::kESF, Method::kVFH};
+
+  // Train on what will be seen: besides each training cloud, its top-down prefixes holding these
+  // fractions of its points (sec. 4's exploration order), as samples of the same object. A scan is
+  // classified while it grows, so the model must know partial views. Empty: whole clouds only.
+  std::vector<double> partial_prefixes = {0.15, 0.25, 0.35, 0.5, 0.7};
 
   DecisionParams decision;
   int kmeans_restarts = 4;
