@@ -7,9 +7,9 @@
 
 namespace glimpse {
 
-Tally accuracy(std::span<const Decision> decisions, std::string_view stage, Method method) {
+Tally accuracy(std::span<const StageDecision> decisions, std::string_view stage, Method method) {
   Tally t;
-  for (const Decision& d : decisions) {
+  for (const StageDecision& d : decisions) {
     if (d.method != method || d.stage != stage) continue;
     ++t.total;
     t.correct += d.winner == d.truth;
@@ -17,11 +17,11 @@ Tally accuracy(std::span<const Decision> decisions, std::string_view stage, Meth
   return t;
 }
 
-std::vector<std::vector<double>> confusion_percent(std::span<const Decision> decisions, std::string_view stage,
+std::vector<std::vector<double>> confusion_percent(std::span<const StageDecision> decisions, std::string_view stage,
                                                    Method method, size_t categories) {
   std::vector<std::vector<double>> m(categories, std::vector<double>(categories, 0.0));
   std::vector<size_t> row_total(categories, 0);
-  for (const Decision& d : decisions) {
+  for (const StageDecision& d : decisions) {
     if (d.method != method || d.stage != stage) continue;
     if (d.truth < 0 || static_cast<size_t>(d.truth) >= categories) continue;
     ++row_total[d.truth];
@@ -39,7 +39,7 @@ size_t category_changes(std::span<const int> winners) {
   return changes;
 }
 
-std::vector<ExplorationTrace> exploration_traces(std::span<const Decision> decisions, Method method,
+std::vector<ExplorationTrace> exploration_traces(std::span<const StageDecision> decisions, Method method,
                                                  const std::vector<size_t>& grid) {
   std::map<std::string, size_t> grid_index;
   for (size_t g = 0; g < grid.size(); ++g)
@@ -50,7 +50,7 @@ std::vector<ExplorationTrace> exploration_traces(std::span<const Decision> decis
     bool has_full = false;
   };
   std::map<std::tuple<int, int, int>, Partial> views;  // (fold, object, view), so traces come out ordered
-  for (const Decision& d : decisions) {
+  for (const StageDecision& d : decisions) {
     if (d.method != method) continue;
     const bool full = d.stage == "full";
     auto g = grid_index.find(d.stage);

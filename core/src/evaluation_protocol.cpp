@@ -233,11 +233,10 @@ Expected<EvalResult> run_evaluation(const std::vector<EvalObject>& objects, cons
         count = fraction_prefix(pts.size(), full[views[v].object].size(), stages[s].value);
       stage_slot[v][s] = slot_for(v, count);
     }
-    if (params.train_on_partial)
-      for (double f : params.train_prefixes) {
-        const int id = slot_for(v, static_cast<size_t>(std::round(f * double(pts.size()))));
-        if (id >= 0 && id != static_cast<int>(v)) train_slots[v].push_back(id);
-      }
+    for (double f : tp.partial_prefixes) {
+      const int id = slot_for(v, static_cast<size_t>(std::round(f * double(pts.size()))));
+      if (id >= 0 && id != static_cast<int>(v)) train_slots[v].push_back(id);
+    }
   }
   const size_t first_prefix = views.size();
   parallel_for(slots.size() - first_prefix, threads, "features: prefixes", progress, [&](size_t j) {
@@ -293,6 +292,8 @@ Expected<EvalResult> run_evaluation(const std::vector<EvalObject>& objects, cons
   // ---- 5. cross-validation ----
   double train_seconds = 0, classify_seconds = 0;
   size_t train_samples = 0;
+  std::vector<std::shared_ptr<const Model>> fold_models;
+  std::vector<std::vector<int>> fold_to_ours;  // per fold: model category index -> report category index
   for (int fold = 0; fold < params.folds; ++fold) {
     const std::string tag = "fold " + std::to_string(fold + 1) + "/" + std::to_string(params.folds);
     t0 = Clock::now();
@@ -311,8 +312,10 @@ Expected<EvalResult> run_evaluation(const std::vector<EvalObject>& objects, cons
         if (slots[id].ok) samples.push_back({cat, objects[o].id, slots[id].features});
     }
     train_samples += samples.size();
-    auto model = train_on_features(std::move(samples), tp);
-    if (!model.ok()) return Error{model.error().code, tag + ": training failed: " + model.error().message};
+    auto trained = train_on_features(std::move(samples), tp);
+    if (!trained.ok()) return Error{trained.error().code, tag + ": training failed: " + trained.error().message};
+    const auto model = std::make_shared<const Model>(std::move(*trained));
+    fold_models.push_back(model);
     train_seconds += seconds_since(t0);
     if (progress) progress({tag + ": train", 1, 1});
 
@@ -320,16 +323,17 @@ Expected<EvalResult> run_evaluation(const std::vector<EvalObject>& objects, cons
     std::vector<int> to_ours;  // model category index -> report category index
     for (const std::string& c : model->categories)
       to_ours.push_back(static_cast<int>(std::find(r.categories.begin(), r.categories.end(), c) - r.categories.begin()));
+    fold_to_ours.push_back(to_ours);
     const ModelImpl& impl = *model->impl;
     const size_t per_view = stages.size() * params.methods.size();
-    std::vector<Decision> fold_decisions(test_views.size() * per_view);
+    std::vector<StageDecision> fold_decisions(test_views.size() * per_view);
     parallel_for(test_views.size() * stages.size(), threads, tag + ": classify", progress, [&](size_t item) {
       const size_t t = item / stages.size(), s = item % stages.size();
       const size_t v = test_views[t];
       const int id = stage_slot[v][s];
       const bool ok = id >= 0 && slots[id].ok;
       for (size_t m = 0; m < params.methods.size(); ++m) {
-        Decision& d = fold_decisions[t * per_view + s * params.methods.size() + m];
+        StageDecision& d = fold_decisions[t * per_view + s * params.methods.size() + m];
         d.fold = fold;
         d.object = views[v].object;
         d.view = views[v].view;
@@ -365,7 +369,44 @@ Expected<EvalResult> run_evaluation(const std::vector<EvalObject>& objects, cons
   r.traces = exploration_traces(r.decisions, r.change_method, r.grid);
   r.changes = change_summary(r.traces, params.change_up_to);
 
-  // ---- 7. what looks wrong ----
+  // ---- 7. streaming: every view revealed top to bottom through a ScanSession of its fold's model ----
+  if (params.stream_chunk_fraction > 0) {
+    t0 = Clock::now();
+    r.streams.resize(views.size());
+    SessionParams sp = params.session;
+    sp.method = r.change_method;
+    parallel_for(views.size(), threads, "streaming sessions", progress, [&](size_t v) {
+      const int o = views[v].object, fold = r.object_fold[o];
+      StreamTrace& t = r.streams[v];
+      t.fold = fold, t.object = o, t.view = views[v].view, t.truth = r.object_truth[o];
+      auto session = ScanSession::create(fold_models[static_cast<size_t>(fold)], sp);
+      if (!session.ok()) return;
+      const Cloud& cloud = views[v].cloud;
+      const std::vector<uint32_t> order = top_down_order(cloud.points);
+      const size_t chunk = std::max<size_t>(
+          1, static_cast<size_t>(std::lround(params.stream_chunk_fraction * double(full[o].size()))));
+      Cloud part;
+      part.sensor = cloud.sensor;
+      for (size_t begin = 0; begin < order.size(); begin += chunk) {
+        part.points.clear();
+        for (size_t i = begin; i < std::min(order.size(), begin + chunk); ++i) part.points.push_back(cloud.points[order[i]]);
+        auto d = (*session)->add(part);
+        if (!d.ok()) break;
+        t.visible_fraction.push_back(double(std::min(order.size(), begin + chunk)) / double(std::max<size_t>(1, full[o].size())));
+        t.winners.push_back(d->winner >= 0 ? fold_to_ours[static_cast<size_t>(fold)][static_cast<size_t>(d->winner)] : -1);
+        t.confidence.push_back(d->confidence);
+        t.settled.push_back(d->settled ? 1 : 0);
+        t.keypoints.push_back(d->keypoints);
+      }
+    });
+    size_t chunks = 0;
+    for (const StreamTrace& t : r.streams) chunks += t.winners.size();
+    r.timings.push_back({"streaming sessions", seconds_since(t0),
+                         std::to_string(r.streams.size()) + " views, " + std::to_string(chunks) + " chunks (" +
+                             method_name(r.change_method) + ")"});
+  }
+
+  // ---- 8. what looks wrong ----
   const double chance = 100.0 / double(n_cat);
   for (Method m : params.methods) {
     const Tally t = accuracy(r.decisions, "full", m);

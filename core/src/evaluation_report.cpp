@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "glimpse/evaluation.h"
+#include "model_impl.h"
 
 namespace glimpse {
 
@@ -149,14 +150,14 @@ void write_protocol(std::ostringstream& o, const EvalResult& r) {
   o << "| fraction stages | top prefix holding the fraction of the FULL 3D cloud's point count | ~10 %, ~20 % visible |\n";
   o << "| cross-validation | " << p.folds << "-fold by object, stratified by category, seed " << p.seed
     << "; accuracy pooled over folds | not stated |\n";
-  o << "| training clouds (`--train-on`) | "
-    << (p.train_on_partial ? "partial: full views + top-down prefixes holding " : "full views only")
-    << (p.train_on_partial ? [&] {
-         std::string s;
-         for (double f : p.train_prefixes) s += (s.empty() ? "" : ", ") + pct(100 * f) + " %";
-         return s + " of each training view";
-       }()
-                           : "")
+  const std::vector<double>& prefixes = p.train.partial_prefixes;
+  std::string trained_on = "full views only";
+  if (!prefixes.empty()) {
+    trained_on = "full views + top-down prefixes holding ";
+    for (size_t i = 0; i < prefixes.size(); ++i) trained_on += (i ? ", " : "") + pct(100 * prefixes[i]) + " %";
+    trained_on += " of each training view";
+  }
+  o << "| training clouds (`--train-on`, `--train-prefixes`) | " << trained_on
     << " | full views |\n";
   const TrainParams& t = p.train;
   o << "| methods | " << join_methods(p.methods) << " (fusion = mean scores of " << join_methods(t.fusion_of)
@@ -166,7 +167,9 @@ void write_protocol(std::ostringstream& o, const EvalResult& r) {
     << (t.normalise_histograms ? ", histograms normalised" : "") << " | BoK 60, BoG 6x5 -> 65, KGH 8x15 |\n";
   const char* kind = t.decision.kind == DecisionKind::kNearestCentre ? "nearest centre"
                      : t.decision.kind == DecisionKind::kCentres   ? "several centres per category"
-                                                                   : "k-NN";
+                     : t.decision.kind == DecisionKind::kNearestReference
+                         ? "nearest reference per category (every training vector; softmin scores)"
+                         : "k-NN";
   o << "| decision | " << kind;
   if (t.decision.kind == DecisionKind::kNearestNeighbours) o << " (k = " << t.decision.neighbours << ")";
   if (t.decision.kind == DecisionKind::kCentres) o << " (" << t.decision.centres_per_category << " per category)";
@@ -311,7 +314,52 @@ void write_changes(std::ostringstream& o, const EvalResult& r) {
        "Figures 5-6): [finally correct](evolution_correct.svg), [finally incorrect](evolution_incorrect.svg).\n\n";
 }
 
+void write_streams(std::ostringstream& o, const EvalResult& r) {
+  if (r.streams.empty()) return;
+  const SessionParams& sp = r.params.session;
+  const size_t min_kp = uses_keypoints(r.change_method) ? sp.min_keypoints : 0;
+  o << "## Streaming: when the decision settles (ScanSession)\n\n";
+  o << "Every view streamed top to bottom through a ScanSession of its fold's model (method **"
+    << method_label(r.change_method) << "**), in chunks of " << pct(100 * r.params.stream_chunk_fraction, 1)
+    << " % of the full 3D cloud's points. A view counts at its first settled decision: precision = share of those "
+       "that name the true category, visible % = how much of the full cloud had been seen then. Goal: precision >= 95 % "
+       "with settlement before 30 % visible on average.\n\n";
+  o << "| settled when | views settled | precision | mean visible % | median visible % |\n|---|---:|---:|---:|---:|\n";
+  auto row = [&](const std::string& label, const SettleRow& s) {
+    o << "| " << label << " | " << s.settled_views << " / " << s.views << " (" << pct(s.settled_percent(), 1) << " %) | "
+      << pct(s.precision_percent(), 1) << " % | " << pct(s.mean_visible_percent, 1) << " | "
+      << pct(s.median_visible_percent, 1) << " |\n";
+  };
+  row("**session default** (confidence >= " + fmt("%.2f", sp.settle_confidence) + ")", settle_summary(r.streams, -1));
+  for (double t : r.params.settle_sweep) row("confidence >= " + fmt("%.2f", t), settle_summary(r.streams, t, min_kp));
+  o << "\nPer category, the session's own flag:\n\n| category | views settled | precision | mean visible % |\n"
+       "|---|---:|---:|---:|\n";
+  for (size_t c = 0; c < r.categories.size(); ++c) {
+    const SettleRow s = settle_summary(r.streams, -1, 0, static_cast<int>(c));
+    o << "| " << r.categories[c] << " | " << s.settled_views << " / " << s.views << " | " << pct(s.precision_percent(), 1)
+      << " % | " << pct(s.mean_visible_percent, 1) << " |\n";
+  }
+  size_t final_correct = 0, decided = 0;
+  for (const StreamTrace& t : r.streams)
+    if (!t.winners.empty()) ++decided, final_correct += t.winners.back() == t.truth;
+  o << "\nLast decision of each stream (the whole view seen): " << final_correct << " / " << decided << " correct ("
+    << pct(decided ? 100.0 * double(final_correct) / double(decided) : 0, 1) << " %). Every chunk is in "
+    << "[streams.csv](streams.csv).\n\n";
+}
+
 }  // namespace
+
+std::string streams_csv(const EvalResult& r) {
+  std::ostringstream o;
+  o << "fold,object,view,truth,chunk,visible_fraction,winner,confidence,settled,keypoints\n";
+  for (const StreamTrace& t : r.streams)
+    for (size_t i = 0; i < t.winners.size(); ++i)
+      o << t.fold << "," << r.object_ids[static_cast<size_t>(t.object)] << "," << t.view << ","
+        << r.categories[static_cast<size_t>(t.truth)] << "," << i << "," << fmt("%.4f", t.visible_fraction[i]) << ","
+        << (t.winners[i] >= 0 ? r.categories[static_cast<size_t>(t.winners[i])] : std::string()) << ","
+        << fmt("%.4f", t.confidence[i]) << "," << int(t.settled[i]) << "," << t.keypoints[i] << "\n";
+  return o.str();
+}
 
 double paper_accuracy(Method method, std::string_view stage) {
   const int col = paper_method_column(method);
@@ -332,6 +380,7 @@ std::string markdown_report(const EvalResult& r) {
   o << "## Confusion tables\n\n";
   write_confusions(o, r);
   write_changes(o, r);
+  write_streams(o, r);
   o << "## Things that look wrong\n\n";
   if (r.notes.empty()) o << "Nothing flagged.\n";
   for (const std::string& n : r.notes) o << "- " << n << "\n";
@@ -348,7 +397,7 @@ std::string decisions_csv(const EvalResult& r) {
   o << "fold,object,view,stage,method,visible_fraction,points,keypoints,truth,winner";
   for (const std::string& c : r.categories) o << ",score_" << c;
   o << "\n";
-  for (const Decision& d : r.decisions) {
+  for (const StageDecision& d : r.decisions) {
     o << d.fold << "," << r.object_ids[d.object] << "," << d.view << "," << d.stage << "," << method_name(d.method) << ","
       << fmt("%.4f", d.visible_fraction) << "," << d.points << "," << d.keypoints << "," << r.categories[d.truth] << ","
       << (d.winner >= 0 ? r.categories[d.winner] : std::string("none"));
@@ -455,13 +504,14 @@ Status write_report(const EvalResult& r, const std::string& dir) {
     if (!f) return internal_error("cannot write " + path);
     return {};
   };
-  const char* kFiles[] = {"report.md", "decisions.csv", "evolution_correct.svg", "evolution_incorrect.svg"};
+  const char* kFiles[] = {"report.md", "decisions.csv", "evolution_correct.svg", "evolution_incorrect.svg", "streams.csv"};
   const std::string method = method_label(r.change_method);
   const std::string texts[] = {
       markdown_report(r), decisions_csv(r),
       evolution_svg(r.traces, r.categories, true, "Finally correct views: decided category along the exploration (" + method + ")"),
-      evolution_svg(r.traces, r.categories, false, "Finally incorrect views: decided category along the exploration (" + method + ")")};
-  for (size_t i = 0; i < 4; ++i)
+      evolution_svg(r.traces, r.categories, false, "Finally incorrect views: decided category along the exploration (" + method + ")"),
+      streams_csv(r)};
+  for (size_t i = 0; i < std::size(kFiles); ++i)
     if (Status s = write(kFiles[i], texts[i]); !s.ok()) return s;
   return {};
 }

@@ -24,8 +24,8 @@ struct EvalOptions {
   int folds = 5;
   std::string methods = "bok,bog,kgh,vfh,esf,ush,fusion";
   std::string train_on = "partial";
-  std::string train_prefixes = "0.1,0.2,0.4";
-  std::string decision = "knn";
+  std::string train_prefixes = "0.15,0.25,0.35,0.5,0.7";
+  std::string decision = "nearest";
   std::string fusion_of;
   int neighbours = 0;
   int threads = 0;
@@ -97,20 +97,20 @@ Expected<EvalParams> params_from(const EvalOptions& o) {
   }
   if (o.train_on != "partial" && o.train_on != "full")
     return invalid_argument("--train-on must be 'full' or 'partial', not '" + o.train_on + "'");
-  p.train_on_partial = o.train_on == "partial";
-  p.train_prefixes.clear();
+  p.train.partial_prefixes.clear();
   std::stringstream fractions(o.train_prefixes);
   for (std::string item; std::getline(fractions, item, ',');) {
     char* end = nullptr;
     const double f = std::strtod(item.c_str(), &end);
     if (item.empty() || *end || !(f > 0 && f < 1))
       return invalid_argument("--train-prefixes takes fractions in (0, 1), not '" + item + "'");
-    p.train_prefixes.push_back(f);
+    if (o.train_on == "partial") p.train.partial_prefixes.push_back(f);
   }
   if (o.decision == "nearest-centre") p.train.decision.kind = DecisionKind::kNearestCentre;
   else if (o.decision == "centres") p.train.decision.kind = DecisionKind::kCentres;
   else if (o.decision == "knn") p.train.decision.kind = DecisionKind::kNearestNeighbours;
-  else return invalid_argument("--decision must be nearest-centre, centres or knn, not '" + o.decision + "'");
+  else if (o.decision == "nearest") p.train.decision.kind = DecisionKind::kNearestReference;
+  else return invalid_argument("--decision must be nearest-centre, centres, knn or nearest, not '" + o.decision + "'");
   if (!o.fusion_of.empty()) {
     p.train.fusion_of.clear();
     std::stringstream parts(o.fusion_of);
@@ -207,7 +207,7 @@ void add_eval_command(CLI::App& app) {
   cmd->add_option("--train-prefixes", o->train_prefixes,
                   "with --train-on partial: comma-separated fractions of each training view's points")
       ->capture_default_str();
-  cmd->add_option("--decision", o->decision, "nearest-centre (the paper), centres or knn")->capture_default_str();
+  cmd->add_option("--decision", o->decision, "nearest-centre (the paper), centres, knn or nearest (every training vector a reference)")->capture_default_str();
   cmd->add_option("--fusion-of", o->fusion_of, "comma-separated components of fusion (default: the recogniser's)");
   cmd->add_option("--neighbours", o->neighbours, "k of the k-NN decision (0: the recogniser's default)");
   cmd->add_option("--threads", o->threads, "threads (0: all cores); results do not depend on it")->capture_default_str();

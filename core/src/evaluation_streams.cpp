@@ -1,0 +1,36 @@
+// Streaming metrics of the evaluation: how early and how right the ScanSession's settled decisions are.
+#include <algorithm>
+
+#include "glimpse/evaluation.h"
+
+namespace glimpse {
+
+SettleRow settle_summary(const std::vector<StreamTrace>& traces, double threshold, size_t min_keypoints,
+                         int truth_filter) {
+  SettleRow row;
+  row.threshold = threshold;
+  std::vector<double> visible;
+  for (const StreamTrace& t : traces) {
+    if (truth_filter >= 0 && t.truth != truth_filter) continue;
+    ++row.views;
+    for (size_t i = 0; i < t.winners.size(); ++i) {
+      const bool settled = threshold < 0 ? t.settled[i] != 0
+                                         : t.winners[i] >= 0 && t.confidence[i] >= threshold &&
+                                               t.keypoints[i] >= min_keypoints;
+      if (!settled) continue;
+      ++row.settled_views;
+      row.correct += t.winners[i] == t.truth;
+      visible.push_back(100.0 * t.visible_fraction[i]);
+      break;
+    }
+  }
+  if (!visible.empty()) {
+    for (double v : visible) row.mean_visible_percent += v;
+    row.mean_visible_percent /= double(visible.size());
+    std::sort(visible.begin(), visible.end());
+    row.median_visible_percent = visible[visible.size() / 2];
+  }
+  return row;
+}
+
+}  // namespace glimpse
