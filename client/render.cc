@@ -184,10 +184,20 @@ std::string ClassifyJson(const ClassifyRow& row) {
 
 // ---- stream ----
 
+namespace {
+// "keypoints N " unless the method uses none (whole-cloud descriptors only) and found none.
+std::string KeypointsField(const v1::Decision& d, std::string_view gap) {
+  const bool global_only = d.method() == v1::METHOD_VFH || d.method() == v1::METHOD_ESF ||
+                           d.method() == v1::METHOD_USH || d.method() == v1::METHOD_FUSION;
+  if (global_only && d.keypoints() == 0) return "";
+  return "keypoints " + std::to_string(d.keypoints()) + std::string(gap);
+}
+}  // namespace
+
 std::string DecisionLine(const v1::Decision& d, size_t chunks_total) {
   std::string winner = d.winner().empty() ? "-" : d.winner() + " " + Score(WinnerScore(d));
   return "chunk " + std::to_string(d.chunk_index() + 1) + "/" + std::to_string(chunks_total) + " points " +
-         std::to_string(d.points()) + " keypoints " + std::to_string(d.keypoints()) + " winner " + winner +
+         std::to_string(d.points()) + " " + KeypointsField(d, " ") + "winner " + winner +
          " changes " + std::to_string(d.category_changes()) + " settled " + YesNo(d.settled()) + " confidence " +
          Fixed(d.confidence(), 2);
 }
@@ -196,7 +206,7 @@ std::string DecisionPanel(const v1::Decision& d, size_t chunks_total, std::strin
                           int bar_width) {
   std::string out = "model " + FormatModelRef(d.model()) + " (" + MethodName(d.method()) + ")   chunk " +
                     std::to_string(d.chunk_index() + 1) + "/" + std::to_string(chunks_total) + "   points " +
-                    std::to_string(d.points()) + "   keypoints " + std::to_string(d.keypoints()) + "   " +
+                    std::to_string(d.points()) + "   " + KeypointsField(d, "   ") +
                     Fixed(d.latency_ms(), 1) + " ms\n";
   if (d.winner().empty()) {
     out += "winner -   (not enough points yet)\n";

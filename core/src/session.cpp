@@ -265,6 +265,7 @@ void track_decision(DecisionTrack& t, const std::vector<double>& scores, size_t 
   int winner = -1;
   for (size_t i = 0; i < t.smoothed.size(); ++i)
     if (winner < 0 || t.smoothed[i] > t.smoothed[static_cast<size_t>(winner)]) winner = static_cast<int>(i);
+  const bool was_settled = d.settled && winner == d.winner;
   if (d.winner >= 0 && winner != d.winner) ++d.category_changes;
   d.winner_held_chunks = winner == d.winner ? d.winner_held_chunks + 1 : 1;
   d.winner = winner;
@@ -282,7 +283,8 @@ void track_decision(DecisionTrack& t, const std::vector<double>& scores, size_t 
   const double stability = static_cast<double>(held) / static_cast<double>(window);
   d.confidence = std::clamp(margin / params.full_margin, 0.0, 1.0) * stability;
   const bool enough = !keypoints_matter || keypoints >= params.min_keypoints;
-  d.settled = enough && d.confidence >= params.settle_confidence;
+  const double needed = was_settled ? params.settle_confidence - params.unsettle_margin : params.settle_confidence;
+  d.settled = enough && d.confidence >= needed;
 }
 
 Expected<std::unique_ptr<ScanSession>> ScanSession::create(std::shared_ptr<const Model> model,

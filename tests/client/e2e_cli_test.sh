@@ -114,7 +114,7 @@ GLIMPSE_MODEL=folder run 0 classify "$BLOB" && out_has "folder:1"
 
 # ---- stream ----
 run 0 stream --zoo chair --model tiny:1 --chunks 5 --rate 50 && out_lines 5
-out_has "^chunk 1/5 points [0-9]+ keypoints [0-9]+ winner " && out_has "^chunk 5/5 .* settled (yes|no) confidence [0-9.]+$"
+out_has "^chunk 1/5 points [0-9]+ (keypoints [0-9]+ )?winner " && out_has "^chunk 5/5 .* settled (yes|no) confidence [0-9.]+$"
 run 0 stream "$BOX" --model tiny --chunk-points 1000 --order random --rate 0 --json && out_has '"chunk":1,' && out_has '"model":"tiny","version":2,"method":"(bok|esf)"'
 run 0 stream "$DATA/blob/s1.xyz" --model folder --chunks 3 --order sweep --rate 0 && out_lines 3
 run 1 stream --zoo human --model nope --rate 0 && err_has "^glimpse: stream --zoo human: NOT_FOUND"

@@ -108,6 +108,13 @@ TEST(Render, DecisionLineIsTheDocumentedPlainFormat) {
   v1::Decision empty;
   empty.set_winner_index(-1);
   EXPECT_EQ(DecisionLine(empty, 5), "chunk 1/5 points 0 keypoints 0 winner - changes 0 settled no confidence 0.00");
+  // A method that uses no keypoints (and found none) does not print a keypoint count.
+  v1::Decision global = MakeDecision();
+  global.set_keypoints(0);
+  EXPECT_EQ(DecisionLine(global, 20), "chunk 3/20 points 1234 winner chair 0.820 changes 1 settled no confidence 0.41");
+  global.set_method(v1::METHOD_BOK);
+  EXPECT_EQ(DecisionLine(global, 20),
+            "chunk 3/20 points 1234 keypoints 0 winner chair 0.820 changes 1 settled no confidence 0.41");
 }
 
 TEST(Render, DecisionPanelMarksWinnerAndAChange) {

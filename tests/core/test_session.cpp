@@ -224,6 +224,35 @@ TEST(DecisionTrack, CountsChangesAndSettlesOnAStableMargin) {
   EXPECT_NEAR(d.confidence, (0.05 / 0.4) * (1.0 / 3.0), 1e-9);
 }
 
+TEST(DecisionTrack, ASettledWinnerStaysSettledThroughASmallDip) {
+  SessionParams p;
+  p.smoothing = 1.0;
+  p.stability_window = 2;
+  p.full_margin = 0.4;
+  p.settle_confidence = 0.6;
+  p.unsettle_margin = 0.2;
+  DecisionTrack t;
+  auto step = [&](std::vector<double> s) {
+    track_decision(t, s, 0, false, p);
+    return t.decision;
+  };
+  EXPECT_FALSE(step({0.4, 0.6}).settled);                         // 0.5 x held 1 of 2
+  EXPECT_FALSE(step({0.9, 0.1}).settled);                         // a change: 1.0 x held 1 of 2
+  EXPECT_TRUE(step({0.9, 0.1}).settled);                          // 1.0
+  Decision d = step({0.7, 0.3});                                  // 0.4 / 0.4 = 1.0
+  EXPECT_TRUE(d.settled);
+  d = step({0.6, 0.4});                                           // 0.5: below 0.6, above 0.6 - 0.2
+  EXPECT_NEAR(d.confidence, 0.5, 1e-12);
+  EXPECT_TRUE(d.settled) << "a small dip keeps a settled decision";
+  d = step({0.55, 0.45});                                         // 0.25: below 0.4
+  EXPECT_FALSE(d.settled) << "a collapse of the margin unsettles";
+  EXPECT_FALSE(step({0.6, 0.4}).settled) << "once unsettled, it must reach 0.6 again";
+  EXPECT_TRUE(step({0.75, 0.25}).settled);
+  // A new winner is never settled on the strength of the old one's history.
+  p.unsettle_margin = 1.0;
+  EXPECT_FALSE(step({0.2, 0.8}).settled);
+}
+
 TEST(DecisionTrack, SmoothingDampsASingleOutlier) {
   SessionParams p;
   p.smoothing = 0.3;

@@ -34,6 +34,10 @@ struct SessionParams {
   int stability_window = 4;          // decisions the stability looks back on
   double full_margin = 0.3;          // smoothed margin giving full margin confidence
   double settle_confidence = 0.5;    // settled at or above this (calibrated on the eval's streams)
+  // A settled decision stays settled while its winner holds and its confidence stays within this of
+  // settle_confidence: more of the object narrows the margin a little (the top of a human and of a
+  // four-legged animal look alike less than their whole), which must not make the answer flicker.
+  double unsettle_margin = 0.2;
   size_t min_keypoints = 10;         // keypoint methods never settle on fewer keypoints
 };
 
