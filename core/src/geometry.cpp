@@ -306,8 +306,9 @@ LocalSurface local_surface(const NeighbourIndex& tree, uint32_t index, float r,
 
   // Least squares for z = 1/2 p1 x^2 + p2 xy + 1/2 p3 y^2 + p4 x + p5 y + p6 in the frame (e1, e2, n)
   // centred on the point; coordinates are divided by r to keep the normal equations well conditioned.
-  Eigen::Matrix<double, 6, 6> AtA = Eigen::Matrix<double, 6, 6>::Zero();
-  Eigen::Matrix<double, 6, 1> Atz = Eigen::Matrix<double, 6, 1>::Zero();
+  // The normal equations' lower triangle (all LDLT reads), accumulated by hand: Eigen's rank update
+  // of a fixed 6x6 is not inlined and costed a fifth of the whole pass.
+  double lower[21] = {}, atz[6] = {};
   const Eigen::Vector3d pd = p.cast<double>();
   const double inv_r = 1.0 / r;
   // Gaussian weights (sigma = r/2) favour the centre, so a crease at the edge of the neighbourhood
@@ -315,11 +316,19 @@ LocalSurface local_surface(const NeighbourIndex& tree, uint32_t index, float r,
   for (const Neighbour& q : nb) {
     const Eigen::Vector3d d = (pts[q.index].cast<double>() - pd) * inv_r;
     const double x = d.dot(e1), y = d.dot(e2), z = d.dot(n);
-    const double w = std::exp(-2.0 * d.squaredNorm());
-    Eigen::Matrix<double, 6, 1> row;
-    row << 0.5 * x * x, x * y, 0.5 * y * y, x, y, 1.0;
-    AtA.noalias() += w * row * row.transpose();
-    Atz.noalias() += w * row * z;
+    const double w = std::exp(-2.f * static_cast<float>(d.squaredNorm()));  // float exp: weights need no more
+    const double row[6] = {0.5 * x * x, x * y, 0.5 * y * y, x, y, 1.0};
+    for (int a = 0, k = 0; a < 6; ++a) {
+      const double wa = w * row[a];
+      atz[a] += wa * z;
+      for (int b = 0; b <= a; ++b) lower[k++] += wa * row[b];
+    }
+  }
+  Eigen::Matrix<double, 6, 6> AtA;
+  Eigen::Matrix<double, 6, 1> Atz;
+  for (int a = 0, k = 0; a < 6; ++a) {
+    Atz[a] = atz[a];
+    for (int b = 0; b <= a; ++b) AtA(a, b) = AtA(b, a) = lower[k++];
   }
   const Eigen::Matrix<double, 6, 1> c = AtA.ldlt().solve(Atz);
   if (!c.allFinite()) return s;

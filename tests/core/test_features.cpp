@@ -87,7 +87,7 @@ TEST(LocalSurfaces, SaddleShapeIndexIsZero) {
 TEST(LocalSurfaces, PlaneNormalsFaceTheViewpoint) {
   const Points pts = test::jitter(test::plane(0.2f, 0.01f), 0.0005f, 3);
   const KdTree tree(pts);
-  for (const Vec3 viewpoint : {Vec3(0.3f, -0.2f, 1.f), Vec3(0.f, 0.5f, -2.f)}) {
+  for (const Vec3& viewpoint : {Vec3(0.3f, -0.2f, 1.f), Vec3(0.f, 0.5f, -2.f)}) {
     const auto s = local_surfaces(tree, 0.03f, viewpoint, {});
     for (size_t i = 0; i < s.size(); ++i) {
       ASSERT_TRUE(s[i].valid);

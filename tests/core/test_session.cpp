@@ -82,7 +82,9 @@ TEST(ScanSession, StreamingEndsLikeTheWholeView) {
           // Same keypoints up to float summation order in the neighbourhood fits (tolerance: 1 in 20).
           EXPECT_NEAR(static_cast<double>(d.keypoints), static_cast<double>(whole->keypoints),
                       std::max(1.0, 0.05 * static_cast<double>(whole->keypoints)));
-          if (n == 1) EXPECT_EQ(d.winner, whole->winner);
+          if (n == 1) {
+            EXPECT_EQ(d.winner, whole->winner);
+          }
         }
       }
     }
