@@ -80,39 +80,53 @@ Expected<Eigen::VectorXf> vfh(const Cloud& cloud, const GlobalDescriptorParams& 
   // Each normal depends only on its own neighbourhood: identical for any number of threads. One
   // thread takes the serial estimator (same arithmetic, ~15% faster than the OpenMP one on 1 thread).
   PclNormals::Ptr normals(new PclNormals);
-  auto estimate = [&](auto& ne) {
-    ne.setInputCloud(pc);
-    ne.setSearchMethod(tree);
-    ne.setRadiusSearch(radius);
-    if (cloud.sensor) ne.setViewPoint(cloud.sensor->x(), cloud.sensor->y(), cloud.sensor->z());
-    ne.compute(*normals);
-  };
-  if (params.threads == 1) {
-    pcl::NormalEstimation<pcl::PointXYZ, pcl::Normal> ne;
-    estimate(ne);
-  } else {
-    pcl::NormalEstimationOMP<pcl::PointXYZ, pcl::Normal> ne(static_cast<unsigned>(std::max(0, params.threads)));
-    estimate(ne);
-  }
-  if (normals->size() != pc->size()) return internal_error("vfh: normal estimation failed");
-
-  // Undefined normals (< 3 neighbours) would turn VFH's sums into NaN: leave their points out through
-  // the index list (same result as a filtered copy, without rebuilding the search tree).
-  const Eigen::Vector3d c = centroid(cloud.points);
   pcl::IndicesPtr kept(new pcl::Indices);
-  kept->reserve(pc->size());
-  for (size_t i = 0; i < pc->size(); ++i) {
-    pcl::Normal& n = (*normals)[i];
-    if (!std::isfinite(n.normal_x) || !std::isfinite(n.normal_y) || !std::isfinite(n.normal_z)) continue;
-    if (!cloud.sensor) {  // no viewpoint: orient away from the centroid
-      const Eigen::Vector3d out = cloud.points[i].cast<double>() - c;
-      if (out.dot(Eigen::Vector3d(n.normal_x, n.normal_y, n.normal_z)) < 0) {
-        n.normal_x = -n.normal_x;
-        n.normal_y = -n.normal_y;
-        n.normal_z = -n.normal_z;
-      }
+  const Eigen::Vector3d c = centroid(cloud.points);
+  auto estimate_normals = [&](float r) {
+    auto estimate = [&](auto& ne) {
+      ne.setInputCloud(pc);
+      ne.setSearchMethod(tree);
+      ne.setRadiusSearch(r);
+      if (cloud.sensor) ne.setViewPoint(cloud.sensor->x(), cloud.sensor->y(), cloud.sensor->z());
+      ne.compute(*normals);
+    };
+    if (params.threads == 1) {
+      pcl::NormalEstimation<pcl::PointXYZ, pcl::Normal> ne;
+      estimate(ne);
+    } else {
+      pcl::NormalEstimationOMP<pcl::PointXYZ, pcl::Normal> ne(static_cast<unsigned>(std::max(0, params.threads)));
+      estimate(ne);
     }
-    kept->push_back(static_cast<pcl::index_t>(i));
+    // Undefined normals (< 3 neighbours) would turn VFH's sums into NaN: leave their points out
+    // through the index list (same result as a filtered copy, without rebuilding the search tree).
+    kept->clear();
+    if (normals->size() != pc->size()) return;
+    kept->reserve(pc->size());
+    for (size_t i = 0; i < pc->size(); ++i) {
+      pcl::Normal& n = (*normals)[i];
+      if (!std::isfinite(n.normal_x) || !std::isfinite(n.normal_y) || !std::isfinite(n.normal_z)) continue;
+      if (!cloud.sensor) {  // no viewpoint: orient away from the centroid
+        const Eigen::Vector3d out = cloud.points[i].cast<double>() - c;
+        if (out.dot(Eigen::Vector3d(n.normal_x, n.normal_y, n.normal_z)) < 0) {
+          n.normal_x = -n.normal_x;
+          n.normal_y = -n.normal_y;
+          n.normal_z = -n.normal_z;
+        }
+      }
+      kept->push_back(static_cast<pcl::index_t>(i));
+    }
+  };
+  estimate_normals(radius);
+  if (normals->size() != pc->size()) return internal_error("vfh: normal estimation failed");
+  // A fixed radius too small for a sparse scan (a far or large object) leaves most points without a
+  // normal: then the density decides, as with normal_radius_m <= 0, rather than failing the scan.
+  if (params.normal_radius_m > 0 && kept->size() * 2 < pc->size()) {
+    const float automatic = automatic_normal_radius(*pc, *tree);
+    if (automatic > radius) {
+      radius = automatic;
+      estimate_normals(radius);
+      if (normals->size() != pc->size()) return internal_error("vfh: normal estimation failed");
+    }
   }
   normals->is_dense = kept->size() == pc->size();
   if (kept->size() < static_cast<size_t>(kMinGlobalDescriptorPoints))

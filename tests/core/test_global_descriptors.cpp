@@ -139,9 +139,29 @@ TEST(Vfh, InvalidInputIsAnError) {
   Cloud same;
   same.points.assign(50, Vec3(0.1f, 0.2f, 1.0f));
   EXPECT_FALSE(vfh(same).ok());
-  auto tiny_radius = vfh(cloud, {.normal_radius_m = 1e-5f});  // no point has 3 neighbours
-  ASSERT_FALSE(tiny_radius.ok());
-  EXPECT_EQ(tiny_radius.error().code, ErrorCode::kInvalidArgument);
+  // Isolated pairs: even the density's radius (4 x the 1 mm spacing) gives no point 3 neighbours.
+  Cloud pairs;
+  for (int i = 0; i < 40; ++i) {
+    pairs.points.push_back(Vec3(float(i), 0.f, 1.f));
+    pairs.points.push_back(Vec3(float(i) + 0.001f, 0.f, 1.f));
+  }
+  auto no_normals = vfh(pairs, {.normal_radius_m = 0.03f});
+  ASSERT_FALSE(no_normals.ok());
+  EXPECT_EQ(no_normals.error().code, ErrorCode::kInvalidArgument);
+  EXPECT_NE(no_normals.error().message.find("have a normal"), std::string::npos) << no_normals.error().message;
+}
+
+TEST(Vfh, AFixedRadiusTooSmallForTheDensityFallsBackToTheAutomaticOne) {
+  const Cloud cloud = single_view(Shape::kSphere, 2000, 6);
+  auto tiny_radius = vfh(cloud, {.normal_radius_m = 1e-5f});  // no point has 3 neighbours within it
+  ASSERT_TRUE(tiny_radius.ok()) << tiny_radius.error().message;
+  auto automatic = vfh(cloud, {.normal_radius_m = 0});
+  ASSERT_TRUE(automatic.ok());
+  EXPECT_EQ(*tiny_radius, *automatic);
+  // A radius that suits the density is used as given.
+  auto fixed = vfh(cloud, {.normal_radius_m = 0.03f});
+  ASSERT_TRUE(fixed.ok());
+  EXPECT_NE(*fixed, *automatic);
 }
 
 // ---- ESF

@@ -30,10 +30,12 @@ struct GlobalDescriptorParams {
 // Viewpoint Feature Histogram (Rusu et al. 2010) via pcl::VFHEstimation, bins normalised as PCL does
 // (each of the first four 45-bin blocks sums to ~100, the viewpoint block to 100).
 // Normals: PCA over normal_radius_m, oriented toward cloud.sensor when set, else away from the
-// centroid; points whose normal is undefined (< 3 neighbours) are dropped. The viewpoint component
+// centroid; points whose normal is undefined (< 3 neighbours) are dropped. When a fixed
+// normal_radius_m leaves more than half the points without a normal (a sparse scan), the automatic
+// radius is used instead if it is larger. The viewpoint component
 // uses cloud.sensor, else the origin (PCL's default: clouds in the sensor frame).
 // Errors (kInvalidArgument): fewer than kMinGlobalDescriptorPoints points, NaN/Inf coordinates, all
-// points coincident, or too few points with a defined normal (radius too small for the density).
+// points coincident, or too few points with a defined normal even at the automatic radius.
 // Never returns a vector with NaN or Inf.
 Expected<Eigen::VectorXf> vfh(const Cloud& cloud, const GlobalDescriptorParams& params = {});
 
