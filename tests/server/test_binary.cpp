@@ -54,6 +54,25 @@ int FreePort() {
   return ntohs(addr.sin_port);
 }
 
+// GET http://127.0.0.1:port/metrics, the body ("" when the port does not answer).
+std::string Metrics(int port) {
+  int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  addr.sin_port = htons(static_cast<uint16_t>(port));
+  std::string out;
+  if (::connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) == 0) {
+    const std::string req = "GET /metrics HTTP/1.0\r\nHost: 127.0.0.1\r\n\r\n";
+    if (::write(fd, req.data(), req.size()) == static_cast<ssize_t>(req.size())) {
+      char buf[4096];
+      for (ssize_t n; (n = ::read(fd, buf, sizeof buf)) > 0;) out.append(buf, static_cast<size_t>(n));
+    }
+  }
+  ::close(fd);
+  return out;
+}
+
 // The server as a child process, its stdout+stderr in a file.
 class Process {
  public:
@@ -150,6 +169,14 @@ TEST(Binary, ServesUntilSigtermThenClosesTheStore) {
   // An open scan session when SIGTERM arrives may finish its work.
   grpc::ClientContext sctx;
   auto stream = stub->StreamClassify(&sctx);
+  // Only once the server holds the stream (its handler counts it), so that the stream is in flight
+  // rather than refused because it arrived after shutdown began.
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (Metrics(metrics_port).find("glimpse_active_streams{method=\"StreamClassify\"} 1") == std::string::npos &&
+         std::chrono::steady_clock::now() < until)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  ASSERT_NE(Metrics(metrics_port).find("glimpse_active_streams{method=\"StreamClassify\"} 1"), std::string::npos)
+      << Metrics(metrics_port);
   p.Signal(SIGTERM);
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
   v1::ScanChunk chunk;
