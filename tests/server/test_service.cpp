@@ -160,7 +160,9 @@ TEST(Train, DeadlineStopsTrainingAndStoresNothing) {
   Harness h;
   h.behaviour.train_waits_for_cancel = true;
   grpc::ClientContext ctx;
-  ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::milliseconds(300));
+  // Long enough for the upload to reach training even under a sanitizer on a busy machine (at 300 ms
+  // the deadline could pass before train started: right status, but not the case this test is about).
+  ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::milliseconds(1500));
   auto stream = h.stub->Train(&ctx);
   v1::TrainRequest header;
   header.mutable_header()->set_model_name("m");
