@@ -388,11 +388,12 @@ Expected<EvalResult> run_evaluation(const std::vector<EvalObject>& objects, cons
       Cloud part;
       part.sensor = cloud.sensor;
       for (size_t begin = 0; begin < order.size(); begin += chunk) {
+        const size_t end = std::min(order.size(), begin + chunk);
         part.points.clear();
-        for (size_t i = begin; i < std::min(order.size(), begin + chunk); ++i) part.points.push_back(cloud.points[order[i]]);
+        for (size_t i = begin; i < end; ++i) part.points.push_back(cloud.points[order[i]]);
         auto d = (*session)->add(part);
         if (!d.ok()) break;
-        t.visible_fraction.push_back(double(std::min(order.size(), begin + chunk)) / double(std::max<size_t>(1, full[o].size())));
+        t.visible_fraction.push_back(double(end) / double(std::max<size_t>(1, full[o].size())));
         t.winners.push_back(d->winner >= 0 ? fold_to_ours[static_cast<size_t>(fold)][static_cast<size_t>(d->winner)] : -1);
         t.confidence.push_back(d->confidence);
         t.settled.push_back(d->settled ? 1 : 0);

@@ -41,6 +41,11 @@ size_t stored_count() {
   return model() ? std::max<size_t>(1, model()->stats.clouds * (1 + TrainParams{}.partial_prefixes.size())) : 100;
 }
 
+double median(std::vector<double> v) {
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+
 double& pcl_median_ms() {
   static double ms = 0;
   return ms;
@@ -67,10 +72,7 @@ void BM_PclVfhPipeline(benchmark::State& state) {
     benchmark::DoNotOptimize(best);
     times.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
   }
-  if (!times.empty()) {
-    std::nth_element(times.begin(), times.begin() + static_cast<std::ptrdiff_t>(times.size() / 2), times.end());
-    pcl_median_ms() = times[times.size() / 2];
-  }
+  if (!times.empty()) pcl_median_ms() = median(times);
   state.counters["stored"] = static_cast<double>(db.size());
 }
 // Registered first so that every classify run can report its ratio to it.
@@ -98,10 +100,7 @@ void BM_Classify(benchmark::State& state) {
     times.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
   }
   state.counters["keypoints"] = static_cast<double>(keypoints);
-  if (!times.empty() && pcl_median_ms() > 0) {
-    std::nth_element(times.begin(), times.begin() + static_cast<std::ptrdiff_t>(times.size() / 2), times.end());
-    state.counters["x_pcl_vfh"] = times[times.size() / 2] / pcl_median_ms();
-  }
+  if (!times.empty() && pcl_median_ms() > 0) state.counters["x_pcl_vfh"] = median(times) / pcl_median_ms();
 }
 BENCHMARK(BM_Classify)->DenseRange(0, static_cast<int>(std::size(kAllMethods)) - 1)->Unit(benchmark::kMillisecond);
 
