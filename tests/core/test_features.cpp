@@ -1,8 +1,11 @@
 // Local geometry, keypoints and the 12-D descriptor on analytic shapes (sec. 2.2-2.3, 3.2).
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
+#include <Eigen/QR>
 #include <cmath>
+#include <random>
 
 #include "glimpse/descriptor.h"
 #include "glimpse/features.h"
@@ -111,6 +114,72 @@ TEST(LocalSurfaces, PropagationOrientsASphereConsistently) {
   EXPECT_EQ(outward, valid) << "every component is turned outward";
 }
 
+// The textbook fit local_surface must agree with: two-pass PCA, exact Gaussian weights, the full
+// weighted design matrix solved by column-pivoting QR, all in double precision.
+LocalSurface reference_surface(const Points& pts, uint32_t index, float r, const Vec3& viewpoint) {
+  LocalSurface s;
+  std::vector<uint32_t> nb;
+  for (uint32_t j = 0; j < pts.size(); ++j)
+    if ((pts[j] - pts[index]).squaredNorm() <= r * r) nb.push_back(j);
+  if (nb.size() < 8) return s;
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  for (uint32_t j : nb) c += pts[j].cast<double>();
+  c /= static_cast<double>(nb.size());
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (uint32_t j : nb) cov += (pts[j].cast<double>() - c) * (pts[j].cast<double>() - c).transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
+  Eigen::Vector3d n = es.eigenvectors().col(0);
+  const Eigen::Vector3d p = pts[index].cast<double>();
+  if (n.dot(viewpoint.cast<double>() - p) < 0) n = -n;
+  const Eigen::Vector3d e1 = es.eigenvectors().col(2), e2 = n.cross(e1);
+  Eigen::MatrixXd A(nb.size(), 6);
+  Eigen::VectorXd z(nb.size());
+  for (size_t k = 0; k < nb.size(); ++k) {
+    const Eigen::Vector3d d = (pts[nb[k]].cast<double>() - p) / r;
+    const double x = d.dot(e1), y = d.dot(e2), sw = std::sqrt(std::exp(-2 * d.squaredNorm()));
+    A.row(static_cast<Eigen::Index>(k)) << 0.5 * x * x, x * y, 0.5 * y * y, x, y, 1;
+    A.row(static_cast<Eigen::Index>(k)) *= sw;
+    z[static_cast<Eigen::Index>(k)] = sw * d.dot(n);
+  }
+  const Eigen::VectorXd q = A.colPivHouseholderQr().solve(z);
+  const float p1 = float(q[0] / r), p2 = float(q[1] / r), p3 = float(q[2] / r), p4 = float(q[3]), p5 = float(q[4]);
+  const Eigen::Vector2f k = principal_curvatures(p1, p2, p3, p4, p5);
+  const Eigen::Vector2f l = harris_eigenvalues(p1, p2, p3, p4, p5);
+  s.normal = n.cast<float>();
+  s.k1 = k[0], s.k2 = k[1], s.lambda_min = l[0], s.lambda_max = l[1];
+  s.valid = true;
+  // Where the two smallest PCA axes nearly tie the normal is ill-defined: callers skip such points.
+  s.neighbours = (es.eigenvalues()[1] - es.eigenvalues()[0]) > 1e-3 * es.eigenvalues()[2] ? 1 : 0;
+  return s;
+}
+
+TEST(LocalSurfaces, AgreeWithATextbookFit) {
+  // A noisy scene of flat faces, edges, corners, a ball and a thin post, seen from one side.
+  Points pts = test::jitter(test::cube(0.3f, 0.01f), 0.0008f, 11);
+  for (const Vec3& q : test::sphere(0.08f, 3000, Vec3(0.15f, 0.15f, 0.45f))) pts.push_back(q);
+  for (const Vec3& q : test::cylinder(0.02f, 0.4f, 0.006f)) pts.push_back(q + Vec3(0.45f, 0.1f, 0.f));
+  const Vec3 viewpoint(1.2f, 0.9f, 1.1f);
+  const Cloud cloud = clean({pts, viewpoint}, 0, nullptr);
+  const KdTree tree(cloud.points);
+  const float r = 0.03f;
+  const auto fast = local_surfaces(tree, r, viewpoint, {});
+  size_t compared = 0;
+  for (uint32_t i = 0; i < cloud.points.size(); i += 7) {
+    const LocalSurface ref = reference_surface(cloud.points, i, r, viewpoint);
+    ASSERT_EQ(fast[i].valid, ref.valid) << "point " << i;
+    if (!ref.valid || ref.neighbours == 0) continue;
+    ++compared;
+    EXPECT_GT(fast[i].normal.dot(ref.normal), 1 - 1e-5f) << "point " << i;
+    // Curvatures to 0.1 % of their value or of 1/r; Harris eigenvalues likewise in 1/r^2.
+    const float k_tol = 1e-3f / r, l_tol = 1e-3f / (r * r);
+    EXPECT_NEAR(fast[i].k1, ref.k1, k_tol + 1e-3f * std::abs(ref.k1)) << "point " << i;
+    EXPECT_NEAR(fast[i].k2, ref.k2, k_tol + 1e-3f * std::abs(ref.k2)) << "point " << i;
+    EXPECT_NEAR(fast[i].lambda_min, ref.lambda_min, l_tol + 1e-3f * ref.lambda_min) << "point " << i;
+    EXPECT_NEAR(fast[i].lambda_max, ref.lambda_max, l_tol + 1e-3f * ref.lambda_max) << "point " << i;
+  }
+  EXPECT_GT(compared, cloud.points.size() / 8) << "most sampled points have a well-defined normal";
+}
+
 TEST(Keypoints, PlaneHasNone) {
   Cloud c{test::jitter(test::plane(0.3f, 0.01f), 0.0003f, 7), Vec3(0, 0, 1)};
   auto f = extract(c);
@@ -155,6 +224,44 @@ TEST(Keypoints, RadiiGrowMonotonically) {
     for (size_t j = i + 1; j < f->keypoints.size(); ++j)
       EXPECT_GT((f->keypoints[i].position - f->keypoints[j].position).norm(),
                 std::max(f->keypoints[i].characteristic_radius, f->diagnostics.support_radius_m));
+}
+
+TEST(Boundary, GapTestAgreesWithMeasuredAngles) {
+  // A point at the origin of a tilted disc of random neighbours with one empty sector: the largest
+  // angular gap measured with atan2 must decide exactly as is_boundary_point's arctangent-free test.
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> unit(0.f, 1.f);
+  const Vec3 normal = Vec3(0.3f, -0.2f, 1.f).normalized();
+  const Vec3 u = normal.unitOrthogonal(), v = normal.cross(u);
+  size_t compared = 0, boundaries = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const float gap = unit(rng) * 1.6f * kPi, start = unit(rng) * 2 * kPi;
+    const int n = 4 + static_cast<int>(unit(rng) * 40);
+    Points pts{Vec3::Zero()};
+    std::vector<float> angles;
+    for (int i = 0; i < n; ++i) {
+      const float t = start + gap + unit(rng) * (2 * kPi - gap), rho = 0.1f + 0.8f * unit(rng);
+      pts.push_back(rho * (std::cos(t) * u + std::sin(t) * v));
+      angles.push_back(std::atan2(std::sin(t), std::cos(t)));
+    }
+    if (trial % 3 == 0) pts.push_back(pts[1] * 0.37f), angles.push_back(angles[0]);  // same direction twice
+    std::sort(angles.begin(), angles.end());
+    float measured = angles.front() + 2 * kPi - angles.back();
+    for (size_t i = 1; i < angles.size(); ++i) measured = std::max(measured, angles[i] - angles[i - 1]);
+    const KdTree tree(pts);
+    std::vector<Neighbour> scratch;
+    for (float threshold : {kPi / 4, kPi / 2, 3 * kPi / 4, 1.25f * kPi}) {
+      if (std::abs(measured - threshold) < 1e-3f) continue;  // too close to call in single precision
+      ++compared;
+      const bool expected = measured > threshold;
+      boundaries += expected;
+      EXPECT_EQ(is_boundary_point(tree, 0, normal, 1.f, threshold, scratch), expected)
+          << "trial " << trial << ": gap " << measured << " rad, threshold " << threshold;
+    }
+  }
+  EXPECT_GT(compared, 1500u);
+  EXPECT_GT(boundaries, compared / 4) << "both answers are exercised";
+  EXPECT_LT(boundaries, 3 * compared / 4);
 }
 
 TEST(Keypoints, BoundaryOfAViewGivesNone) {

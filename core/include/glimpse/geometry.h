@@ -108,7 +108,7 @@ class VoxelIndex final : public NeighbourIndex {
 
 // Median distance from a point to its k-th nearest other point (over a deterministic sample of at
 // most `sample` points); 0 for fewer than 2 points. k = 1 gives the median spacing.
-float median_knn_distance(const NeighbourIndex& tree, size_t k, size_t sample = 1000);
+float median_knn_distance(const NeighbourIndex& tree, size_t k, size_t sample = 300);
 
 // ---- Local surfaces ------------------------------------------------------------------------------
 
