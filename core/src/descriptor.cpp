@@ -38,8 +38,11 @@ std::array<float, 8> pfh8(const std::vector<Vec3>& points, const std::vector<Vec
       // eq. 6 (with alpha = v . n_t as in Rusu's definition the paper cites).
       const float alpha = v.dot(nt);
       const float phi = u.dot(d);
-      const float theta = std::atan2(w.dot(nt), u.dot(nt));
-      const int bin = (alpha >= 0 ? 4 : 0) + (phi >= 0 ? 2 : 0) + (theta >= 0 ? 1 : 0);
+      // theta = atan2(w . n_t, u . n_t) >= 0, told from the signs alone (atan2 keeps the sign of
+      // its first argument, -0 included, and gives -pi for (-0, negative)).
+      const float ty = w.dot(nt), tx = u.dot(nt);
+      const bool theta_nonnegative = ty > 0 || (ty == 0 && (!std::signbit(ty) || !std::signbit(tx)));
+      const int bin = (alpha >= 0 ? 4 : 0) + (phi >= 0 ? 2 : 0) + (theta_nonnegative ? 1 : 0);
       h[bin] += 1.f;
       ++pairs;
     }

@@ -36,7 +36,7 @@ double convex_hull_volume(std::span<const Vec3> points) {
   FILE* sink = quiet_sink();
   if (!sink) return 0.0;
   qh_zero(qh, sink);
-  char options[] = "qhull FA Qt Pp";
+  char options[] = "qhull FA Pp";
   const int exitcode = qh_new_qhull(qh, 3, static_cast<int>(points.size()), coords.data(), False, options,
                                     nullptr, sink);
   const double volume = exitcode == 0 ? qh->totvol : 0.0;

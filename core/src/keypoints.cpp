@@ -45,18 +45,26 @@ std::vector<Keypoint> characteristic_scale_keypoints(const NeighbourIndex& tree,
                 grid_cell<int32_t>(p.z(), claim_max)};
   };
   std::unordered_map<Cell, std::vector<uint32_t>, CellHash> accepted;  // cell -> keypoint slots
+  auto inside_claim = [&](uint32_t k, const Vec3& p) {
+    // Below the support radius r curvature is not resolved, so a claim is never smaller than r.
+    const float claim = std::max(keypoints[k].characteristic_radius, r);
+    return (keypoints[k].position - p).squaredNorm() <= claim * claim;
+  };
   auto claimed = [&](const Vec3& p) {
+    // A handful of keypoints (the usual case) are cheaper to scan than 27 cells to look up.
+    if (keypoints.size() <= 64) {
+      for (uint32_t k = 0; k < keypoints.size(); ++k)
+        if (inside_claim(k, p)) return true;
+      return false;
+    }
     const Cell c = cell_of(p);
     for (int dx = -1; dx <= 1; ++dx)
       for (int dy = -1; dy <= 1; ++dy)
         for (int dz = -1; dz <= 1; ++dz) {
           const auto it = accepted.find({c.x + dx, c.y + dy, c.z + dz});
           if (it == accepted.end()) continue;
-          for (uint32_t k : it->second) {
-            // Below the support radius r curvature is not resolved, so a claim is never smaller than r.
-            const float claim = std::max(keypoints[k].characteristic_radius, r);
-            if ((keypoints[k].position - p).squaredNorm() <= claim * claim) return true;
-          }
+          for (uint32_t k : it->second)
+            if (inside_claim(k, p)) return true;
         }
     return false;
   };
