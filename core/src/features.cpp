@@ -25,7 +25,9 @@ Expected<Features> extract(const Cloud& input, const FeatureParams& params, cons
   auto stopped = [&] { return cancel && cancel(); };
   Features f;
   FeatureDiagnostics& diag = f.diagnostics;
+  auto t0 = std::chrono::steady_clock::now();
   f.cloud = clean(input, params.duplicate_tolerance_m, &diag.clean);
+  diag.clean_ms = ms_since(t0);
   if (f.cloud.points.empty())
     return invalid_argument("the cloud has no finite point (" + std::to_string(diag.clean.non_finite) +
                             " NaN/Inf points)");
@@ -34,14 +36,16 @@ Expected<Features> extract(const Cloud& input, const FeatureParams& params, cons
                             " usable points after cleaning; at least " + std::to_string(params.min_points) +
                             " are needed");
 
-  auto t0 = std::chrono::steady_clock::now();
+  t0 = std::chrono::steady_clock::now();
   const KdTree tree(f.cloud.points);
   const float r = support_radius(tree, params.surface);
   diag.support_radius_m = r;
+  diag.index_ms = ms_since(t0);
   if (!(r > 0)) {
     diag.note = "no support radius: every point coincides with another";
     return f;
   }
+  t0 = std::chrono::steady_clock::now();
   f.surfaces = local_surfaces(tree, r, f.cloud.sensor, params.surface, cancel);
   if (stopped()) return cancelled("feature extraction cancelled");
   const std::vector<LocalSurface>& surfaces = f.surfaces;
