@@ -1,8 +1,8 @@
 // Per-chunk latency of a ScanSession (issue 6): 1k-point chunks of one object revealed top-down, from
 // the 1st to the 50th chunk. The cost of a chunk must depend on the chunk, not on what was
 // accumulated. Goal: the 50th chunk <= 1.5x the 5th (compare the medians of one run).
-// Measured (2-core VM): BoK 50th / 5th = 9.79 / 7.98 ms = 1.23; fusion, the mean of chunks 41-50 over
-// that of chunks 5-14 = 132 / 101 ms = 1.31 (BM_SessionWindow).
+// Measured (2-core VM): BoK 50th / 5th = 10.0 / 8.74 ms = 1.14; fusion, the mean of chunks 41-50 over
+// that of chunks 5-14 = 132 / 111 ms = 1.18 (BM_SessionWindow).
 #include <benchmark/benchmark.h>
 
 #include "../core/synthetic.h"
