@@ -219,16 +219,41 @@ float median_knn_distance(const NeighbourIndex& tree, size_t k, size_t sample) {
   if (pts.size() < 2 || k == 0) return 0.f;
   k = std::min(k, pts.size() - 1);
   const size_t step = std::max<size_t>(1, pts.size() / std::max<size_t>(sample, 1));
-  std::vector<float> d;
+  std::vector<size_t> at;
+  for (size_t i = 0; i < pts.size(); i += step) at.push_back(i);
   std::vector<Neighbour> nn;
-  for (size_t i = 0; i < pts.size(); i += step) {
+  auto kth = [&](size_t i) {
     tree.nearest(pts[i], k + 1, nn);  // the point itself comes first
-    if (nn.size() == k + 1) d.push_back(std::sqrt(nn[k].distance_sq));
+    return std::sqrt(nn[k].distance_sq);
+  };
+  auto median = [](std::vector<float>& v) {
+    auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+    std::nth_element(v.begin(), mid, v.end());
+    return *mid;
+  };
+  // A k-nearest search costs about two radius searches, so: the exact k-th distance at a few samples
+  // gives a radius R a little above the typical one; at every sample the k-th smallest distance
+  // within R is exact, and a sample with fewer than k + 1 points within R has its k-th distance
+  // beyond R. While those are fewer than half, the median is exactly the one of the k-th distances.
+  std::vector<float> pilot;
+  for (size_t j = 0; j < at.size(); j += std::max<size_t>(1, at.size() / 16)) pilot.push_back(kth(at[j]));
+  const float R = 1.2f * median(pilot);
+  std::vector<float> d;
+  d.reserve(at.size());
+  auto closer = [](const Neighbour& a, const Neighbour& b) { return a.distance_sq < b.distance_sq; };
+  for (size_t i : at) {
+    tree.radius(pts[i], R, nn);
+    if (nn.size() < k + 1) {
+      d.push_back(std::numeric_limits<float>::infinity());
+      continue;
+    }
+    std::nth_element(nn.begin(), nn.begin() + static_cast<std::ptrdiff_t>(k), nn.end(), closer);
+    d.push_back(std::sqrt(nn[k].distance_sq));
   }
-  if (d.empty()) return 0.f;
-  auto mid = d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2);
-  std::nth_element(d.begin(), mid, d.end());
-  return *mid;
+  const float m = median(d);
+  if (std::isfinite(m)) return m;
+  for (size_t j = 0; j < at.size(); ++j) d[j] = kth(at[j]);
+  return median(d);
 }
 
 float support_radius(const NeighbourIndex& tree, const SurfaceParams& params) {

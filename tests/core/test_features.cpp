@@ -180,6 +180,40 @@ TEST(LocalSurfaces, AgreeWithATextbookFit) {
   EXPECT_GT(compared, cloud.points.size() / 8) << "most sampled points have a well-defined normal";
 }
 
+// The median over a strided sample of each point's distance to its k-th nearest other point, by
+// brute force.
+float brute_median_knn(const Points& pts, size_t k, size_t sample) {
+  const size_t step = std::max<size_t>(1, pts.size() / sample);
+  std::vector<float> kth;
+  for (size_t i = 0; i < pts.size(); i += step) {
+    std::vector<float> d;
+    for (const Vec3& q : pts) d.push_back((q - pts[i]).norm());
+    std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(k), d.end());
+    kth.push_back(d[k]);  // d[0] is the point itself
+  }
+  std::nth_element(kth.begin(), kth.begin() + static_cast<std::ptrdiff_t>(kth.size() / 2), kth.end());
+  return kth[kth.size() / 2];
+}
+
+TEST(SupportRadius, MedianKthNeighbourDistanceIsExact) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> unit(0.f, 1.f);
+  // An even surface, and one where the few samples that set the search radius sit in dense blobs
+  // while most samples are sparse (the radius then misses most k-th neighbours: the exact fallback).
+  Points even = test::jitter(test::cube(0.3f, 0.012f), 0.001f, 2);
+  Points uneven(3200);
+  for (size_t i = 0; i < uneven.size(); ++i)
+    uneven[i] = i % 200 < 40 ? Vec3(0.01f * unit(rng), 0.01f * unit(rng), float(i / 200))
+                             : Vec3(unit(rng), unit(rng), unit(rng) * 16);
+  for (const Points* pts : {&even, &uneven}) {
+    const KdTree tree(*pts);
+    for (size_t k : {1, 8, 30}) {
+      const float expected = brute_median_knn(*pts, k, 300);
+      EXPECT_NEAR(median_knn_distance(tree, k, 300), expected, 1e-5f * expected) << "k = " << k;
+    }
+  }
+}
+
 TEST(Keypoints, PlaneHasNone) {
   Cloud c{test::jitter(test::plane(0.3f, 0.01f), 0.0003f, 7), Vec3(0, 0, 1)};
   auto f = extract(c);
