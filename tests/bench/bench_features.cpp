@@ -1,11 +1,12 @@
 // Per-stage cost of feature extraction on a 10k-point single view, against the floor: one radius-
 // neighbourhood pass over the cloud (every point's neighbourhood must be visited at least once).
 // Goal (issue 3): the whole extraction within 2x that pass. Compare the medians in the same run.
-// Measured (2-core VM, 1 thread, ratio to the floor in the same run, median of 5 runs of 5
-// repetitions): floor 9.6 ms; local surfaces 1.39x; index + support radius 0.24x; keypoints 0.13x;
-// descriptors 0.10x; extract 19.3 ms = 1.97x (runs 1.90-2.04); 2 threads 1.24x. The per-point fit
-// is single-precision moments in vectorised loops, a Newton-step normal and a block 6x6 solve
-// (LocalSurfaces.AgreeWithATextbookFit checks it against a plain double-precision fit).
+// Measured (2-core VM, 1 thread, ratio to the floor in the same run; 10 runs of 5 repetitions):
+// floor 9.6-10.4 ms; local surfaces 1.38-1.45x; index + support radius 0.22-0.24x; keypoints 0.13x;
+// descriptors 0.11x; extract 19.3-20.1 ms = 1.91x median of the runs (1.57-2.18: the VM is noisy,
+// the margin thin); 2 threads 1.25x. The per-point fit is single-precision moments in vectorised
+// loops, a Newton-step normal and a block 6x6 solve (LocalSurfaces.AgreeWithATextbookFit checks it
+// against a plain double-precision fit).
 #include <benchmark/benchmark.h>
 
 #include "scene.h"
