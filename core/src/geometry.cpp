@@ -287,43 +287,6 @@ Eigen::Vector2f principal_curvatures(float p1, float p2, float p3, float p4, flo
 
 namespace {
 
-// PCA of a neighbourhood: centroid and eigenvectors (ascending eigenvalues) in double precision.
-struct Pca3 {
-  Eigen::Vector3d centroid;
-  Eigen::Matrix3d axes;  // columns: smallest (normal), middle, largest
-  bool ok = false;
-};
-
-Pca3 neighbourhood_pca(const Points& pts, const std::vector<Neighbour>& nb) {
-  Pca3 out;
-  if (nb.size() < 3) return out;
-  Eigen::Vector3d c = Eigen::Vector3d::Zero();
-  for (const Neighbour& n : nb) c += pts[n.index].cast<double>();
-  c /= static_cast<double>(nb.size());
-  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-  for (const Neighbour& n : nb) {
-    const Eigen::Vector3d d = pts[n.index].cast<double>() - c;
-    cov.noalias() += d * d.transpose();
-  }
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
-  es.computeDirect(cov);
-  out.centroid = c;
-  out.axes = es.eigenvectors();
-  out.ok = es.info() == Eigen::Success && out.axes.allFinite();
-  return out;
-}
-
-}  // namespace
-
-Vec3 pca_normal(const NeighbourIndex& tree, const Vec3& centre, float radius, std::vector<Neighbour>& scratch) {
-  tree.radius(centre, radius, scratch);
-  const Pca3 pca = neighbourhood_pca(tree.points(), scratch);
-  if (!pca.ok) return Vec3::Zero();
-  return pca.axes.col(0).normalized().cast<float>();
-}
-
-namespace {
-
 // exp(-2 s) for s in [0, 1], a neighbour's squared distance in units of r: (e^(-s/4))^8 with e^(-s/4)
 // from its degree-5 Taylor polynomial (relative error < 3e-6). Inline, so the weight loop vectorises.
 inline float gaussian_weight(float s) {
@@ -405,6 +368,23 @@ bool smallest_eigenvector(const Eigen::Matrix3d& C, Eigen::Vector3d& v) {
 }
 
 }  // namespace
+
+Vec3 pca_normal(const NeighbourIndex& tree, const Vec3& centre, float radius, std::vector<Neighbour>& scratch) {
+  tree.radius(centre, radius, scratch);
+  if (scratch.size() < 3) return Vec3::Zero();
+  const Points& pts = tree.points();
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  for (const Neighbour& n : scratch) c += pts[n.index].cast<double>();
+  c /= static_cast<double>(scratch.size());
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (const Neighbour& n : scratch) {
+    const Eigen::Vector3d d = pts[n.index].cast<double>() - c;
+    cov.noalias() += d * d.transpose();
+  }
+  Eigen::Vector3d normal;
+  if (!smallest_eigenvector(cov, normal)) return Vec3::Zero();
+  return normal.cast<float>();
+}
 
 LocalSurface local_surface(const NeighbourIndex& tree, uint32_t index, float r,
                            const std::optional<Vec3>& viewpoint, int min_neighbours,
