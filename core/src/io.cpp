@@ -195,13 +195,14 @@ using namespace io_detail;
 Expected<Mesh> read_mesh(const std::string& path) {
   try {
     const std::string ext = extension(path);
-    if (ext != ".off" && ext != ".obj" && ext != ".ply")
-      return invalid_argument(path + ": unknown mesh extension '" + ext + "' (want .off, .obj, .ply)");
+    if (ext != ".off" && ext != ".obj" && ext != ".ply" && ext != ".stl")
+      return invalid_argument(path + ": unknown mesh extension '" + ext + "' (want .off, .obj, .ply, .stl)");
     Expected<std::string> data = read_file(path);
     if (!data) return data.error();
     if (data->empty()) return data_loss(path + ": empty file");
     if (ext == ".off") return read_off(path, *data);
     if (ext == ".obj") return read_obj(path, *data);
+    if (ext == ".stl") return read_stl(path, *data);
     return read_ply(path, *data, /*vertices_only=*/false, nullptr);
   } catch (const std::bad_alloc&) {
     return resource_exhausted(path + ": out of memory while reading");
@@ -214,10 +215,10 @@ Expected<Cloud> read_cloud(const std::string& path) {
   try {
     const std::string ext = extension(path);
     const bool known = ext == ".pcd" || ext == ".ply" || ext == ".xyz" || ext == ".txt" ||
-                       ext == ".csv" || ext == ".off" || ext == ".obj";
+                       ext == ".csv" || ext == ".off" || ext == ".obj" || ext == ".stl";
     if (!known)
       return invalid_argument(path + ": unknown cloud extension '" + ext +
-                              "' (want .pcd, .ply, .xyz, .txt, .csv, .off, .obj)");
+                              "' (want .pcd, .ply, .xyz, .txt, .csv, .off, .obj, .stl)");
     Expected<std::string> data = read_file(path);
     if (!data) return data.error();
     if (data->empty()) return data_loss(path + ": empty file");
@@ -226,6 +227,7 @@ Expected<Cloud> read_cloud(const std::string& path) {
     Cloud cloud;
     Expected<Mesh> mesh = ext == ".ply"   ? read_ply(path, *data, true, &cloud.sensor)
                           : ext == ".off" ? read_off(path, *data)
+                          : ext == ".stl" ? read_stl(path, *data)
                                           : read_obj(path, *data);
     if (!mesh) return mesh.error();
     cloud.points = std::move(mesh->vertices);

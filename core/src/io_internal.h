@@ -66,6 +66,7 @@ bool parse_sensor_comment(std::string_view comment, Vec3& sensor);
 
 Expected<Mesh> read_off(const std::string& path, std::string_view text);
 Expected<Mesh> read_obj(const std::string& path, std::string_view text);
+Expected<Mesh> read_stl(const std::string& path, std::string_view data);  // binary or ASCII
 Expected<Mesh> read_ply(const std::string& path, std::string_view text, bool vertices_only,
                         std::optional<Vec3>* sensor);
 Expected<Cloud> read_pcd(const std::string& path, std::string_view text);

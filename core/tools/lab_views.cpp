@@ -28,7 +28,7 @@ int run_views(const ViewsOptions& o) {
     std::fprintf(stderr, "glimpse-lab views: %s\n", mesh.error().message.c_str());
     return 1;
   }
-  auto up = parse_up_axis(o.up);
+  auto up = parse_up(o.up);
   if (!up.ok()) {
     std::fprintf(stderr, "glimpse-lab views: --up: %s\n", up.error().message.c_str());
     return 2;

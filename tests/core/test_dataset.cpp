@@ -48,17 +48,83 @@ TEST_F(DatasetTest, ScanSortsByCategoryThenNumericIdAndReadsUpAxes) {
   EXPECT_EQ(ds->categories, (std::vector<std::string>{"chair", "human", "widget"}));
   ASSERT_EQ(ds->objects.size(), 4u);
   EXPECT_EQ(ds->objects[0].id, "7");
-  EXPECT_EQ(ds->objects[0].up, UpAxis::kNegX);
+  EXPECT_EQ(ds->objects[0].up, Vec3(-1, 0, 0));
   EXPECT_EQ(ds->objects[1].id, "2");  // 2 before 10: numeric order
-  EXPECT_EQ(ds->objects[1].up, UpAxis::kPosY);
+  EXPECT_EQ(ds->objects[1].up, Vec3(0, 1, 0));
   EXPECT_EQ(ds->objects[2].id, "10");
-  EXPECT_EQ(ds->objects[2].up, UpAxis::kPosZ);
+  EXPECT_EQ(ds->objects[2].up, Vec3(0, 0, 1));
   EXPECT_EQ(ds->objects[1].size.measure, CategorySize::kHeight);
   EXPECT_FLOAT_EQ(ds->objects[1].size.min_m, 1.55f);
   EXPECT_EQ(ds->objects[3].category, "widget");  // unknown category: documented default
   EXPECT_EQ(ds->objects[3].size.measure, CategorySize::kLargestExtent);
   EXPECT_FLOAT_EQ(ds->objects[3].size.min_m, 0.3f);
   EXPECT_FLOAT_EQ(ds->objects[3].size.max_m, 1.0f);
+  EXPECT_EQ(ds->unmatched_up_rows, 1u);  // 999
+  EXPECT_TRUE(ds->has_up_axes);
+  EXPECT_FALSE(ds->has_sizes);
+}
+
+TEST_F(DatasetTest, ManifestOfCategoryFileKeysVectorsSizesAndPoses) {
+  file("chair/psb_D1.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n");
+  file("chair/psb_D2.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n");
+  file("mechanic/abc_1.stl", "solid a\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\nendsolid a\n");
+  file("lamp/l1.off", kTallAlongY);
+  file("up_axis.csv", "# category/file,up\nchair/psb_D1.obj,-0.762 0.080 -0.642\nchair/psb_D2,+z\nmechanic/abc_1.stl,-y\n");
+  file("sizes.csv", "# category,height|extent,min_m,max_m\nlamp,height,0.30,0.60\nmechanic,extent,0.05,0.10,any-pose\nchair,height,0.4,0.5,upright\n");
+  Expected<Dataset> ds = scan_dataset(root_.string());
+  ASSERT_TRUE(ds.ok()) << ds.error().message;
+  ASSERT_EQ(ds->objects.size(), 4u);
+  EXPECT_TRUE(ds->has_sizes);
+  EXPECT_EQ(ds->unmatched_up_rows, 0u);
+  const DatasetObject& d1 = ds->objects[0];
+  EXPECT_EQ(d1.id, "psb_D1");
+  EXPECT_TRUE(d1.up.isApprox(Vec3(-0.762f, 0.080f, -0.642f).normalized()));
+  EXPECT_EQ(ds->objects[1].up, Vec3(0, 0, 1));
+  EXPECT_FLOAT_EQ(d1.size.max_m, 0.5f);  // the folder's row replaces the default chair range
+  EXPECT_FALSE(d1.size.any_pose);
+  EXPECT_EQ(ds->objects[2].category, "lamp");
+  EXPECT_EQ(ds->objects[2].size.measure, CategorySize::kHeight);
+  EXPECT_FLOAT_EQ(ds->objects[2].size.min_m, 0.3f);
+  EXPECT_EQ(ds->objects[3].up, Vec3(0, -1, 0));
+  EXPECT_TRUE(ds->objects[3].size.any_pose);
+  EXPECT_FLOAT_EQ(ds->objects[3].size.max_m, 0.1f);
+  // The tilted chair stands up: the listed vector becomes +z (its tip is the highest point).
+  Expected<Mesh> m = load_object(d1, 3);
+  ASSERT_TRUE(m.ok()) << m.error().message;
+  const Eigen::Matrix3f r = upright_rotation(d1.up);
+  EXPECT_TRUE((r * d1.up).isApprox(Vec3::UnitZ(), 1e-5f));
+}
+
+TEST_F(DatasetTest, DefaultsKnowTheFiveCategoriesAndThatPartsHaveNoUp) {
+  for (const CategorySize& c : default_category_sizes()) EXPECT_EQ(c.any_pose, c.category == "mechanic") << c.category;
+  EXPECT_FALSE(category_size("bicycle").any_pose);
+}
+
+TEST_F(DatasetTest, SizingByUnitOrCommonHeight) {
+  file("human/1.off", kTallAlongY);  // 2 units tall along +y
+  Expected<Dataset> ds = scan_dataset(root_.string());
+  ASSERT_TRUE(ds.ok()) << ds.error().message;
+  Expected<Mesh> cm = load_object(ds->objects[0], 1, {Sizing::kUnit, 0.01f});
+  ASSERT_TRUE(cm.ok());
+  EXPECT_NEAR(bounds(cm->vertices).extent().z(), 0.02f, 1e-6f);
+  Expected<Mesh> tall = load_object(ds->objects[0], 1, {Sizing::kHeight, 1.0f});
+  ASSERT_TRUE(tall.ok());
+  EXPECT_NEAR(bounds(tall->vertices).extent().z(), 1.0f, 1e-6f);
+}
+
+TEST_F(DatasetTest, BadSizeRowsNameFileAndLine) {
+  file("human/1.off", kTallAlongY);
+  for (const char* csv : {"# c\nhuman,height,1\n", "# c\nhuman,width,1,2\n", "# c\nhuman,height,2,1\n",
+                          "# c\nhuman,height,0,1\n", "# c\nhuman,height,1,2,sideways\n",
+                          "# c\nhuman,height,1,2\nhuman,height,1,2\n", "# c\n,height,1,2\n"}) {
+    SCOPED_TRACE(csv);
+    file("sizes.csv", csv);
+    Expected<Dataset> ds = scan_dataset(root_.string());
+    ASSERT_FALSE(ds.ok());
+    const std::string& msg = ds.error().message;
+    EXPECT_NE(msg.find("sizes.csv:"), std::string::npos) << msg;
+    EXPECT_TRUE(msg.find(":2:") != std::string::npos || msg.find(":3:") != std::string::npos) << msg;
+  }
 }
 
 TEST_F(DatasetTest, SizeTableCanBeOverridden) {
@@ -86,7 +152,8 @@ TEST_F(DatasetTest, MissingOrEmptyFolderNamesIt) {
 
 TEST_F(DatasetTest, BadUpAxisRowsNameFileAndLine) {
   file("human/1.off", kTallAlongY);
-  for (const char* csv : {"# c\n1,+w\n", "# c\n1\n", "# c\n,+z\n", "# c\n1,+z,2\n", "# c\n1,+z\n1,-z\n"}) {
+  for (const char* csv : {"# c\n1,+w\n", "# c\n1\n", "# c\n,+z\n", "# c\n1,+z,2\n", "# c\n1,+z\n1,-z\n",
+                          "# c\n1,0 0 0\n", "# c\nhuman/1.off,1 2\n"}) {
     SCOPED_TRACE(csv);
     file("up_axis.csv", csv);
     Expected<Dataset> ds = scan_dataset(root_.string());
@@ -153,7 +220,7 @@ TEST(Shrec07, AllHundredLoadUprightAtRealLifeSize) {
   size_t not_y = 0;
   for (const DatasetObject& o : ds->objects) {
     SCOPED_TRACE(o.path);
-    not_y += o.up != UpAxis::kPosY;
+    not_y += o.up != Vec3::UnitY();
     Expected<Mesh> m = load_object(o, 2024);
     ASSERT_TRUE(m.ok()) << m.error().message;
     EXPECT_GT(m->vertices.size(), 1000u);
@@ -166,6 +233,41 @@ TEST(Shrec07, AllHundredLoadUprightAtRealLifeSize) {
       EXPECT_GT(b.extent().z(), 0.8f * std::max(b.extent().x(), b.extent().y()));
   }
   EXPECT_EQ(not_y, 19u);
+}
+
+// ---- the second source: Princeton Shape Benchmark meshes and ABC CAD parts (research licence) ----
+
+std::string psb_dir() {
+  if (const char* env = std::getenv("GLIMPSE_PSB_DIR")) return env;
+  return GLIMPSE_SOURCE_DIR "/../shared/data/psb";
+}
+
+TEST(Psb, All150LoadUprightIncludingTiltedOnesAndBinaryStl) {
+  const std::string dir = psb_dir();
+  if (!fs::is_directory(dir)) GTEST_SKIP() << "PSB set not found at " << dir << " (set GLIMPSE_PSB_DIR)";
+  Expected<Dataset> ds = scan_dataset(dir);
+  ASSERT_TRUE(ds.ok()) << ds.error().message;
+  EXPECT_EQ(ds->categories, (std::vector<std::string>{"chair", "fourleg", "human", "mechanic", "table"}));
+  ASSERT_EQ(ds->objects.size(), 150u);
+  EXPECT_EQ(ds->unmatched_up_rows, 0u);
+  size_t tilted = 0, parts = 0;
+  for (const DatasetObject& o : ds->objects) {
+    SCOPED_TRACE(o.path);
+    tilted += o.up.cwiseAbs().maxCoeff() < 0.999f;
+    Expected<Mesh> m = load_object(o, 2024);
+    ASSERT_TRUE(m.ok()) << m.error().message;
+    const Bounds b = bounds(m->vertices);
+    EXPECT_NEAR(b.min.z(), 0.f, 1e-5f);
+    if (o.category == "human")  // upright people are taller than they are wide
+      EXPECT_GT(b.extent().z(), 0.8f * std::max(b.extent().x(), b.extent().y()));
+    if (o.category == "mechanic") {
+      ++parts;
+      EXPECT_TRUE(o.size.any_pose);
+      EXPECT_GT(m->faces.size(), 10u);
+    }
+  }
+  EXPECT_EQ(parts, 6u);
+  EXPECT_GE(tilted, 3u);  // the README lists chairs and tables of the D series 10-40 degrees off
 }
 
 }  // namespace

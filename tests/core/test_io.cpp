@@ -1,6 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <array>
 #include <bit>
+#include <limits>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -104,10 +106,10 @@ TEST_F(IoTest, EmptyCloudRoundTrips) {
 }
 
 TEST_F(IoTest, UnknownExtensionsAreErrors) {
-  Expected<Cloud> c = read_cloud(write("a.stl", "solid x\n"));
+  Expected<Cloud> c = read_cloud(write("a.las", "LASF"));
   ASSERT_FALSE(c.ok());
   EXPECT_EQ(c.error().code, ErrorCode::kInvalidArgument);
-  EXPECT_NE(c.error().message.find("a.stl"), std::string::npos);
+  EXPECT_NE(c.error().message.find("a.las"), std::string::npos);
   EXPECT_FALSE(read_mesh(write("b.pcd", "x")).ok());
   EXPECT_FALSE(write_cloud(path("c.las"), Cloud{}).ok());
 }
@@ -321,6 +323,103 @@ TEST_F(IoTest, MalformedInputsGiveErrorsNamingFileAndPlace) {
     }
     EXPECT_NE(message.find(bad.name), std::string::npos) << message;
     EXPECT_NE(message.find(bad.where), std::string::npos) << message;
+  }
+}
+
+// ---- STL ----
+
+// A binary STL of the given triangles (corners), header starting with "solid" as many exporters write.
+std::string binary_stl(const std::vector<std::array<Vec3, 3>>& triangles) {
+  std::string s = "solid exported by a CAD tool";
+  s.resize(80, ' ');
+  put(s, static_cast<uint32_t>(triangles.size()), false);
+  for (const auto& t : triangles) {
+    for (int a = 0; a < 3; ++a) put(s, 0.f, false);  // stored normal: ignored
+    for (const Vec3& c : t)
+      for (int a = 0; a < 3; ++a) put(s, c[a], false);
+    put(s, uint16_t{0}, false);
+  }
+  return s;
+}
+
+// A unit square pyramid: 4 sides and a base of 2 triangles, 5 distinct corners.
+std::vector<std::array<Vec3, 3>> pyramid_triangles() {
+  const Vec3 a(0, 0, 0), b(1, 0, 0), c(1, 1, 0), d(0, 1, 0), top(0.5f, 0.5f, 1);
+  return {{a, c, b}, {a, d, c}, {a, b, top}, {b, c, top}, {c, d, top}, {d, a, top}};
+}
+
+void expect_welded_pyramid(const Mesh& m) {
+  ASSERT_EQ(m.vertices.size(), 5u);  // 18 stored corners welded into 5 points
+  ASSERT_EQ(m.faces.size(), 6u);
+  EXPECT_EQ(m.vertices[4], Vec3(0.5f, 0.5f, 1.0f));
+  for (const auto& f : m.faces)
+    for (int k = 0; k < 3; ++k) EXPECT_LT(f[k], 5);
+  EXPECT_EQ(m.faces[2], Eigen::Vector3i(0, 2, 4));  // corners numbered as first met: a, c, b, d, top
+}
+
+TEST_F(IoTest, StlBinaryWithASolidHeaderIsReadAsBinary) {
+  const std::string p = write("part.stl", binary_stl(pyramid_triangles()));
+  Expected<Mesh> m = read_mesh(p);
+  ASSERT_TRUE(m.ok()) << m.error().message;
+  expect_welded_pyramid(*m);
+  Expected<Cloud> c = read_cloud(p);
+  ASSERT_TRUE(c.ok()) << c.error().message;
+  EXPECT_EQ(c->points.size(), 5u);
+  EXPECT_FALSE(c->sensor);
+}
+
+TEST_F(IoTest, StlAsciiWithSeveralSolidsAndUpperCase) {
+  std::string text = "solid pyramid\n";
+  const auto tris = pyramid_triangles();
+  for (size_t t = 0; t < tris.size(); ++t) {
+    if (t == 3) text += "endsolid pyramid\nSOLID second\n";
+    text += "  facet normal 0 0 0\n    outer loop\n";
+    for (const Vec3& v : tris[t]) text += "      vertex " + std::to_string(v.x()) + " " + std::to_string(v.y()) + " " + std::to_string(v.z()) + "\n";
+    text += "    endloop\n  endfacet\n";
+  }
+  text += "ENDSOLID second\n";
+  Expected<Mesh> m = read_mesh(write("part.STL", text));
+  ASSERT_TRUE(m.ok()) << m.error().message;
+  expect_welded_pyramid(*m);
+}
+
+TEST_F(IoTest, StlTrianglesThatCollapseAreDropped) {
+  auto tris = pyramid_triangles();
+  tris.push_back({Vec3(1, 1, 0), Vec3(1, 1, 0), Vec3(0, 0, 0)});
+  Expected<Mesh> m = read_mesh(write("sliver.stl", binary_stl(tris)));
+  ASSERT_TRUE(m.ok()) << m.error().message;
+  EXPECT_EQ(m->faces.size(), 6u);
+}
+
+TEST_F(IoTest, MalformedStlGivesErrorsNamingFileAndPlace) {
+  std::string body = binary_stl(pyramid_triangles());
+  struct Case {
+    std::string name, bytes, where;
+  };
+  std::string nan_corner = body;
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  std::memcpy(nan_corner.data() + 84 + 12, &nan, 4);  // first corner's x of triangle 0
+  const std::vector<Case> cases = {
+      {"short.stl", body.substr(0, body.size() - 1), "byte offset 80: binary STL header states 6 triangles"},
+      {"tiny.stl", "\x01\x02", "byte offset 2: truncated"},
+      {"nan.stl", nan_corner, "byte offset 96: triangle 0 has a non-finite corner"},
+      {"zero.stl", binary_stl({}), "no triangles"},
+      {"four.stl", "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 1 1 0\nvertex 0 1 0\n", ":7: a facet with more than 3 vertices"},
+      {"two.stl", "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nendloop\n", ":6: a facet needs exactly 3"},
+      {"letters.stl", "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 zero 0\n", ":4: expected 'vertex x y z'"},
+      {"stray.stl", "solid x\nvertex 0 0 0\n", ":2: 'vertex' outside"},
+      {"open.stl", "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\n", "truncated inside a facet"},
+      {"word.stl", "solid x\nfacets 3\n", ":2: unexpected 'facets'"},
+      {"text.stl", "hello world, this is not a mesh at all but it is long enough to have a header ........ 1234", "byte offset 80"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    Expected<Mesh> m = read_mesh(write(c.name, c.bytes));
+    ASSERT_FALSE(m.ok());
+    EXPECT_EQ(m.error().code, ErrorCode::kDataLoss);
+    EXPECT_NE(m.error().message.find(c.name), std::string::npos) << m.error().message;
+    EXPECT_NE(m.error().message.find(c.where), std::string::npos) << m.error().message;
+    EXPECT_FALSE(read_cloud(path(c.name)).ok());
   }
 }
 

@@ -88,32 +88,56 @@ TEST(SampleSurface, DeterministicPerSeedAndEmptyCases) {
 
 // ---- orientation, size, placement ----
 
-TEST(UpAxis, Parses) {
-  EXPECT_EQ(*parse_up_axis("+z"), UpAxis::kPosZ);
-  EXPECT_EQ(*parse_up_axis("-x"), UpAxis::kNegX);
-  EXPECT_EQ(*parse_up_axis("y"), UpAxis::kPosY);
-  EXPECT_EQ(*parse_up_axis(" -Y "), UpAxis::kNegY);
-  EXPECT_EQ(*parse_up_axis("+X"), UpAxis::kPosX);
-  EXPECT_EQ(*parse_up_axis("-z"), UpAxis::kNegZ);
-  for (const char* bad : {"", "+", "w", "+zz", "up", "--z"}) EXPECT_FALSE(parse_up_axis(bad).ok()) << bad;
-  for (UpAxis a : {UpAxis::kPosX, UpAxis::kNegX, UpAxis::kPosY, UpAxis::kNegY, UpAxis::kPosZ, UpAxis::kNegZ})
-    EXPECT_EQ(*parse_up_axis(to_string(a)), a);
+TEST(Up, ParsesAxesAndVectors) {
+  EXPECT_EQ(*parse_up("+z"), Vec3(0, 0, 1));
+  EXPECT_EQ(*parse_up("-x"), Vec3(-1, 0, 0));
+  EXPECT_EQ(*parse_up("y"), Vec3(0, 1, 0));
+  EXPECT_EQ(*parse_up(" -Y "), Vec3(0, -1, 0));
+  EXPECT_EQ(*parse_up("+X"), Vec3(1, 0, 0));
+  EXPECT_EQ(*parse_up("-z"), Vec3(0, 0, -1));
+  EXPECT_TRUE(parse_up("-0.762 0.080 -0.642")->isApprox(Vec3(-0.762f, 0.080f, -0.642f).normalized()));
+  EXPECT_TRUE(parse_up("0 3 4")->isApprox(Vec3(0, 0.6f, 0.8f)));  // normalised
+  for (const char* bad : {"", "+", "w", "+zz", "up", "--z", "0 0 0", "1 2", "1 2 3 4", "nan 0 1", "1 x 2"})
+    EXPECT_FALSE(parse_up(bad).ok()) << bad;
+  for (int a = 0; a < 3; ++a)
+    for (float sign : {1.f, -1.f}) EXPECT_EQ(*parse_up(up_to_string(sign * Vec3::Unit(a))), sign * Vec3::Unit(a));
+  EXPECT_EQ(up_to_string(Vec3(0, 0.6f, 0.8f)), "0.000 0.600 0.800");
 }
 
-TEST(StandUpright, EachAxisBecomesPlusZByAProperRotation) {
-  const std::pair<UpAxis, Vec3> cases[] = {
-      {UpAxis::kPosX, Vec3(1, 0, 0)}, {UpAxis::kNegX, Vec3(-1, 0, 0)}, {UpAxis::kPosY, Vec3(0, 1, 0)},
-      {UpAxis::kNegY, Vec3(0, -1, 0)}, {UpAxis::kPosZ, Vec3(0, 0, 1)}, {UpAxis::kNegZ, Vec3(0, 0, -1)}};
-  for (const auto& [axis, dir] : cases) {
-    SCOPED_TRACE(to_string(axis));
-    const Eigen::Matrix3f r = upright_rotation(axis);
-    EXPECT_NEAR(r.determinant(), 1.f, 1e-6f);
-    EXPECT_TRUE((r * r.transpose()).isIdentity(1e-6f));
+TEST(StandUpright, EachAxisAndATiltedVectorBecomesPlusZByAProperRotation) {
+  std::vector<Vec3> ups;
+  for (int a = 0; a < 3; ++a) ups.push_back(Vec3::Unit(a)), ups.push_back(-Vec3::Unit(a));
+  ups.push_back(Vec3(-0.762f, 0.080f, -0.642f).normalized());
+  ups.push_back(Vec3(0.01f, 0, -1).normalized());  // nearly upside down
+  for (const Vec3& dir : ups) {
+    SCOPED_TRACE(up_to_string(dir));
+    const Eigen::Matrix3f r = upright_rotation(dir);
+    EXPECT_NEAR(r.determinant(), 1.f, 1e-5f);
+    EXPECT_TRUE((r * r.transpose()).isIdentity(1e-5f));
     Mesh m;
     m.vertices = {2.f * dir, Vec3(0, 0, 0)};
-    const Mesh up = stand_upright(m, axis);
-    EXPECT_TRUE(up.vertices[0].isApprox(Vec3(0, 0, 2)));
+    const Mesh up = stand_upright(m, dir);
+    EXPECT_TRUE(up.vertices[0].isApprox(Vec3(0, 0, 2), 1e-5f)) << up.vertices[0].transpose();
   }
+}
+
+TEST(RandomRotation, ProperDeterministicAndSpreadOverTheSphere) {
+  EXPECT_TRUE(random_rotation(7).isApprox(random_rotation(7)));
+  EXPECT_FALSE(random_rotation(7).isApprox(random_rotation(8)));
+  // Where +z goes: uniform on the sphere, so its mean is near 0 and each hemisphere gets about half.
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  int upper = 0;
+  const int n = 4000;
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Matrix3f r = random_rotation(uint64_t(i));
+    ASSERT_NEAR(r.determinant(), 1.f, 1e-5f);
+    const Vec3 z = r * Vec3::UnitZ();
+    mean += z.cast<double>();
+    upper += z.z() > 0;
+  }
+  mean /= n;
+  EXPECT_LT(mean.norm(), 0.05);  // 3 sigma of the mean of n unit vectors is about 0.03
+  EXPECT_NEAR(double(upper) / n, 0.5, 0.03);
 }
 
 TEST(Scale, HeightExtentAndGround) {

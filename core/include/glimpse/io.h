@@ -1,4 +1,4 @@
-// Reading meshes and point clouds from the formats users have (OFF, OBJ, PLY, PCD, XYZ) and writing
+// Reading meshes and point clouds from the formats users have (OFF, OBJ, PLY, STL, PCD, XYZ) and writing
 // clouds back. Hand-written parsers: no PCL types, no exceptions, bounded allocations.
 //
 // Format is chosen by extension (case-insensitive). Malformed input gives an Error (code kDataLoss,
@@ -17,12 +17,14 @@ namespace glimpse {
 
 // .off (OFF/COFF/NOFF headers; text after the face list is ignored), .obj (v and f records, any
 // v/vt/vn index form, negative indices), .ply (ascii and binary of either endianness; vertex x,y,z of
-// any scalar type, face vertex_indices or vertex_index lists). Polygons are fan-triangulated.
+// any scalar type, face vertex_indices or vertex_index lists), .stl (binary or ASCII, told apart by the
+// binary size rule 84 + 50 n bytes; corners with identical coordinates welded into one vertex,
+// triangles that collapse dropped). Polygons are fan-triangulated.
 Expected<Mesh> read_mesh(const std::string& path);
 
 // .pcd (ascii or binary; binary_compressed is refused with a clear error; x y z anywhere among other
 // fields; NaN points are kept), .ply, .xyz/.txt/.csv (x y z per line separated by blanks or commas,
-// further columns ignored, '#' comments), .off/.obj (their vertices).
+// further columns ignored, '#' comments), .off/.obj/.stl (their vertices).
 // Sensor: a PCD VIEWPOINT other than the default "0 0 0 1 0 0 0" sets Cloud.sensor to its translation
 // (its rotation is ignored); PLY and XYZ files written by write_cloud carry it as a
 // "glimpse_sensor x y z" comment. A sensor exactly at the origin written to PCD reads back as none.

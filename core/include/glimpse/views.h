@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -27,15 +28,21 @@ double surface_area(const Mesh& mesh);
 
 // ---- orientation, size, placement ----
 
-enum class UpAxis { kPosX, kNegX, kPosY, kNegY, kPosZ, kNegZ };
+// The direction that points up in a mesh's own coordinates, a unit vector. As text: a signed axis
+// "+z", "-x", "y" (= "+y"), case-insensitive, or three numbers "x y z" (normalised; must not be zero).
+Expected<Vec3> parse_up(std::string_view text);
+// "+y" for the six axes, else "x y z" with 3 decimals.
+std::string up_to_string(const Vec3& up);
 
-// "+z", "-x", "y" (= "+y"), case-insensitive, surrounding blanks ignored.
-Expected<UpAxis> parse_up_axis(std::string_view text);
-const char* to_string(UpAxis up);
+// A proper rotation (det +1) that takes `up` to +z: for the six axes a quarter or half turn about
+// another axis, otherwise the shortest rotation. Rotating by it stands the object up.
+Eigen::Matrix3f upright_rotation(const Vec3& up);
+Mesh stand_upright(Mesh mesh, const Vec3& up);
 
-// The proper rotation (det +1) that takes the given axis to +z; rotating by it stands the object up.
-Eigen::Matrix3f upright_rotation(UpAxis up);
-Mesh stand_upright(Mesh mesh, UpAxis up);
+// A rotation drawn uniformly from all 3D rotations (Shoemake 1992), the same for a given seed on every
+// machine: the pose of an object that has no natural up (a machine part lying as it fell).
+Eigen::Matrix3f random_rotation(uint64_t seed);
+Points rotate_points(const Points& points, const Eigen::Matrix3f& rotation);
 
 // Scales about the origin.
 Mesh scale_uniform(Mesh mesh, float factor);
@@ -45,6 +52,7 @@ Mesh scale_to_height(Mesh mesh, float height_m);
 Mesh scale_to_largest_extent(Mesh mesh, float extent_m);
 // Translates so min z = 0 and the bounding-box centre is at x = y = 0.
 Mesh place_on_ground(Mesh mesh);
+Points place_on_ground(Points points);
 
 // ---- single views ----
 

@@ -4,7 +4,7 @@
 // Each shape is a union of overlapping primitives (boxes, tapered capsules, ellipsoids, extruded
 // outlines with holes such as gears and nuts, tori) with proportions, variant (e.g. four legs vs
 // pedestal) and pose drawn from the seed; it stands upright (+z), on the ground (min z = 0), centred
-// in x, y, at a real-life size drawn from paper_category_sizes() (dataset.h), with a random yaw.
+// in x, y, at a real-life size drawn from default_category_sizes() (dataset.h), with a random yaw.
 // Primitives are tessellated evenly, so mesh_vertices() gives a usable cloud ("vertices as points",
 // like the SHREC meshes); the surface is not watertight (inner, overlapping parts remain) and triangle
 // winding is not consistent. Deterministic per (category, seed) on a given platform.
