@@ -112,7 +112,7 @@ int Main(int argc, char** argv) {
   train->add_option("--seed", t.seed, "zoo shapes and surface sampling seed")->capture_default_str();
   train->add_option("--name", t.name, "model name ([A-Za-z0-9._-], 1-128)")->required()
       ->check(Checked([](const std::string& s) { return ParseModelRef(s + ":latest"); }, "NAME"));
-  train->add_option("--methods", t.methods, "comma-separated: bok,bog,kgh,vfh,esf,ush,fusion (default: the server's)")
+  train->add_option("--methods", t.methods, "comma-separated: bok,bog,kgh,vfh,esf,ush,size,fusion (default: the server's)")
       ->check(kMethodList);
   train->add_option("--description", t.description, "free text stored with the model");
   train->add_option("--views", t.views.views, "single views (HPR) per mesh or zoo shape, 0 = the whole cloud")

@@ -32,7 +32,7 @@ struct MethodEntry {
 };
 constexpr MethodEntry kMethods[] = {{"bok", v1::METHOD_BOK}, {"bog", v1::METHOD_BOG}, {"kgh", v1::METHOD_KGH},
                                     {"vfh", v1::METHOD_VFH}, {"esf", v1::METHOD_ESF}, {"ush", v1::METHOD_USH},
-                                    {"fusion", v1::METHOD_FUSION}};
+                                    {"size", v1::METHOD_SIZE},   {"fusion", v1::METHOD_FUSION}};
 
 }  // namespace
 

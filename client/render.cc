@@ -188,7 +188,8 @@ namespace {
 // "keypoints N " unless the method uses none (whole-cloud descriptors only) and found none.
 std::string KeypointsField(const v1::Decision& d, std::string_view gap) {
   const bool global_only = d.method() == v1::METHOD_VFH || d.method() == v1::METHOD_ESF ||
-                           d.method() == v1::METHOD_USH || d.method() == v1::METHOD_FUSION;
+                           d.method() == v1::METHOD_USH || d.method() == v1::METHOD_SIZE ||
+                           d.method() == v1::METHOD_FUSION;
   if (global_only && d.keypoints() == 0) return "";
   return "keypoints " + std::to_string(d.keypoints()) + std::string(gap);
 }

@@ -96,7 +96,7 @@ Expected<std::optional<Method>> MethodFromProto(int method) {
   if (method == v1::METHOD_UNSPECIFIED) return std::optional<Method>();
   if (!v1::Method_IsValid(method))
     return invalid_argument("unknown method " + std::to_string(method) +
-                            "; valid: METHOD_BOK, METHOD_BOG, METHOD_KGH, METHOD_VFH, METHOD_ESF, METHOD_FUSION, METHOD_USH");
+                            "; valid: METHOD_BOK, METHOD_BOG, METHOD_KGH, METHOD_VFH, METHOD_ESF, METHOD_FUSION, METHOD_USH, METHOD_SIZE");
   return std::optional<Method>(static_cast<Method>(method - 1));  // the enums differ by UNSPECIFIED
 }
 

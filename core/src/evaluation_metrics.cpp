@@ -17,6 +17,36 @@ Tally accuracy(std::span<const StageDecision> decisions, std::string_view stage,
   return t;
 }
 
+double balanced_accuracy(std::span<const StageDecision> decisions, std::string_view stage, Method method,
+                         size_t categories) {
+  std::vector<Tally> per(categories);
+  for (const StageDecision& d : decisions) {
+    if (d.method != method || d.stage != stage || d.truth < 0 || static_cast<size_t>(d.truth) >= categories) continue;
+    ++per[d.truth].total;
+    per[d.truth].correct += d.winner == d.truth;
+  }
+  double sum = 0;
+  size_t n = 0;
+  for (const Tally& t : per)
+    if (t.total) sum += t.percent(), ++n;
+  return n ? sum / double(n) : 0.0;
+}
+
+void add_ablation(EvalResult& result, const EvalResult& other, const std::string& label) {
+  for (Method m : other.params.methods) {
+    AblationRow row;
+    row.label = label;
+    row.method = m;
+    for (const Stage& s : result.params.stages) {
+      const std::string name = stage_name(s);
+      const Tally t = accuracy(other.decisions, name, m);
+      row.accuracy.push_back(t.total ? t.percent() : -1.0);
+      row.balanced.push_back(t.total ? balanced_accuracy(other.decisions, name, m, other.categories.size()) : -1.0);
+    }
+    result.ablations.push_back(std::move(row));
+  }
+}
+
 std::vector<std::vector<double>> confusion_percent(std::span<const StageDecision> decisions, std::string_view stage,
                                                    Method method, size_t categories) {
   std::vector<std::vector<double>> m(categories, std::vector<double>(categories, 0.0));

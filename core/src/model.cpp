@@ -25,6 +25,7 @@ const char* method_name(Method m) {
     case Method::kVFH: return "vfh";
     case Method::kESF: return "esf";
     case Method::kUSH: return "ush";
+    case Method::kSize: return "size";
     case Method::kFusion: return "fusion";
   }
   return "unknown";
@@ -35,7 +36,7 @@ Expected<Method> parse_method(std::string_view name) {
   for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   for (Method m : kAllMethods)
     if (lower == method_name(m)) return m;
-  return invalid_argument("unknown method '" + std::string(name) + "' (valid: bok, bog, kgh, vfh, esf, ush, fusion)");
+  return invalid_argument("unknown method '" + std::string(name) + "' (valid: bok, bog, kgh, vfh, esf, ush, size, fusion)");
 }
 
 std::vector<Method> component_methods(const ModelImpl& impl, Method method) {
@@ -70,6 +71,7 @@ Expected<CloudFeatures> cloud_features(const Cloud& cloud, const TrainParams& pa
   for (const Keypoint& k : f->keypoints) out.positions.push_back(k.position);
   out.descriptors = std::move(f->descriptors);
   if (needs(methods, Method::kUSH)) out.ush = upright_histogram(f->cloud.points, f->surfaces, params.ush);
+  if (needs(methods, Method::kSize)) out.size = visible_size(f->cloud.points);
   if (needs(methods, Method::kVFH)) {
     GlobalDescriptorParams gp = params.global;
     gp.threads = threads;
@@ -101,6 +103,7 @@ Eigen::VectorXd method_histogram(const ModelImpl& impl, Method method, const Clo
     case Method::kESF: return f.esf ? Eigen::VectorXd(f.esf->cast<double>()) : Eigen::VectorXd::Zero(kEsfSize);
     case Method::kUSH:
       return f.ush ? Eigen::VectorXd(f.ush->cast<double>()) : Eigen::VectorXd::Zero(kUprightHistogramSize);
+    case Method::kSize: return f.size ? Eigen::VectorXd(f.size->cast<double>()) : Eigen::VectorXd::Zero(kVisibleSizeSize);
     case Method::kFusion: break;
   }
   return {};

@@ -32,6 +32,7 @@ struct CloudFeatures {
   std::optional<Eigen::VectorXf> vfh;
   std::optional<Eigen::VectorXf> esf;
   std::optional<Eigen::VectorXf> ush;
+  std::optional<Eigen::VectorXf> size;  // visible_size: the size-only baseline
   size_t points = 0;
 };
 

@@ -22,8 +22,9 @@ namespace glimpse {
 namespace {
 
 constexpr char kMagic[8] = {'G', 'L', 'M', 'P', 'S', 'M', 'D', 'L'};
-// 1: stage slots of the first 5 methods. 2: a u8 slot count first (USH is method 6).
-constexpr uint32_t kFormatVersion = 2;
+// 1: stage slots of the first 5 methods. 2: a u8 slot count first (USH is method 6). 3: the size-only
+// baseline (method 7).
+constexpr uint32_t kFormatVersion = 3;
 constexpr uint32_t kOldestReadableVersion = 1;
 
 uint32_t crc32(const uint8_t* data, size_t n) {
@@ -430,7 +431,7 @@ Expected<Model> deserialize(std::span<const uint8_t> bytes) {
     const Eigen::Index sizes[kMethodCount] = {
         p.bok_clusters, static_cast<Eigen::Index>(impl->graphs.types.size()),
         static_cast<Eigen::Index>(p.kgh_clusters) * p.kgh_clusters * p.kgh_distance_bins, kVfhSize, kEsfSize,
-        0, kUprightHistogramSize};
+        0, kUprightHistogramSize, kVisibleSizeSize};
     const uint32_t slots = version == 1 ? 5 : r.u8("stage slots");
     if (!r.failed() && slots > kMethodCount) r.fail("more decision stages than methods this build knows");
     for (int m = 0; m < kMethodCount && !r.failed(); ++m) {

@@ -66,4 +66,32 @@ Eigen::VectorXf upright_histogram(const Points& points, const std::vector<LocalS
   return h;
 }
 
+Eigen::VectorXf visible_size(const Points& points) {
+  Eigen::VectorXf out = Eigen::VectorXf::Zero(kVisibleSizeSize);
+  if (points.empty()) return out;
+  double zmin = INFINITY, zmax = -INFINITY, cx = 0, cy = 0;
+  for (const Vec3& p : points) {
+    zmin = std::min(zmin, double(p.z())), zmax = std::max(zmax, double(p.z()));
+    cx += p.x(), cy += p.y();
+  }
+  cx /= double(points.size()), cy /= double(points.size());
+  double sxx = 0, sxy = 0, syy = 0;
+  for (const Vec3& p : points) {
+    const double x = p.x() - cx, y = p.y() - cy;
+    sxx += x * x, sxy += x * y, syy += y * y;
+  }
+  // Principal axis of the 2x2 covariance: angle 1/2 atan2(2 sxy, sxx - syy).
+  const double a = 0.5 * std::atan2(2 * sxy, sxx - syy);
+  const double ux = std::cos(a), uy = std::sin(a);
+  double lo1 = INFINITY, hi1 = -INFINITY, lo2 = INFINITY, hi2 = -INFINITY;
+  for (const Vec3& p : points) {
+    const double x = p.x() - cx, y = p.y() - cy;
+    const double s1 = x * ux + y * uy, s2 = -x * uy + y * ux;
+    lo1 = std::min(lo1, s1), hi1 = std::max(hi1, s1), lo2 = std::min(lo2, s2), hi2 = std::max(hi2, s2);
+  }
+  const double e1 = hi1 - lo1, e2 = hi2 - lo2;
+  out << float(zmax - zmin), float(std::max(e1, e2)), float(std::min(e1, e2));
+  return out;
+}
+
 }  // namespace glimpse

@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -18,11 +19,14 @@ namespace {
 
 struct EvalOptions {
   std::string data;
+  std::string train;
+  std::string test;
+  std::string size_blind = "fusion";
   size_t zoo = 0;
   std::string points = "6000";
   size_t views = 6;
   int folds = 5;
-  std::string methods = "bok,bog,kgh,vfh,esf,ush,fusion";
+  std::string methods = "bok,bog,kgh,vfh,esf,ush,size,fusion";
   std::string train_on = "partial";
   std::string train_prefixes = "0.15,0.25,0.35,0.5,0.7";
   std::string decision = "nearest";
@@ -133,6 +137,59 @@ Expected<EvalParams> params_from(const EvalOptions& o) {
   return p;
 }
 
+std::vector<std::string> split_list(const std::string& text) {
+  std::vector<std::string> out;
+  std::stringstream list(text);
+  for (std::string item; std::getline(list, item, ',');)
+    if (!item.empty()) out.push_back(item);
+  return out;
+}
+
+// The objects of every folder in `dirs`, each given `role`.
+Expected<std::vector<EvalObject>> load_sources(const std::vector<std::string>& dirs, EvalRole role, uint64_t seed,
+                                               size_t max_objects, int threads) {
+  std::vector<EvalObject> all;
+  for (const std::string& dir : dirs) {
+    std::fprintf(stderr, "loading %s ...\n", dir.c_str());
+    auto loaded = load_dataset_objects(dir, seed, max_objects, threads);
+    if (!loaded.ok()) return loaded.error();
+    for (EvalObject& o : *loaded) {
+      o.role = role;
+      all.push_back(std::move(o));
+    }
+  }
+  return all;
+}
+
+// The size-blind ablation (every object 1 m tall, train and test) of `methods`: the same protocol
+// without streams or the keypoint exploration, its accuracies added to `result` beside the real ones.
+Status size_blind_ablation(EvalResult& result, const std::vector<EvalObject>& objects, const EvalParams& params,
+                           const std::string& methods, ProgressBar& bar) {
+  EvalParams p = params;
+  p.methods.clear();
+  for (const std::string& name : split_list(methods)) {
+    auto m = parse_method(name);
+    if (!m.ok()) return m.error();
+    p.methods.push_back(*m);
+  }
+  if (p.methods.empty()) return {};
+  p.stream_chunk_fraction = 0;
+  p.explore_max_keypoints = 0;
+  const bool keypoints = std::any_of(p.methods.begin(), p.methods.end(), [](Method m) {
+    return m == Method::kBoK || m == Method::kBoG || m == Method::kKGH;
+  });
+  if (!keypoints) std::erase_if(p.stages, [](const Stage& s) { return s.kind == StageKind::kKeypoints; });
+  const auto t0 = std::chrono::steady_clock::now();
+  auto blind = run_evaluation(common_height(objects, 1.0f), p, result.source + ", every object 1 m tall",
+                              [&bar](const EvalProgress& e) { bar({"size-blind: " + e.phase, e.done, e.total}); });
+  if (!blind.ok()) return blind.error();
+  add_ablation(result, *blind, "size-blind: every object 1 m tall, train and test");
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  result.timings.push_back({"size-blind ablation", secs, std::to_string(blind->decisions.size()) + " decisions"});
+  result.total_seconds += secs;
+  return {};
+}
+
 int run_eval(const EvalOptions& o) {
   auto params = params_from(o);
   if (!params.ok()) {
@@ -143,15 +200,25 @@ int run_eval(const EvalOptions& o) {
   const size_t max_objects = o.quick && o.max_objects == 0 ? 8 : o.max_objects;
   std::vector<EvalObject> objects;
   std::string source;
-  if (!o.data.empty()) {
-    std::fprintf(stderr, "loading %s ...\n", o.data.c_str());
-    auto loaded = load_dataset_objects(o.data, params->seed, max_objects, params->threads);
-    if (!loaded.ok()) {
-      std::fprintf(stderr, "glimpse-lab eval: %s\n", loaded.error().message.c_str());
+  if (!o.data.empty() || !o.train.empty()) {
+    const bool cross = !o.train.empty();
+    auto first = load_sources(split_list(cross ? o.train : o.data), cross ? EvalRole::kTrainOnly : EvalRole::kCrossValidate,
+                              params->seed, max_objects, params->threads);
+    if (!first.ok()) {
+      std::fprintf(stderr, "glimpse-lab eval: %s\n", first.error().message.c_str());
       return 1;
     }
-    objects = std::move(*loaded);
-    source = "meshes in " + o.data;
+    objects = std::move(*first);
+    source = "meshes in " + (cross ? o.train : o.data);
+    if (cross) {
+      auto second = load_sources(split_list(o.test), EvalRole::kTestOnly, params->seed, max_objects, params->threads);
+      if (!second.ok()) {
+        std::fprintf(stderr, "glimpse-lab eval: %s\n", second.error().message.c_str());
+        return 1;
+      }
+      for (EvalObject& x : *second) objects.push_back(std::move(x));
+      source = "trained on " + o.train + ", tested on " + o.test;
+    }
   } else {
     const size_t n = max_objects ? std::min(o.zoo, max_objects) : o.zoo;
     std::fprintf(stderr, "making the zoo: %zu objects per category ...\n", n);
@@ -162,11 +229,17 @@ int run_eval(const EvalOptions& o) {
 
   ProgressBar bar;
   auto result = run_evaluation(objects, *params, source, [&bar](const EvalProgress& p) { bar(p); });
-  bar({"done", 1, 1});
   if (!result.ok()) {
+    bar({"done", 1, 1});
     std::fprintf(stderr, "glimpse-lab eval: %s\n", result.error().message.c_str());
     return 1;
   }
+  if (o.size_blind != "none")
+    if (Status s = size_blind_ablation(*result, objects, *params, o.size_blind, bar); !s.ok()) {
+      std::fprintf(stderr, "glimpse-lab eval: --size-blind: %s\n", s.error().message.c_str());
+      return 2;
+    }
+  bar({"done", 1, 1});
   result->timings.insert(result->timings.begin(), {"load objects", load_seconds, std::to_string(objects.size()) + " meshes"});
   result->total_seconds += load_seconds;
   if (Status s = write_report(*result, o.out); !s.ok()) {
@@ -175,8 +248,13 @@ int run_eval(const EvalOptions& o) {
   }
   for (const PhaseTiming& t : result->timings)
     std::fprintf(stderr, "  %-24s %7.1f s  %s\n", t.phase.c_str(), t.seconds, t.detail.c_str());
-  std::printf("accuracy %% (paper in brackets), %zu objects, %d folds:\n%s", objects.size(), params->folds,
-              summary_table(*result).c_str());
+  if (result->cross_source)
+    std::printf("accuracy %% (paper in brackets), trained on %s, tested on %zu objects of %s:\n%s", o.train.c_str(),
+                result->streams.empty() ? size_t{0} : result->streams.size() / params->views_per_object, o.test.c_str(),
+                summary_table(*result).c_str());
+  else
+    std::printf("accuracy %% (paper in brackets), %zu objects, %d folds:\n%s", objects.size(), params->folds,
+                summary_table(*result).c_str());
   std::printf("category changes (%s), finally correct / incorrect:", method_name(result->change_method));
   for (const ChangeRow& c : result->changes)
     std::printf("  <=%zu kp %.2f / %.2f", c.up_to_keypoints, c.mean_correct, c.mean_incorrect);
@@ -190,17 +268,26 @@ int run_eval(const EvalOptions& o) {
 void add_eval_command(CLI::App& app) {
   auto o = std::make_shared<EvalOptions>();
   CLI::App* cmd = app.add_subcommand("eval", "run the paper's evaluation protocol and write a report");
-  auto* data = cmd->add_option("--data", o->data, "dataset folder DIR/<category>/<id>.off (e.g. SHREC 2007)");
+  auto* data = cmd->add_option("--data", o->data,
+                               "dataset folders DIR[,DIR...] (DIR/<category>/<mesh>, e.g. SHREC 2007): cross-validation "
+                               "over the union, by object");
+  auto* train = cmd->add_option("--train", o->train, "cross-source: train on every object of these folders DIR[,DIR...]");
+  auto* test = cmd->add_option("--test", o->test, "cross-source: test on every view of these folders DIR[,DIR...]");
   auto* zoo = cmd->add_option("--zoo", o->zoo, "use the procedural zoo with N objects per category instead");
-  data->excludes(zoo);
-  zoo->excludes(data);
+  data->excludes(zoo)->excludes(train)->excludes(test);
+  zoo->excludes(data)->excludes(train)->excludes(test);
+  train->needs(test);
+  test->needs(train);
+  cmd->add_option("--size-blind", o->size_blind,
+                  "methods of the size-blind ablation (every object 1 m tall, train and test), or 'none'")
+      ->capture_default_str();
   cmd->add_option("--points", o->points,
                   "object cloud: 'vertices' (the paper) or N area-weighted samples per object (a sensor at 3x the "
                   "bounding radius sees about the same number of points whatever the object's size)")
       ->capture_default_str();
   cmd->add_option("--views", o->views, "views per object (1-6, evenly spaced of the paper's 6)")->capture_default_str();
   cmd->add_option("--folds", o->folds, "cross-validation folds (by object, stratified)")->capture_default_str();
-  cmd->add_option("--methods", o->methods, "comma-separated: bok,bog,kgh,vfh,esf,ush,fusion")->capture_default_str();
+  cmd->add_option("--methods", o->methods, "comma-separated: bok,bog,kgh,vfh,esf,ush,size,fusion")->capture_default_str();
   cmd->add_option("--train-on", o->train_on,
                   "full: full views only (the paper); partial: plus their top-down prefixes (--train-prefixes)")
       ->capture_default_str();
@@ -220,8 +307,8 @@ void add_eval_command(CLI::App& app) {
   cmd->add_option("--cut-margin", o->cut_margin, "keypoint stage cut below the k-th keypoint, in support radii")
       ->capture_default_str();
   cmd->callback([o, cmd] {
-    if (o->data.empty() && o->zoo == 0) {
-      std::fprintf(stderr, "glimpse-lab eval: give --data DIR or --zoo N\n%s", cmd->help().c_str());
+    if (o->data.empty() && o->train.empty() && o->zoo == 0) {
+      std::fprintf(stderr, "glimpse-lab eval: give --data DIR, --train DIR --test DIR, or --zoo N\n%s", cmd->help().c_str());
       throw CLI::RuntimeError(2);
     }
     if (int rc = run_eval(*o); rc != 0) throw CLI::RuntimeError(rc);

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "glimpse/cloud.h"
+#include "glimpse/dataset.h"
 #include "glimpse/expected.h"
 #include "glimpse/model.h"
 #include "glimpse/session.h"
@@ -25,18 +26,33 @@ namespace glimpse {
 
 // ---- Objects ---------------------------------------------------------------------------------------
 
+// How the protocol uses an object: cross-validation (all objects), or the two sides of a cross-source
+// evaluation (train on every object of some collections, test on every object of others).
+enum class EvalRole : uint8_t {
+  kCrossValidate,  // in the folds: learnt by the other folds' models, tested by its own fold's
+  kTrainOnly,      // learnt by every model, never tested
+  kTestOnly,       // tested by the one model of all kTrainOnly objects, never learnt
+};
+
 struct EvalObject {
   std::string category;
   std::string id;
-  Mesh mesh;  // upright (+z), real-life size, on the ground
+  Mesh mesh;              // upright (+z), real-life size, on the ground
+  std::string source;     // the collection: the dataset folder's name ("shrec07"), "zoo"
+  bool any_pose = false;  // no natural up (CategorySize::any_pose): each view in a random pose of its own
+  EvalRole role = EvalRole::kCrossValidate;
 };
 
-// Every object of a dataset folder (scan_dataset + load_object with `seed`), at most
+// Every object of a dataset folder (scan_dataset + load_object with `seed` and `sizing`), at most
 // `max_per_category` per category (0 = all; the first ones in manifest order). Loaded in parallel.
 Expected<std::vector<EvalObject>> load_dataset_objects(const std::string& dir, uint64_t seed,
-                                                       size_t max_per_category = 0, int threads = 0);
+                                                       size_t max_per_category = 0, int threads = 0,
+                                                       const Sizing& sizing = {});
 // make_zoo(per_category, seed): the procedural stand-in for the dataset.
 std::vector<EvalObject> zoo_objects(size_t per_category, uint64_t seed);
+
+// The size-blind ablation: every object scaled to `height_m` (upright height), on the ground.
+std::vector<EvalObject> common_height(std::vector<EvalObject> objects, float height_m);
 
 // The categories of `objects` in the paper's order (human, chair, table, mechanic, fourleg) when
 // they are among them, then any others sorted by name.
@@ -104,6 +120,10 @@ struct Tally {
 
 // Decisions of one stage and method, pooled over folds. A missing decision counts as wrong.
 Tally accuracy(std::span<const StageDecision> decisions, std::string_view stage, Method method);
+// Mean over the categories of the per-category recall (each category weighs the same, whatever its
+// number of views); categories without a decision of this stage and method are left out.
+double balanced_accuracy(std::span<const StageDecision> decisions, std::string_view stage, Method method,
+                         size_t categories);
 // Rows: truth (query), columns: winner (result), percent of the row's decisions (missing ones are in
 // the row's total but in no column, so such a row sums to less than 100).
 std::vector<std::vector<double>> confusion_percent(std::span<const StageDecision> decisions, std::string_view stage,
@@ -173,7 +193,7 @@ struct EvalParams {
   double hpr_radius_factor = 100;
   std::vector<Stage> stages = paper_stages();
   float cut_margin_supports = 1.5f;  // keypoint cut margin in support radii (see keypoint_prefix)
-  int folds = 5;
+  int folds = 5;  // cross-validation; a cross-source evaluation (kTrainOnly/kTestOnly objects) trains one model
   std::vector<Method> methods = {std::begin(kAllMethods), std::end(kAllMethods)};
   size_t explore_max_keypoints = 55;
   size_t explore_step = 5;
@@ -211,18 +231,31 @@ struct StageStats {
   size_t cut_min_keypoints = 0, cut_max_keypoints = 0;
 };
 
+// Another evaluation's accuracy shown beside this one's (the size-blind ablation).
+struct AblationRow {
+  std::string label;             // what was changed
+  Method method = Method::kFusion;
+  std::vector<double> accuracy;  // per main stage, %
+  std::vector<double> balanced;  // per main stage, %
+};
+
 struct EvalResult {
   EvalParams params;
-  std::string source;  // "SHREC 2007 at DIR" / "procedural zoo, N per category"
+  std::string source;  // "meshes in DIR" / "procedural zoo, N per category"
+  bool cross_source = false;                // kTrainOnly/kTestOnly objects: one model, no folds
+  std::vector<std::string> train_sources;   // collections learnt from
+  std::vector<std::string> test_sources;    // collections tested
+  std::vector<std::string> any_pose_categories;  // their objects' views are taken in random poses
   std::vector<std::string> categories;
   std::vector<std::string> object_ids;      // "category/id" per object
   std::vector<int> object_truth;
-  std::vector<int> object_fold;
+  std::vector<int> object_fold;             // -1: training only (cross-source)
+  std::vector<std::string> object_source;
   std::vector<size_t> object_points;        // full 3D cloud size
   std::vector<StageDecision> decisions;
   std::vector<StageStats> stage_stats;      // main stages then the exploration grid
   std::vector<size_t> grid;
-  Method change_method = Method::kFusion;   // best method by mean accuracy over the main stages
+  Method change_method = Method::kFusion;   // the default method (train.default_method when evaluated)
   std::vector<ChangeRow> changes;
   std::vector<ExplorationTrace> traces;     // of change_method
   std::vector<StreamTrace> streams;         // of change_method, every view
@@ -230,7 +263,11 @@ struct EvalResult {
   double total_seconds = 0;
   int threads = 1;
   std::vector<std::string> notes;           // anything that looks wrong
+  std::vector<AblationRow> ablations;       // filled by the caller (add_ablation)
 };
+
+// The accuracy of each of `other`'s methods at `result`'s main stages, as ablation rows labelled `label`.
+void add_ablation(EvalResult& result, const EvalResult& other, const std::string& label);
 
 struct EvalProgress {
   std::string phase;

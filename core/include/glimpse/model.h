@@ -17,12 +17,14 @@
 namespace glimpse {
 
 // The recognition methods of the paper (BoK, BoG, KGH, VFH), ESF, our upright shape histogram (USH,
-// upright_histogram.h) and a score-level fusion. The numbers are stored in model bytes: never reuse one.
-enum class Method : uint8_t { kBoK = 0, kBoG = 1, kKGH = 2, kVFH = 3, kESF = 4, kFusion = 5, kUSH = 6 };
-inline constexpr int kMethodCount = 7;
-inline constexpr Method kAllMethods[] = {Method::kBoK, Method::kBoG, Method::kKGH, Method::kVFH,
-                                         Method::kESF, Method::kUSH, Method::kFusion};
-const char* method_name(Method m);  // "bok", "bog", "kgh", "vfh", "esf", "ush", "fusion"
+// upright_histogram.h), a size-only baseline (the visible height and horizontal extents: how much a
+// ruler alone gets right) and a score-level fusion. The numbers are stored in model bytes: never
+// reuse one.
+enum class Method : uint8_t { kBoK = 0, kBoG = 1, kKGH = 2, kVFH = 3, kESF = 4, kFusion = 5, kUSH = 6, kSize = 7 };
+inline constexpr int kMethodCount = 8;
+inline constexpr Method kAllMethods[] = {Method::kBoK, Method::kBoG, Method::kKGH,  Method::kVFH,
+                                         Method::kESF, Method::kUSH, Method::kSize, Method::kFusion};
+const char* method_name(Method m);  // "bok", "bog", "kgh", "vfh", "esf", "ush", "size", "fusion"
 Expected<Method> parse_method(std::string_view name);   // case-insensitive; error lists valid names
 
 struct LabelledCloud {

@@ -43,4 +43,10 @@ float shape_index(float k1, float k2);
 Eigen::VectorXf upright_histogram(const Points& points, const std::vector<LocalSurface>& surfaces,
                                   const UprightHistogramParams& params = {});
 
+// The size-only baseline: what a ruler sees of a (partial) cloud, in metres — its height (z extent)
+// and its horizontal extents along the principal axes of the points' x, y (largest first), so a turn
+// about the up axis changes nothing. A recogniser that does no better than this one is measuring size.
+inline constexpr int kVisibleSizeSize = 3;
+Eigen::VectorXf visible_size(const Points& points);
+
 }  // namespace glimpse
