@@ -81,8 +81,8 @@ double TrainPercent(std::string_view stage, size_t done, size_t total) {
     double from, to;
   };
   // Rough shares of a training run; only the order and monotonicity matter to a progress bar.
-  static constexpr Span kSpans[] = {{"received", 0, 0},   {"features", 0, 60},  {"codebooks", 60, 80},
-                                    {"histograms", 80, 90}, {"centres", 90, 97}, {"storing", 97, 99},
+  static constexpr Span kSpans[] = {{"received", 0, 0},    {"features", 0, 60},      {"codebooks", 60, 80},
+                                    {"centres", 80, 92},   {"calibration", 92, 97}, {"storing", 97, 99},
                                     {"done", 100, 100}};
   for (const Span& s : kSpans) {
     if (s.stage != stage) continue;

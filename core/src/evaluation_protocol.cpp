@@ -79,13 +79,16 @@ void parallel_for(size_t n, int threads, const std::string& phase, const EvalPro
 struct View {
   int object = 0;
   int view = 0;  // index among the object's evaluated viewpoints
-  Cloud cloud;
+  Cloud cloud;   // as the sensor saw it: what is tested
+  Cloud learnt;  // as training learns it (training_view: tilted); empty when that is `cloud` itself
 };
 
-// The features of one top-down prefix of one view (count == view size: the full view).
+// The features of one top-down prefix of one view (count == view size: the full view), cut from the
+// view as seen or from its learnt (tilted) copy.
 struct FeatureSlot {
   size_t view = 0;
   size_t count = 0;
+  bool learnt = false;
   bool ok = false;
   CloudFeatures features;
   std::string error;
@@ -107,7 +110,7 @@ struct Protocol {
   std::vector<float> margin;       // keypoint cut margin per view
   std::vector<Stage> stages;       // the main stages, then the exploration grid's
   std::vector<std::vector<int>> stage_slot;   // [view][stage] -> slot, -1 none
-  std::vector<std::vector<int>> train_slots;  // [view] -> prefix slots trained on
+  std::vector<std::vector<int>> train_slots;  // [view] -> slots trained on: the full view, then prefixes
   std::vector<std::shared_ptr<const Model>> fold_models;
   std::vector<std::vector<int>> fold_to_ours;  // per fold: model category index -> report category index
   EvalResult r;
@@ -115,6 +118,8 @@ struct Protocol {
   bool tested(size_t v) const { return r.object_fold[static_cast<size_t>(views[v].object)] >= 0; }
   bool learnt(size_t v) const { return objects[static_cast<size_t>(views[v].object)].role != EvalRole::kTestOnly; }
   size_t full_points(size_t v) const { return std::max<size_t>(1, full[static_cast<size_t>(views[v].object)].size()); }
+  const Cloud& learnt_cloud(size_t v) const { return views[v].learnt.points.empty() ? views[v].cloud : views[v].learnt; }
+  bool tilted(size_t v) const { return !views[v].learnt.points.empty(); }
 };
 
 Status validate(const std::vector<EvalObject>& objects, const EvalParams& p) {
@@ -129,8 +134,7 @@ Status validate(const std::vector<EvalObject>& objects, const EvalParams& p) {
     if (o.role != EvalRole::kTestOnly) learnt.insert(o.category);
     cv += o.role == EvalRole::kCrossValidate, train += o.role == EvalRole::kTrainOnly, test += o.role == EvalRole::kTestOnly;
   }
-  if (cv && (train || test))
-    return invalid_argument("objects are either all cross-validated or split into training and test sources");
+  if (cv && test) return invalid_argument("objects are either cross-validated or split into training and test sources");
   if (cv) {
     if (p.folds < 2) return invalid_argument("cross-validation needs at least 2 folds");
     if (static_cast<size_t>(p.folds) > objects.size()) return invalid_argument("more folds than objects");
@@ -222,6 +226,8 @@ void make_views(Protocol& P) {
     const Points& cloud = object.any_pose ? points : P.full[o];
     const std::vector<Vec3> cameras = paper_viewpoints(cloud);
     if (vp[v] < cameras.size()) P.views[j].cloud = hidden_point_removal(cloud, cameras[vp[v]], P.params.hpr_radius_factor);
+    if (object.role != EvalRole::kTestOnly && P.tp.tilt_deg > 0)
+      P.views[j].learnt = training_view(P.views[j].cloud, P.tp, fnv1a(object.source + "/" + object.category + "/" + object.id) + v);
   });
   size_t posed = 0;
   for (const EvalObject& o : P.objects) posed += o.any_pose;
@@ -249,6 +255,7 @@ void full_view_features(Protocol& P) {
   parallel_for(P.views.size(), P.threads, "features: full views", P.progress, [&](size_t v) {
     P.slots[v].view = v;
     P.slots[v].count = P.views[v].cloud.points.size();
+    if (!P.tested(v) && P.tilted(v)) return;  // only its tilted copy is learnt
     compute_slot(P, P.slots[v], P.views[v].cloud);
     if (keypoint_stages && P.tested(v) && P.views[v].cloud.points.size() > 1) {
       SurfaceParams sp = P.tp.features.surface;
@@ -271,14 +278,17 @@ void prefix_features(Protocol& P) {
   std::vector<std::map<size_t, int>> slot_of(n_views);
   P.stage_slot.assign(n_views, std::vector<int>(P.stages.size(), -1));
   P.train_slots.assign(n_views, {});
-  auto slot_for = [&](size_t v, size_t count) -> int {
+  std::vector<std::map<size_t, int>> learnt_slot_of(n_views);
+  auto slot_for = [&](size_t v, size_t count, bool learnt) -> int {
     if (count == 0) return -1;
-    if (count >= P.views[v].cloud.points.size()) return static_cast<int>(v);
-    auto [it, fresh] = slot_of[v].emplace(count, static_cast<int>(P.slots.size()));
+    learnt = learnt && P.tilted(v);
+    if (!learnt && count >= P.views[v].cloud.points.size()) return static_cast<int>(v);
+    auto [it, fresh] = (learnt ? learnt_slot_of : slot_of)[v].emplace(count, static_cast<int>(P.slots.size()));
     if (fresh) {
       P.slots.emplace_back();
       P.slots.back().view = v;
       P.slots.back().count = count;
+      P.slots.back().learnt = learnt;
     }
     return it->second;
   };
@@ -293,19 +303,23 @@ void prefix_features(Protocol& P) {
           count = keypoint_prefix(pts, heights, static_cast<size_t>(P.stages[s].value), P.margin[v]);
         else if (P.stages[s].kind == StageKind::kFraction)
           count = fraction_prefix(pts.size(), P.full_points(v), P.stages[s].value);
-        P.stage_slot[v][s] = slot_for(v, count);
+        P.stage_slot[v][s] = slot_for(v, count, false);
       }
     }
-    if (P.learnt(v))
+    if (P.learnt(v)) {
+      const size_t n = P.learnt_cloud(v).points.size();
+      P.train_slots[v].push_back(slot_for(v, n, true));
       for (double f : P.tp.partial_prefixes) {
-        const int id = slot_for(v, static_cast<size_t>(std::round(f * double(pts.size()))));
-        if (id >= 0 && id != static_cast<int>(v)) P.train_slots[v].push_back(id);
+        const size_t count = static_cast<size_t>(std::round(f * double(n)));
+        if (count >= n) continue;
+        if (const int id = slot_for(v, count, true); id >= 0) P.train_slots[v].push_back(id);
       }
+    }
   }
   const size_t first = n_views;
   parallel_for(P.slots.size() - first, P.threads, "features: prefixes", P.progress, [&](size_t j) {
     FeatureSlot& slot = P.slots[first + j];
-    compute_slot(P, slot, reveal_top_down(P.views[slot.view].cloud, slot.count));
+    compute_slot(P, slot, reveal_top_down(slot.learnt ? P.learnt_cloud(slot.view) : P.views[slot.view].cloud, slot.count));
   });
   double cpu = 0;
   for (size_t i = first; i < P.slots.size(); ++i) cpu += P.slots[i].seconds;
@@ -380,7 +394,6 @@ Status train_and_classify(Protocol& P) {
       if (!P.learnt(v)) continue;
       const EvalObject& object = P.objects[static_cast<size_t>(o)];
       const std::string id = object.source + "/" + object.id;
-      if (P.slots[v].ok) samples.push_back({object.category, id, P.slots[v].features});
       for (int s : P.train_slots[v])
         if (P.slots[s].ok) samples.push_back({object.category, id, P.slots[s].features});
     }
@@ -389,6 +402,8 @@ Status train_and_classify(Protocol& P) {
     if (!trained.ok()) return Error{trained.error().code, tag + ": training failed: " + trained.error().message};
     const auto model = std::make_shared<const Model>(std::move(*trained));
     P.fold_models.push_back(model);
+    r.settle_margins.push_back(model->impl->calibration.settle_margin);
+    r.calibration_accuracy.push_back(model->impl->calibration.held_out_accuracy);
     train_seconds += seconds_since(t0);
     if (P.progress) P.progress({tag + ": train", 1, 1});
 
@@ -523,7 +538,7 @@ void flag_problems(Protocol& P) {
   };
   std::map<std::string, ErrorGroup> errors;
   for (const FeatureSlot& slot : P.slots) {
-    if (slot.ok) continue;
+    if (slot.ok || slot.error.empty()) continue;  // computed fine, or never needed
     std::string key;
     for (char c : slot.error) {
       const bool digit = std::isdigit(static_cast<unsigned char>(c));

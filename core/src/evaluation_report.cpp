@@ -182,6 +182,17 @@ void write_protocol(std::ostringstream& o, const EvalResult& r) {
     for (size_t i = 0; i < prefixes.size(); ++i) trained_on += (i ? ", " : "") + pct(100 * prefixes[i]) + " %";
     trained_on += " of each training view";
   }
+  if (p.train.tilt_deg > 0)
+    trained_on += "; each training view (and its prefixes) turned by a random tilt of up to " + pct(p.train.tilt_deg) +
+                  " deg (seeded), test views as seen";
+  {
+    std::map<std::string, size_t> extra;
+    if (!r.cross_source)
+      for (size_t i = 0; i < r.object_fold.size(); ++i)
+        if (r.object_fold[i] < 0) ++extra[r.object_source[i]];
+    for (const auto& [source, n] : extra)
+      trained_on += "; plus every object of " + source + " (" + std::to_string(n) + ", training only, never tested)";
+  }
   o << "| training clouds (`--train-on`, `--train-prefixes`) | " << trained_on
     << " | full views |\n";
   const TrainParams& t = p.train;
@@ -391,13 +402,25 @@ void write_streams(std::ostringstream& o, const EvalResult& r) {
     << " % of the full 3D cloud's points. A view counts at its first settled decision: precision = share of those "
        "that name the true category, visible % = how much of the full cloud had been seen then. Goal: precision >= 95 % "
        "with settlement before 30 % visible on average.\n\n";
-  o << "| settled when | views settled | precision | mean visible % | median visible % |\n|---|---:|---:|---:|---:|\n";
+  if (r.settle_margins.empty())
+    o << "| settled when | views settled | precision | mean visible % | median visible % |\n|---|---:|---:|---:|---:|\n";
   auto row = [&](const std::string& label, const SettleRow& s) {
     o << "| " << label << " | " << s.settled_views << " / " << s.views << " (" << pct(s.settled_percent(), 1) << " %) | "
       << pct(s.precision_percent(), 1) << " % | " << pct(s.mean_visible_percent, 1) << " | "
       << pct(s.median_visible_percent, 1) << " |\n";
   };
-  row("**session default** (confidence >= " + fmt("%.2f", sp.settle_confidence) + ")", settle_summary(r.streams, -1));
+  if (!r.settle_margins.empty()) {
+    o << "Each model calibrated where its decisions settle on held-out folds of its own training objects ("
+      << r.params.train.calibration_folds << " inner folds by object; nothing of the test views): the smallest margin "
+         "between the best two scores at which held-out decisions were " << pct(100 * r.params.train.settle_precision)
+      << " % right. Settle margin per model:";
+    for (size_t i = 0; i < r.settle_margins.size(); ++i)
+      o << (i ? "," : "") << " " << fmt("%.3f", r.settle_margins[i]) << " (held out "
+        << pct(100 * r.calibration_accuracy[i], 1) << " % right)";
+    o << ". The sweep below recomputes settling at fixed confidences from the recorded ones, for comparison only.\n\n";
+    o << "| settled when | views settled | precision | mean visible % | median visible % |\n|---|---:|---:|---:|---:|\n";
+  }
+  row("**session default** (calibrated margin, confidence >= " + fmt("%.2f", sp.settle_confidence) + ")", settle_summary(r.streams, -1));
   for (double t : r.params.settle_sweep) row("confidence >= " + fmt("%.2f", t), settle_summary(r.streams, t, min_kp));
   o << "\nPer category, the session's own flag:\n\n| category | views settled | precision | mean visible % |\n"
        "|---|---:|---:|---:|\n";

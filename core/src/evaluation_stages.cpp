@@ -129,32 +129,4 @@ std::vector<size_t> exploration_grid(size_t max_keypoints, size_t step) {
   return grid;
 }
 
-// ---- Folds -----------------------------------------------------------------------------------------
-
-namespace {
-uint32_t fnv1a(const std::string& s) {  // std::hash differs between standard libraries
-  uint32_t h = 2166136261u;
-  for (unsigned char c : s) h = (h ^ c) * 16777619u;
-  return h;
-}
-}  // namespace
-
-std::vector<int> stratified_folds(const std::vector<std::string>& object_categories, int folds, uint64_t seed) {
-  std::vector<int> fold(object_categories.size(), 0);
-  if (folds < 1) return fold;
-  std::map<std::string, std::vector<size_t>> by_category;
-  for (size_t i = 0; i < object_categories.size(); ++i) by_category[object_categories[i]].push_back(i);
-  int start = 0;  // rotate so small categories do not all start filling fold 0
-  for (auto& [name, members] : by_category) {
-    std::seed_seq seq{static_cast<uint32_t>(seed), static_cast<uint32_t>(seed >> 32),
-                      fnv1a(name)};
-    std::mt19937_64 rng(seq);
-    // Fisher-Yates with our own index draw: std::shuffle's use of the engine is implementation-defined.
-    for (size_t i = members.size(); i > 1; --i) std::swap(members[i - 1], members[rng() % i]);
-    for (size_t j = 0; j < members.size(); ++j) fold[members[j]] = static_cast<int>((start + j) % folds);
-    start = static_cast<int>((start + members.size()) % folds);
-  }
-  return fold;
-}
-
 }  // namespace glimpse

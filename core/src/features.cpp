@@ -57,6 +57,7 @@ Expected<Features> extract(const Cloud& input, const FeatureParams& params, cons
   }
 
   if (stopped()) return cancelled("feature extraction cancelled");
+  if (!params.find_keypoints) return f;
   t0 = std::chrono::steady_clock::now();
   f.keypoints = characteristic_scale_keypoints(tree, surfaces, r, params.keypoints, &diag.keypoints);
   diag.keypoints_ms = ms_since(t0);

@@ -64,6 +64,7 @@ Expected<CloudFeatures> cloud_features(const Cloud& cloud, const TrainParams& pa
   CloudFeatures out;
   FeatureParams fp = params.features;
   fp.surface.threads = threads;
+  fp.find_keypoints = std::any_of(methods.begin(), methods.end(), uses_keypoints);
   auto f = extract(cloud, fp, cancel);
   if (!f.ok()) return f.error();
   if (cancel && cancel()) return cancelled("feature extraction cancelled");
@@ -120,6 +121,19 @@ Eigen::VectorXd method_scores(const ModelImpl& impl, Method method, const CloudF
 }
 
 // ---- Training -------------------------------------------------------------------------------------
+
+const Calibration& calibration(const Model& model) {
+  static const Calibration none;
+  return model.impl ? model.impl->calibration : none;
+}
+
+Cloud training_view(const Cloud& cloud, const TrainParams& params, uint64_t salt) {
+  if (!(params.tilt_deg > 0)) return cloud;
+  uint64_t z = params.seed + 0x9E3779B97F4A7C15ull * (salt + 1);  // splitmix64 of (seed, salt)
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return rotate_about_centroid(cloud, random_tilt(z ^ (z >> 31), params.tilt_deg));
+}
 
 namespace {
 
@@ -178,7 +192,9 @@ Expected<Model> train(const std::vector<LabelledCloud>& data, const TrainParams&
     size_t prefix;
   };
   std::vector<Job> jobs;
+  std::vector<Cloud> learnt(data.size());
   for (size_t i = 0; i < data.size(); ++i) {
+    learnt[i] = training_view(data[i].cloud, params, i);
     jobs.push_back({i, 0});
     const size_t n = data[i].cloud.points.size();
     for (double f : params.partial_prefixes) {
@@ -195,7 +211,7 @@ Expected<Model> train(const std::vector<LabelledCloud>& data, const TrainParams&
     const int64_t end = static_cast<int64_t>(std::min(jobs.size(), begin + batch));
 #pragma omp parallel for num_threads(threads) schedule(dynamic, 1)
     for (int64_t j = static_cast<int64_t>(begin); j < end; ++j) {
-      const Cloud& cloud = data[jobs[j].cloud].cloud;
+      const Cloud& cloud = learnt[jobs[j].cloud];
       feats[j] = jobs[j].prefix ? cloud_features(reveal_top_down(cloud, jobs[j].prefix), params, base, 1, cancel)
                                 : cloud_features(cloud, params, base, 1, cancel);
     }
@@ -308,8 +324,9 @@ Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainP
 
   // 3. Global histograms and decision stages (sec. 3.3).
   size_t done = 0;
+  std::vector<Eigen::MatrixXd> histograms(kMethodCount);
   for (Method m : base) {
-    Eigen::MatrixXd h;
+    Eigen::MatrixXd& h = histograms[static_cast<size_t>(m)];
     for (size_t i = 0; i < f.size(); ++i) {
       const Eigen::VectorXd row = method_histogram(*impl, m, f[i]);
       if (i == 0) h.resize(static_cast<Eigen::Index>(f.size()), row.size());
@@ -330,6 +347,15 @@ Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainP
   if (needs(model.methods, Method::kFusion) && component_methods(*impl, Method::kFusion).empty())
     return invalid_argument("fusion needs at least one of its component methods (fusion_of)");
   model.default_method = needs(model.methods, params.default_method) ? params.default_method : model.methods.front();
+  // 4. Calibration of the default method on held-out folds of the training objects.
+  report("calibration", 0, 1);
+  std::vector<std::string> object_categories(object_index.size());
+  for (size_t i = 0; i < labels.size(); ++i)
+    object_categories[static_cast<size_t>(object_of[i])] = model.categories[static_cast<size_t>(labels[i])];
+  impl->calibration = calibrate(*impl, model.default_method, histograms, labels, object_of, object_categories,
+                                static_cast<int>(model.categories.size()), threads);
+  report("calibration", 1, 1);
+  if (cancelled_now()) return cancelled("training cancelled");
   model.stats.clouds = data.size();
   std::set<std::string> objects;
   for (const auto& d : data) objects.insert(d.category + "/" + d.object_id);

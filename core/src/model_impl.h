@@ -15,6 +15,7 @@ namespace glimpse {
 
 struct ModelImpl {
   TrainParams params;
+  Calibration calibration;
   KeypointCodebook bok;        // sec. 3.2.5, one codebook per method (the paper's cluster counts differ)
   KeypointCodebook bog;
   KeypointCodebook kgh;
@@ -47,6 +48,10 @@ Expected<CloudFeatures> cloud_features(const Cloud& cloud, const TrainParams& pa
 // The global histogram of one base method (every method but fusion).
 Eigen::VectorXd method_histogram(const ModelImpl& impl, Method method, const CloudFeatures& f);
 
+// A training cloud as it is learnt: turned by a random tilt of up to params.tilt_deg (seeded by
+// params.seed and `salt`); its top-down prefixes are cut from this turned cloud.
+Cloud training_view(const Cloud& cloud, const TrainParams& params, uint64_t salt);
+
 // A training cloud whose features are already computed (train() computes them; the evaluation
 // computes each view's features once and trains every fold from them).
 struct TrainingSample {
@@ -56,6 +61,13 @@ struct TrainingSample {
 };
 Expected<Model> train_on_features(std::vector<TrainingSample> samples, const TrainParams& params,
                                   const ProgressFn& progress = {}, const CancelFn& cancel = {});
+
+// Inner cross-validation of `method`'s decision stages over params.calibration_folds folds of the
+// training objects (`objects[i]` the object of row i, `object_categories` per object); histograms[m] the
+// training rows of base method m. The codebooks are the model's own (fitted without labels).
+Calibration calibrate(const ModelImpl& impl, Method method, const std::vector<Eigen::MatrixXd>& histograms,
+                      const std::vector<int>& labels, const std::vector<int>& objects,
+                      const std::vector<std::string>& object_categories, int categories, int threads);
 
 // Scores of `method` (fusion: the mean of its components' scores).
 Eigen::VectorXd method_scores(const ModelImpl& impl, Method method, const CloudFeatures& f);

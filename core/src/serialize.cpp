@@ -23,7 +23,7 @@ namespace {
 
 constexpr char kMagic[8] = {'G', 'L', 'M', 'P', 'S', 'M', 'D', 'L'};
 // 1: stage slots of the first 5 methods. 2: a u8 slot count first (USH is method 6). 3: the size-only
-// baseline (method 7).
+// baseline (method 7) and the calibration after the stages.
 constexpr uint32_t kFormatVersion = 3;
 constexpr uint32_t kOldestReadableVersion = 1;
 
@@ -167,6 +167,9 @@ void visit_params(TrainParams& p, F&& f) {
   f("decision.pca_explained_variance", p.decision.pca_explained_variance);
   f("decision.max_pca_dims", p.decision.max_pca_dims);
   f("kmeans_restarts", p.kmeans_restarts);
+  f("calibration_folds", p.calibration_folds);
+  f("settle_precision", p.settle_precision);
+  f("tilt_deg", p.tilt_deg);
   f("seed", p.seed);
 }
 
@@ -335,6 +338,10 @@ std::vector<uint8_t> serialize(const Model& model) {
       w.u8(s ? 1 : 0);
       if (s) write_stage(w, *s);
     }
+    w.u8(static_cast<uint8_t>(m.calibration.method));
+    w.f64(m.calibration.settle_margin);
+    w.u64(m.calibration.held_out);
+    w.f64(m.calibration.held_out_accuracy);
   }
 
   Writer out;
@@ -442,6 +449,18 @@ Expected<Model> deserialize(std::span<const uint8_t> bytes) {
       }
       if (!r.failed() && method != Method::kFusion && used(method) != impl->stages[m].has_value())
         r.fail(std::string("decision stage of ") + method_name(method) + " missing or unexpected");
+    }
+    if (version >= 3 && !r.failed()) {
+      Calibration& c = impl->calibration;
+      const uint8_t m = r.u8("calibration method");
+      if (m >= kMethodCount) r.fail("unknown calibration method");
+      c.method = static_cast<Method>(m);
+      c.settle_margin = r.f64("settle margin");
+      c.held_out = r.u64("calibration count");
+      c.held_out_accuracy = r.f64("calibration accuracy");
+      if (!r.failed() && (!(c.settle_margin >= 0 && c.settle_margin <= 2) ||
+                          !(c.held_out_accuracy >= 0 && c.held_out_accuracy <= 1)))
+        r.fail("calibration out of range");
     }
     model.impl = std::move(impl);
   }

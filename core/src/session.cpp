@@ -21,6 +21,9 @@ class Session final : public ScanSession {
   Session(std::shared_ptr<const Model> model, const SessionParams& params, Method method)
       : model_(std::move(model)), impl_(*model_->impl), params_(params), method_(method),
         components_(component_methods(impl_, method)) {
+    if (const Calibration& c = impl_.calibration;
+        params_.use_model_calibration && c.method == method_ && c.settle_margin > 0 && params_.settle_confidence > 0)
+      params_.full_margin = c.settle_margin / params_.settle_confidence;
     last_.categories = model_->categories;
     last_.scores.assign(model_->categories.size(), 0.0);
     for (Method m : components_) {

@@ -145,6 +145,29 @@ Eigen::Matrix3f random_rotation(uint64_t seed) {
   return q.normalized().toRotationMatrix().cast<float>();
 }
 
+Eigen::Matrix3f random_tilt(uint64_t seed, float max_deg) {
+  std::mt19937_64 rng(seed);
+  const double u1 = uniform01(rng), u2 = uniform01(rng);
+  const double cap = std::cos(std::clamp(double(max_deg), 0.0, 180.0) * kPi / 180.0);
+  const double angle = std::acos(1 - u1 * (1 - cap));  // uniform over the cap's area
+  const double azimuth = 2 * kPi * u2;
+  const Eigen::Vector3d axis(std::cos(azimuth), std::sin(azimuth), 0);
+  return Eigen::AngleAxisd(angle, axis).toRotationMatrix().cast<float>();
+}
+
+Cloud rotate_about_centroid(const Cloud& cloud, const Eigen::Matrix3f& rotation) {
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  size_t n = 0;
+  for (const Vec3& p : cloud.points)
+    if (p.allFinite()) c += p.cast<double>(), ++n;
+  const Vec3 centre = n ? Vec3((c / double(n)).cast<float>()) : Vec3::Zero();
+  Cloud out;
+  out.points.reserve(cloud.points.size());
+  for (const Vec3& p : cloud.points) out.points.push_back(rotation * (p - centre) + centre);
+  if (cloud.sensor) out.sensor = rotation * (*cloud.sensor - centre) + centre;
+  return out;
+}
+
 Points rotate_points(const Points& points, const Eigen::Matrix3f& rotation) {
   Points out;
   out.reserve(points.size());

@@ -22,6 +22,8 @@ struct EvalOptions {
   std::string train;
   std::string test;
   std::string size_blind = "fusion";
+  std::string also_train;
+  float tilt = -1;
   size_t zoo = 0;
   std::string points = "6000";
   size_t views = 6;
@@ -32,6 +34,8 @@ struct EvalOptions {
   std::string decision = "nearest";
   std::string fusion_of;
   int neighbours = 0;
+  double pca_variance = 0;
+  int pca_dims = 0;
   int threads = 0;
   uint64_t seed = 42;
   std::string out = "out/eval";
@@ -39,6 +43,8 @@ struct EvalOptions {
   size_t max_objects = 0;
   size_t explore_step = 5;
   float cut_margin = 1.5f;
+  std::string stages = "full,10kp,25kp,55kp,10%,20%";
+  double stream_chunk = 0.02;
 };
 
 // A progress bar on stderr; plain lines (every 10 %) when stderr is not a terminal.
@@ -126,9 +132,30 @@ Expected<EvalParams> params_from(const EvalOptions& o) {
     }
   }
   if (o.neighbours > 0) p.train.decision.neighbours = o.neighbours;
+  if (o.tilt >= 0) p.train.tilt_deg = o.tilt;
+  if (o.pca_variance > 0) p.train.decision.pca_explained_variance = o.pca_variance;
+  if (o.pca_dims > 0) p.train.decision.max_pca_dims = o.pca_dims;
   p.threads = o.threads;
   p.seed = o.seed;
   p.explore_step = o.explore_step;
+  p.stages.clear();
+  for (const std::string& name : [&] {
+         std::vector<std::string> v;
+         std::stringstream list(o.stages);
+         for (std::string item; std::getline(list, item, ',');) v.push_back(item);
+         return v;
+       }()) {
+    char* end = nullptr;
+    const double x = std::strtod(name.c_str(), &end);
+    if (name == "full") p.stages.push_back({StageKind::kFull, 0});
+    else if (end && std::string(end) == "kp" && x >= 1) p.stages.push_back({StageKind::kKeypoints, x});
+    else if (end && std::string(end) == "%" && x > 0 && x <= 100) p.stages.push_back({StageKind::kFraction, x / 100});
+    else return invalid_argument("--stages takes full, Nkp and N% items, not '" + name + "'");
+  }
+  if (!std::any_of(p.stages.begin(), p.stages.end(), [](const Stage& s) { return s.kind == StageKind::kKeypoints; }))
+    p.explore_max_keypoints = 0;
+  if (!(o.stream_chunk >= 0 && o.stream_chunk < 1)) return invalid_argument("--stream-chunk must be in [0, 1)");
+  p.stream_chunk_fraction = o.stream_chunk;
   p.cut_margin_supports = o.cut_margin;
   if (o.quick) {  // CI: 3 views per object, a coarser exploration grid
     p.views_per_object = std::min<size_t>(p.views_per_object, 3);
@@ -150,8 +177,16 @@ Expected<std::vector<EvalObject>> load_sources(const std::vector<std::string>& d
                                                size_t max_objects, int threads) {
   std::vector<EvalObject> all;
   for (const std::string& dir : dirs) {
-    std::fprintf(stderr, "loading %s ...\n", dir.c_str());
-    auto loaded = load_dataset_objects(dir, seed, max_objects, threads);
+    Expected<std::vector<EvalObject>> loaded = std::vector<EvalObject>{};
+    if (dir.rfind("zoo:", 0) == 0) {  // the procedural zoo as a source: zoo:N objects per category
+      const long n = std::strtol(dir.c_str() + 4, nullptr, 10);
+      if (n <= 0) return invalid_argument("'" + dir + "': want zoo:N with N objects per category");
+      std::fprintf(stderr, "making the zoo: %ld objects per category ...\n", n);
+      loaded = zoo_objects(static_cast<size_t>(n), seed);
+    } else {
+      std::fprintf(stderr, "loading %s ...\n", dir.c_str());
+      loaded = load_dataset_objects(dir, seed, max_objects, threads);
+    }
     if (!loaded.ok()) return loaded.error();
     for (EvalObject& o : *loaded) {
       o.role = role;
@@ -210,6 +245,15 @@ int run_eval(const EvalOptions& o) {
     }
     objects = std::move(*first);
     source = "meshes in " + (cross ? o.train : o.data);
+    if (!o.also_train.empty()) {
+      auto extra = load_sources(split_list(o.also_train), EvalRole::kTrainOnly, params->seed, max_objects, params->threads);
+      if (!extra.ok()) {
+        std::fprintf(stderr, "glimpse-lab eval: --also-train: %s\n", extra.error().message.c_str());
+        return 1;
+      }
+      for (EvalObject& x : *extra) objects.push_back(std::move(x));
+      source += " (also trained on " + o.also_train + ")";
+    }
     if (cross) {
       auto second = load_sources(split_list(o.test), EvalRole::kTestOnly, params->seed, max_objects, params->threads);
       if (!second.ok()) {
@@ -217,7 +261,7 @@ int run_eval(const EvalOptions& o) {
         return 1;
       }
       for (EvalObject& x : *second) objects.push_back(std::move(x));
-      source = "trained on " + o.train + ", tested on " + o.test;
+      source = "trained on " + o.train + (o.also_train.empty() ? "" : "," + o.also_train) + ", tested on " + o.test;
     }
   } else {
     const size_t n = max_objects ? std::min(o.zoo, max_objects) : o.zoo;
@@ -278,6 +322,10 @@ void add_eval_command(CLI::App& app) {
   zoo->excludes(data)->excludes(train)->excludes(test);
   train->needs(test);
   test->needs(train);
+  cmd->add_option("--also-train", o->also_train,
+                  "extra training-only sources DIR[,DIR...] or zoo:N (the procedural zoo, N per category), learnt by "
+                  "every model and never tested");
+  cmd->add_option("--train-tilt", o->tilt, "training views turned by a random tilt of up to DEG degrees (default: the recogniser's)");
   cmd->add_option("--size-blind", o->size_blind,
                   "methods of the size-blind ablation (every object 1 m tall, train and test), or 'none'")
       ->capture_default_str();
@@ -297,12 +345,19 @@ void add_eval_command(CLI::App& app) {
   cmd->add_option("--decision", o->decision, "nearest-centre (the paper), centres, knn or nearest (every training vector a reference)")->capture_default_str();
   cmd->add_option("--fusion-of", o->fusion_of, "comma-separated components of fusion (default: the recogniser's)");
   cmd->add_option("--neighbours", o->neighbours, "k of the k-NN decision (0: the recogniser's default)");
+  cmd->add_option("--pca-variance", o->pca_variance, "explained variance the decision stage's PCA keeps (0: default)");
+  cmd->add_option("--pca-dims", o->pca_dims, "at most this many PCA dimensions in the decision stage (0: default)");
   cmd->add_option("--threads", o->threads, "threads (0: all cores); results do not depend on it")->capture_default_str();
   cmd->add_option("--seed", o->seed, "seed of sizes, samples, folds, codebooks")->capture_default_str();
   cmd->add_option("--out", o->out, "report folder")->capture_default_str();
   cmd->add_flag("--quick", o->quick, "CI size: at most 8 objects per category, 3 views, exploration every 10 keypoints");
   cmd->add_option("--max-objects", o->max_objects, "at most N objects per category (0: all)")->capture_default_str();
   cmd->add_option("--explore-step", o->explore_step, "keypoint step of the exploration grid (1: the paper's)")
+      ->capture_default_str();
+  cmd->add_option("--stages", o->stages, "comma-separated stages: full, Nkp (N visible keypoints), N% (of the full cloud)")
+      ->capture_default_str();
+  cmd->add_option("--stream-chunk", o->stream_chunk,
+                  "stream every test view in chunks of this fraction of the full cloud (0: no streaming)")
       ->capture_default_str();
   cmd->add_option("--cut-margin", o->cut_margin, "keypoint stage cut below the k-th keypoint, in support radii")
       ->capture_default_str();

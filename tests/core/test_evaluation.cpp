@@ -369,12 +369,13 @@ TEST(RunEvaluation, ReducedProtocolOnTheZooIsWellAboveChance) {
       EXPECT_NEAR(d.visible_fraction, 0.10, 1e-3);
     }
   }
-  // Chance is 20 %. Measured with the nearest-reference decision and top-down training prefixes (zoo 4
-  // per category, seed 3, 2 folds, 3 views, 3000 points): full view fusion 81.7 %, VFH 60.0 %, 20 %
-  // visible fusion 86.7 %; streams: 46.7 % settle, at 18.4 % visible on average, all of them right.
-  EXPECT_GE(accuracy(r->decisions, "full", Method::kFusion).percent(), 70.0);  // measured 81.7
-  EXPECT_GE(accuracy(r->decisions, "20%", Method::kFusion).percent(), 70.0);   // measured 86.7
-  EXPECT_GE(accuracy(r->decisions, "full", Method::kVFH).percent(), 45.0);     // measured 60.0
+  // Chance is 20 %. Measured (zoo 4 per category, seed 3, 2 folds, 3 views, 3000 points; parts in random
+  // poses, training views tilted up to 5 degrees, fusion of USH and VFH): full view fusion 78.3 %, VFH
+  // 65.0 %, 20 % visible fusion 76.7 %; streams: 58.3 % settle, at 15.7 % visible on average, all right.
+  // 60 test views: one view is 1.7 points.
+  EXPECT_GE(accuracy(r->decisions, "full", Method::kFusion).percent(), 75.0);  // measured 78.3
+  EXPECT_GE(accuracy(r->decisions, "20%", Method::kFusion).percent(), 73.0);   // measured 76.7
+  EXPECT_GE(accuracy(r->decisions, "full", Method::kVFH).percent(), 61.0);     // measured 65.0
   EXPECT_FALSE(markdown_report(*r).empty());
   // Every test view streamed once, top to bottom, one entry per chunk, visible fraction growing.
   ASSERT_EQ(r->streams.size(), objects.size() * p.views_per_object);
@@ -384,7 +385,8 @@ TEST(RunEvaluation, ReducedProtocolOnTheZooIsWellAboveChance) {
     EXPECT_TRUE(std::is_sorted(t.visible_fraction.begin(), t.visible_fraction.end()));
   }
   const SettleRow settled = settle_summary(r->streams, -1);
-  EXPECT_GE(settled.precision_percent(), 85.0);  // measured 100 (28 of 60 views settled)
+  EXPECT_GE(settled.precision_percent(), 95.0);  // measured 100 (35 of 60 views settled)
+  EXPECT_GE(settled.settled_percent(), 50.0);    // measured 58.3
   std::cout << "zoo reduced: full fusion " << accuracy(r->decisions, "full", Method::kFusion).percent() << " %, VFH "
             << accuracy(r->decisions, "full", Method::kVFH).percent() << " %, 20 % fusion "
             << accuracy(r->decisions, "20%", Method::kFusion).percent() << " %; streams settled "
@@ -408,6 +410,77 @@ TEST(RunEvaluation, ReducedProtocolOnTheZooIsWellAboveChance) {
   }
 }
 
+std::vector<EvalObject> with_role(std::vector<EvalObject> objects, EvalRole role, const std::string& source) {
+  for (EvalObject& o : objects) o.role = role, o.source = source;
+  return objects;
+}
+
+TEST(RunEvaluation, CrossSourceTrainsOneModelOnOneSourceAndTestsOnlyTheOther) {
+  std::vector<EvalObject> objects = with_role(zoo_objects(4, 3), EvalRole::kTrainOnly, "zoo-a");
+  const std::vector<EvalObject> test = with_role(zoo_objects(3, 9), EvalRole::kTestOnly, "zoo-b");
+  objects.insert(objects.end(), test.begin(), test.end());
+  EvalParams p = reduced_params();
+  p.methods = {Method::kUSH, Method::kSize, Method::kFusion};
+  p.stages = {{StageKind::kFull, 0}, {StageKind::kFraction, 0.1}, {StageKind::kFraction, 0.2}};
+  p.explore_max_keypoints = 0;
+  auto r = run_evaluation(objects, p, "two zoos");
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  EXPECT_TRUE(r->cross_source);
+  EXPECT_EQ(r->train_sources, std::vector<std::string>{"zoo-a"});
+  EXPECT_EQ(r->test_sources, std::vector<std::string>{"zoo-b"});
+  EXPECT_EQ(r->settle_margins.size(), 1u);  // one model, not one per fold
+  // Only the test source's views are decided, each once per stage and method, by the one model.
+  EXPECT_EQ(r->decisions.size(), test.size() * p.views_per_object * p.stages.size() * p.methods.size());
+  for (const StageDecision& d : r->decisions) {
+    EXPECT_EQ(d.fold, 0);
+    EXPECT_EQ(r->object_source[static_cast<size_t>(d.object)], "zoo-b");
+  }
+  EXPECT_EQ(r->streams.size(), test.size() * p.views_per_object);
+  const std::string report = markdown_report(*r);
+  EXPECT_NE(report.find("cross-source"), std::string::npos);
+  EXPECT_NE(report.find("How much is size"), std::string::npos);
+  // Chance is 20 %: a model of 4 zoo objects per category on 3 others of another seed (45 views, one is
+  // 2.2 points). Measured: fusion full / 20 % 77.8 / 82.2, USH full 77.8, size only full 55.6.
+  const double fusion_full = accuracy(r->decisions, "full", Method::kFusion).percent();
+  const double fusion_20 = accuracy(r->decisions, "20%", Method::kFusion).percent();
+  std::cout << "two zoos: fusion full " << fusion_full << " %, 20 % " << fusion_20 << " %, size only full "
+            << accuracy(r->decisions, "full", Method::kSize).percent() << " %, USH full "
+            << accuracy(r->decisions, "full", Method::kUSH).percent() << " %\n";
+  EXPECT_GE(fusion_full, 73.0);  // measured 77.8
+  EXPECT_GE(fusion_20, 77.0);    // measured 82.2
+  // Cross-validated and test-only objects do not mix; training-only ones may join a cross-validation.
+  std::vector<EvalObject> mixed = with_role(zoo_objects(2, 3), EvalRole::kCrossValidate, "zoo-a");
+  mixed.push_back(test.front());
+  EXPECT_FALSE(run_evaluation(mixed, p, "mixed").ok());
+  std::vector<EvalObject> only_train = with_role(zoo_objects(1, 3), EvalRole::kTrainOnly, "zoo-a");
+  EXPECT_FALSE(run_evaluation(only_train, p, "no test").ok());
+}
+
+TEST(Metrics, BalancedAccuracyWeighsEveryCategoryTheSame) {
+  std::vector<StageDecision> d;
+  auto add = [&](int truth, int winner) {
+    StageDecision x;
+    x.stage = "full";
+    x.method = Method::kUSH;
+    x.truth = truth;
+    x.winner = winner;
+    d.push_back(x);
+  };
+  for (int i = 0; i < 9; ++i) add(0, 0);  // category 0: 9 of 9
+  add(1, 0);                              // category 1: 0 of 1
+  EXPECT_NEAR(accuracy(d, "full", Method::kUSH).percent(), 90.0, 1e-9);
+  EXPECT_NEAR(balanced_accuracy(d, "full", Method::kUSH, 3), 50.0, 1e-9);  // category 2 has no view: left out
+  EXPECT_EQ(balanced_accuracy(d, "20%", Method::kUSH, 3), 0.0);
+}
+
+TEST(Objects, CommonHeightMakesEveryObjectOneHeightOnTheGround) {
+  for (const EvalObject& o : common_height(zoo_objects(1, 5), 1.0f)) {
+    const Bounds b = bounds(o.mesh.vertices);
+    EXPECT_NEAR(b.extent().z(), 1.0f, 1e-5f) << o.category;
+    EXPECT_NEAR(b.min.z(), 0.0f, 1e-6f);
+  }
+}
+
 std::string shrec_dir() {
   if (const char* env = std::getenv("GLIMPSE_SHREC_DIR")) return env;
   return GLIMPSE_SOURCE_DIR "/../shared/data/shrec07";
@@ -424,20 +497,64 @@ TEST(RunEvaluation, ReducedProtocolOnShrec) {
   p.seed = 42;
   auto r = run_evaluation(*objects, p, "shrec");
   ASSERT_TRUE(r.ok()) << r.error().message;
-  // Floors under what was measured with the nearest-reference decision and top-down training prefixes
-  // (10 objects per category, 2 folds, 3 views, 3000 points, seed 42); raise them as recognition improves.
-  EXPECT_GE(accuracy(r->decisions, "full", Method::kFusion).percent(), 88.0);  // measured 96.0
-  EXPECT_GE(accuracy(r->decisions, "20%", Method::kFusion).percent(), 82.0);   // measured 92.0
-  EXPECT_GE(accuracy(r->decisions, "full", Method::kBoK).percent(), 45.0);     // measured 57.3
+  // Floors just under what was measured (10 objects per category, 2 folds, 3 views, 3000 points, seed 42;
+  // 150 test views, one is 0.7 points); raise them as recognition improves.
+  EXPECT_GE(accuracy(r->decisions, "full", Method::kFusion).percent(), 92.0);  // measured 94.7
+  EXPECT_GE(accuracy(r->decisions, "20%", Method::kFusion).percent(), 92.0);   // measured 94.7
+  EXPECT_GE(accuracy(r->decisions, "full", Method::kBoK).percent(), 48.0);     // measured 51.3
   const SettleRow settled = settle_summary(r->streams, -1);
-  EXPECT_GE(settled.settled_percent(), 40.0);    // measured 67.3 (101 of 150 views)
-  EXPECT_GE(settled.precision_percent(), 92.0);  // measured 100
-  EXPECT_LE(settled.mean_visible_percent, 30.0); // measured 16.6
+  EXPECT_GE(settled.settled_percent(), 60.0);    // measured 63.3 (95 of 150 views)
+  EXPECT_GE(settled.precision_percent(), 96.0);  // measured 98.9
+  EXPECT_LE(settled.mean_visible_percent, 17.0); // measured 14.7
   std::cout << "shrec reduced: full fusion " << accuracy(r->decisions, "full", Method::kFusion).percent()
             << " %, 20 % fusion " << accuracy(r->decisions, "20%", Method::kFusion).percent() << " %, full BoK "
             << accuracy(r->decisions, "full", Method::kBoK).percent() << " %; streams settled "
             << settled.settled_percent() << " % at " << settled.mean_visible_percent << " % visible, precision "
             << settled.precision_percent() << " %\n";
+}
+
+std::string psb_dir() {
+  if (const char* env = std::getenv("GLIMPSE_PSB_DIR")) return env;
+  return GLIMPSE_SOURCE_DIR "/../shared/data/psb";
+}
+
+// The world is not SHREC: a model of SHREC objects judged on another collection (PSB and ABC parts).
+TEST(RunEvaluation, ReducedCrossSourceShrecToPsb) {
+  const std::string train_dir = shrec_dir(), test_dir = psb_dir();
+  if (!std::filesystem::is_directory(train_dir) || !std::filesystem::is_directory(test_dir))
+    GTEST_SKIP() << "SHREC 2007 (" << train_dir << ") or PSB (" << test_dir
+                 << ") not found (set GLIMPSE_SHREC_DIR / GLIMPSE_PSB_DIR to run this test)";
+  auto train = load_dataset_objects(train_dir, 42, 10);
+  auto test = load_dataset_objects(test_dir, 42, 8);
+  ASSERT_TRUE(train.ok()) << train.error().message;
+  ASSERT_TRUE(test.ok()) << test.error().message;
+  std::vector<EvalObject> objects;
+  for (EvalObject& o : *train) o.role = EvalRole::kTrainOnly, objects.push_back(std::move(o));
+  for (EvalObject& o : *test) o.role = EvalRole::kTestOnly, objects.push_back(std::move(o));
+  EvalParams p = reduced_params();
+  p.methods = {Method::kSize, Method::kFusion};
+  p.stages = {{StageKind::kFull, 0}, {StageKind::kFraction, 0.1}, {StageKind::kFraction, 0.2}};
+  p.explore_max_keypoints = 0;
+  p.seed = 42;
+  auto r = run_evaluation(objects, p, "shrec -> psb");
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  const double full = accuracy(r->decisions, "full", Method::kFusion).percent();
+  const double p10 = accuracy(r->decisions, "10%", Method::kFusion).percent();
+  const double p20 = accuracy(r->decisions, "20%", Method::kFusion).percent();
+  const double size = accuracy(r->decisions, "full", Method::kSize).percent();
+  const SettleRow settled = settle_summary(r->streams, -1);
+  std::cout << "shrec -> psb reduced: fusion full " << full << " %, 10 % " << p10 << " %, 20 % " << p20
+            << " %, size only full " << size << " %; streams settled " << settled.settled_percent() << " % at "
+            << settled.mean_visible_percent << " % visible, precision " << settled.precision_percent() << " %\n";
+  // 10 SHREC objects per category -> 8 PSB objects per category (6 parts), 3 views, 3000 points, seed 42:
+  // 114 test views, one is 0.9 points. Measured: fusion 93.0 / 91.2 / 93.0 (full / 10 % / 20 %), size only
+  // 71.1 on full views; streams settle on 93.9 % of views at 13.6 % visible, 97.2 % of them right.
+  EXPECT_GE(full, 90.0);  // measured 93.0
+  EXPECT_GE(p10, 88.0);   // measured 91.2
+  EXPECT_GE(p20, 90.0);   // measured 93.0
+  EXPECT_GT(full, size + 15);  // shape adds to what a ruler gets right
+  EXPECT_GE(settled.settled_percent(), 90.0);    // measured 93.9
+  EXPECT_GE(settled.precision_percent(), 94.0);  // measured 97.2
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include "glimpse/features.h"
 #include "glimpse/geometry.h"
 #include "glimpse/keypoints.h"
+#include "glimpse/upright_histogram.h"
 #include "shapes.h"
 
 namespace glimpse {
@@ -492,6 +493,41 @@ TEST(Hull, VolumeOfACubeAndAFlatSet) {
   EXPECT_NEAR(convex_hull_volume(cube), 0.125, 1e-4);
   EXPECT_EQ(convex_hull_volume(test::plane(0.1f, 0.01f)), 0.0);
   EXPECT_EQ(convex_hull_volume(std::vector<Vec3>{}), 0.0);
+}
+
+// ---- the size-only baseline ----
+
+TEST(VisibleSize, HeightAndHorizontalExtentsWhateverTheTurnAboutUp) {
+  // A 0.8 x 0.3 x 1.7 m box of samples: height 1.7, extents 0.8 and 0.3, also turned 37 degrees.
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u(0, 1);
+  Points box;
+  for (int i = 0; i < 4000; ++i) box.emplace_back(0.8f * u(rng), 0.3f * u(rng), 1.7f * u(rng));
+  const Eigen::Matrix3f turn = Eigen::AngleAxisf(0.65f, Vec3::UnitZ()).toRotationMatrix();
+  Points turned;
+  for (const Vec3& p : box) turned.push_back(turn * p + Vec3(5, -2, 0.5f));
+  for (const Points* pts : {&box, &turned}) {
+    const Eigen::VectorXf s = visible_size(*pts);
+    ASSERT_EQ(s.size(), kVisibleSizeSize);
+    EXPECT_NEAR(s[0], 1.7f, 0.01f);
+    EXPECT_NEAR(s[1], 0.8f, 0.01f);
+    EXPECT_NEAR(s[2], 0.3f, 0.01f);
+  }
+  EXPECT_TRUE(visible_size({}).isZero());
+}
+
+TEST(Extract, WithoutKeypointsStopsAfterTheSurfaces) {
+  const Cloud cube{test::cube(0.3f, 0.006f), std::nullopt};
+  FeatureParams p;
+  p.find_keypoints = false;
+  auto f = extract(cube, p);
+  ASSERT_TRUE(f.ok()) << f.error().message;
+  EXPECT_TRUE(f->keypoints.empty());
+  EXPECT_FALSE(f->surfaces.empty());
+  auto with = extract(cube);
+  ASSERT_TRUE(with.ok());
+  EXPECT_FALSE(with->keypoints.empty());
+  EXPECT_EQ(with->surfaces.size(), f->surfaces.size());
 }
 
 }  // namespace

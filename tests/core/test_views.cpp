@@ -1,8 +1,10 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <thread>
 
+#include <Eigen/Geometry>
 #include <Eigen/LU>
 
 #include "glimpse/views.h"
@@ -138,6 +140,41 @@ TEST(RandomRotation, ProperDeterministicAndSpreadOverTheSphere) {
   mean /= n;
   EXPECT_LT(mean.norm(), 0.05);  // 3 sigma of the mean of n unit vectors is about 0.03
   EXPECT_NEAR(double(upper) / n, 0.5, 0.03);
+}
+
+TEST(RandomTilt, WithinTheCapSpreadOverItAndDeterministic) {
+  EXPECT_TRUE(random_tilt(3, 5).isApprox(random_tilt(3, 5)));
+  EXPECT_TRUE(random_tilt(3, 0).isIdentity(1e-6f));
+  double max_deg = 0, mean_cos = 0;
+  int beyond_half = 0;
+  const int n = 2000;
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Matrix3f r = random_tilt(uint64_t(i), 5);
+    ASSERT_NEAR(r.determinant(), 1.f, 1e-5f);
+    const Vec3 up = r * Vec3::UnitZ();
+    const double deg = std::acos(std::clamp(double(up.z()), -1.0, 1.0)) * 180 / 3.14159265358979;
+    max_deg = std::max(max_deg, deg);
+    beyond_half += deg > 2.5 * std::sqrt(2.0);  // half the cap's area lies beyond 5/sqrt(2) degrees
+    mean_cos += up.z();
+  }
+  EXPECT_LE(max_deg, 5.0 + 1e-3);
+  EXPECT_GT(max_deg, 4.8);
+  EXPECT_NEAR(double(beyond_half) / n, 0.5, 0.04);
+  // Turning about a horizontal axis keeps the rotation's own z axis out of the tilt: about z it is fixed.
+  const Eigen::Matrix3f r = random_tilt(11, 5);
+  const Vec3 axis = Eigen::AngleAxisf(r).axis();
+  EXPECT_NEAR(axis.z(), 0.f, 1e-4f);
+}
+
+TEST(RotateAboutCentroid, KeepsTheCentroidAndTurnsTheSensor) {
+  Cloud c;
+  c.points = {Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(0, 2, 0), Vec3(2, 2, 0)};  // centroid (1, 1, 0)
+  c.sensor = Vec3(1, 1, 3);
+  const Eigen::Matrix3f half_turn_x = Eigen::AngleAxisf(3.14159265f, Vec3::UnitX()).toRotationMatrix();
+  const Cloud t = rotate_about_centroid(c, half_turn_x);
+  EXPECT_TRUE(t.sensor->isApprox(Vec3(1, 1, -3), 1e-5f));
+  EXPECT_TRUE(t.points[0].isApprox(Vec3(0, 2, 0), 1e-5f));
+  EXPECT_FALSE(rotate_about_centroid(Cloud{c.points, std::nullopt}, half_turn_x).sensor);
 }
 
 TEST(Scale, HeightExtentAndGround) {

@@ -192,7 +192,7 @@ TEST(ToGrpcStatus, MapsEveryErrorCode) {
 
 TEST(TrainPercent, IsMonotonicOverTheStagesInOrder) {
   double last = 0;
-  for (const char* stage : {"features", "codebooks", "histograms", "centres", "storing"}) {
+  for (const char* stage : {"features", "codebooks", "centres", "calibration", "storing"}) {
     for (size_t done = 0; done <= 4; ++done) {
       double p = TrainPercent(stage, done, 4);
       EXPECT_GE(p, last) << stage << " " << done;

@@ -92,9 +92,7 @@ std::vector<size_t> exploration_grid(size_t max_keypoints, size_t step);
 
 // ---- Cross-validation -------------------------------------------------------------------------------
 
-// Fold (0..folds-1) of every object: per category, the objects are shuffled (seeded) and dealt round
-// robin, so each fold holds floor or ceil(n / folds) objects of every category.
-std::vector<int> stratified_folds(const std::vector<std::string>& object_categories, int folds, uint64_t seed);
+// stratified_folds (model.h) deals the objects to the folds.
 
 // ---- Decisions and metrics --------------------------------------------------------------------------
 
@@ -258,7 +256,9 @@ struct EvalResult {
   Method change_method = Method::kFusion;   // the default method (train.default_method when evaluated)
   std::vector<ChangeRow> changes;
   std::vector<ExplorationTrace> traces;     // of change_method
-  std::vector<StreamTrace> streams;         // of change_method, every view
+  std::vector<StreamTrace> streams;         // of change_method, every tested view
+  std::vector<double> settle_margins;       // per model: calibrated on held-out folds of its training set
+  std::vector<double> calibration_accuracy; // per model: its held-out decisions' share right
   std::vector<PhaseTiming> timings;
   double total_seconds = 0;
   int threads = 1;

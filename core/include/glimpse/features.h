@@ -16,6 +16,7 @@ namespace glimpse {
 struct FeatureParams {
   float duplicate_tolerance_m = 0;  // 0: drop exact duplicates only
   size_t min_points = 20;           // fewer points after cleaning: an error
+  bool find_keypoints = true;       // false: stop after the local surfaces (no method needs keypoints)
   SurfaceParams surface;
   KeypointParams keypoints;
   DescriptorParams descriptor;

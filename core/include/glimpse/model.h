@@ -34,7 +34,7 @@ struct LabelledCloud {
 };
 
 struct TrainProgress {
-  std::string stage;  // "features", "codebooks", "histograms", "centres", "done"
+  std::string stage;  // "features", "codebooks", "centres", "calibration", "done"
   size_t done = 0;
   size_t total = 0;
 };
@@ -47,6 +47,19 @@ struct TrainingStats {
   std::vector<std::string> categories;
   std::vector<size_t> clouds_per_category;
   double seconds = 0;
+};
+
+// What a model measured of its own decisions on held-out folds of its training set (inner
+// cross-validation by object, TrainParams::calibration_folds), so no threshold is set on the clouds it
+// is judged on.
+struct Calibration {
+  Method method = Method::kFusion;  // the method measured: the model's default
+  // The smallest margin between the best two scores at which held-out decisions were at least
+  // TrainParams::settle_precision right; a streamed decision of `method` settles there. 0: not
+  // calibrated (too few objects), sessions use SessionParams::full_margin.
+  double settle_margin = 0;
+  size_t held_out = 0;           // held-out decisions (views and prefixes) it was measured on
+  double held_out_accuracy = 0;  // their share right
 };
 
 struct ModelImpl;  // codebooks, bases, centres: defined in core/src (model_impl.h)
@@ -71,6 +84,18 @@ struct Classification {
   double feature_ms = 0;
   double decision_ms = 0;
 };
+
+// Fold (0..folds-1) of every object: per category, the objects are shuffled (seeded) and dealt round
+// robin, so each fold holds floor or ceil(n / folds) objects of every category. Used by training's own
+// calibration (held-out folds of the training set) and by the evaluation's cross-validation.
+std::vector<int> stratified_folds(const std::vector<std::string>& object_categories, int folds, uint64_t seed);
+
+// The lowest margin at which (margin, right) decisions reach `precision` (counting from min_count
+// decisions on); above every margin when they never do, 0 for fewer than min_count decisions.
+double settle_margin(std::vector<std::pair<double, bool>> decisions, double precision, size_t min_count);
+
+// The model's calibration (all zero for an untrained model).
+const Calibration& calibration(const Model& model);
 
 Expected<Model> train(const std::vector<LabelledCloud>& data, const TrainParams& params,
                       const ProgressFn& progress = {}, const CancelFn& cancel = {});

@@ -32,8 +32,12 @@ struct SessionParams {
   // best two smoothed scores and how steadily the winner held over the last decisions.
   double smoothing = 0.5;            // weight of the newest scores in the running average
   int stability_window = 4;          // decisions the stability looks back on
-  double full_margin = 0.3;          // smoothed margin giving full margin confidence
-  double settle_confidence = 0.5;    // settled at or above this (calibrated on the eval's streams)
+  // Smoothed margin giving full margin confidence. A model calibrated on held-out folds of its training
+  // set (its settle margin m, see TrainParams::settle_precision) replaces it by m / settle_confidence,
+  // so its decisions settle where they were found right, unless use_model_calibration is false.
+  double full_margin = 0.3;
+  bool use_model_calibration = true;
+  double settle_confidence = 0.5;    // settled at or above this
   // A settled decision stays settled while its winner holds and its confidence stays within this of
   // settle_confidence: more of the object narrows the margin a little (the top of a human and of a
   // four-legged animal look alike less than their whole), which must not make the answer flicker.

@@ -44,6 +44,12 @@ Mesh stand_upright(Mesh mesh, const Vec3& up);
 Eigen::Matrix3f random_rotation(uint64_t seed);
 Points rotate_points(const Points& points, const Eigen::Matrix3f& rotation);
 
+// A tilt of the up axis by at most `max_deg` degrees in a random direction, uniform over that cap of
+// directions (seeded): how far the up of a real scan may be off.
+Eigen::Matrix3f random_tilt(uint64_t seed, float max_deg);
+// The cloud turned by `rotation` about its centroid, its sensor with it.
+Cloud rotate_about_centroid(const Cloud& cloud, const Eigen::Matrix3f& rotation);
+
 // Scales about the origin.
 Mesh scale_uniform(Mesh mesh, float factor);
 // Uniform scale so the z extent (height) / the largest bounding-box extent equals the target.
