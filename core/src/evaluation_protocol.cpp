@@ -27,19 +27,6 @@ using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-uint64_t mix_seed(uint64_t seed, uint64_t salt) {  // splitmix64 of the pair
-  uint64_t z = seed + 0x9E3779B97F4A7C15ull * (salt + 1);
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  return z ^ (z >> 31);
-}
-
-uint64_t fnv1a(std::string_view s) {  // std::hash differs between standard libraries
-  uint64_t h = 0xcbf29ce484222325ull;
-  for (char c : s) h = (h ^ static_cast<unsigned char>(c)) * 0x100000001b3ull;
-  return h;
-}
-
 bool contains(const std::vector<Method>& v, Method m) { return std::find(v.begin(), v.end(), m) != v.end(); }
 
 // The base methods whose features the evaluated methods need (fusion brings its components).
@@ -52,14 +39,6 @@ std::vector<Method> feature_methods(const TrainParams& tp) {
   if (contains(tp.methods, Method::kFusion))
     for (Method m : tp.fusion_of) add(m);
   return base;
-}
-
-// Which of the 6 paper viewpoints to use: n evenly spaced ones.
-std::vector<size_t> viewpoint_indices(size_t n) {
-  n = std::clamp<size_t>(n, 1, 6);
-  std::vector<size_t> out;
-  for (size_t i = 0; i < n; ++i) out.push_back(i * 6 / n);
-  return out;
 }
 
 // body(i) for i in [0, n) on `threads` threads; progress is reported from thread 0 only.
@@ -120,6 +99,7 @@ struct Protocol {
   size_t full_points(size_t v) const { return std::max<size_t>(1, full[static_cast<size_t>(views[v].object)].size()); }
   const Cloud& learnt_cloud(size_t v) const { return views[v].learnt.points.empty() ? views[v].cloud : views[v].learnt; }
   bool tilted(size_t v) const { return !views[v].learnt.points.empty(); }
+  uint64_t object_seed(size_t o) const { return glimpse::object_seed(params.seed, objects[o].category + "/" + objects[o].id); }
 };
 
 Status validate(const std::vector<EvalObject>& objects, const EvalParams& p) {
@@ -193,14 +173,7 @@ void make_object_clouds(Protocol& P) {
   const size_t n = P.objects.size();
   P.full.assign(n, {});
   parallel_for(n, P.threads, "object clouds", P.progress, [&](size_t i) {
-    const Mesh& mesh = P.objects[i].mesh;
-    if (P.params.points_per_object == 0) {
-      P.full[i] = mesh_vertices(mesh).points;
-    } else {
-      const double area = surface_area(mesh);
-      P.full[i] = area > 0 ? sample_surface(mesh, double(P.params.points_per_object) / area, mix_seed(P.params.seed, i)).points
-                           : mesh_vertices(mesh).points;
-    }
+    P.full[i] = object_cloud(P.objects[i].mesh, P.params.points_per_object, P.object_seed(i));
   });
   for (const Points& p : P.full) P.r.object_points.push_back(p.size());
   P.r.timings.push_back({"object clouds", seconds_since(t0),
@@ -211,23 +184,16 @@ void make_object_clouds(Protocol& P) {
 // ---- 2. single views by HPR from the paper's viewpoints; objects without an up in a random pose ----
 void make_views(Protocol& P) {
   const auto t0 = Clock::now();
-  const std::vector<size_t> vp = viewpoint_indices(P.params.views_per_object);
-  P.views.assign(P.objects.size() * vp.size(), {});
+  const size_t n = std::clamp<size_t>(P.params.views_per_object, 1, 6);
+  P.views.assign(P.objects.size() * n, {});
   parallel_for(P.views.size(), P.threads, "HPR views", P.progress, [&](size_t j) {
-    const size_t o = j / vp.size(), v = j % vp.size();
+    const size_t o = j / n, v = j % n;
     const EvalObject& object = P.objects[o];
     P.views[j].object = static_cast<int>(o);
     P.views[j].view = static_cast<int>(v);
-    Points points;
-    if (object.any_pose) {
-      const uint64_t pose = mix_seed(P.params.seed, fnv1a(object.source + "/" + object.category + "/" + object.id) + v);
-      points = place_on_ground(rotate_points(P.full[o], random_rotation(pose)));
-    }
-    const Points& cloud = object.any_pose ? points : P.full[o];
-    const std::vector<Vec3> cameras = paper_viewpoints(cloud);
-    if (vp[v] < cameras.size()) P.views[j].cloud = hidden_point_removal(cloud, cameras[vp[v]], P.params.hpr_radius_factor);
+    P.views[j].cloud = object_view(P.full[o], v, n, object.any_pose, P.object_seed(o), P.params.hpr_radius_factor);
     if (object.role != EvalRole::kTestOnly && P.tp.tilt_deg > 0)
-      P.views[j].learnt = training_view(P.views[j].cloud, P.tp, fnv1a(object.source + "/" + object.category + "/" + object.id) + v);
+      P.views[j].learnt = training_view(P.views[j].cloud, P.tp, P.object_seed(o) + v);
   });
   size_t posed = 0;
   for (const EvalObject& o : P.objects) posed += o.any_pose;

@@ -301,6 +301,32 @@ std::vector<Vec3> paper_viewpoints(const Points& points) {
   return cameras;
 }
 
+uint64_t object_seed(uint64_t seed, std::string_view key) {
+  uint64_t h = 0xcbf29ce484222325ull;  // FNV-1a: std::hash differs between standard libraries
+  for (char c : key) h = (h ^ static_cast<unsigned char>(c)) * 0x100000001b3ull;
+  uint64_t z = seed + 0x9E3779B97F4A7C15ull * (h + 1);  // splitmix64 of the pair
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
+
+Points object_cloud(const Mesh& mesh, size_t points, uint64_t seed) {
+  const double area = points ? surface_area(mesh) : 0.0;
+  return area > 0 ? sample_surface(mesh, double(points) / area, seed).points : mesh_vertices(mesh).points;
+}
+
+Cloud object_view(const Points& full, size_t view, size_t views, bool any_pose, uint64_t pose_seed,
+                  double hpr_radius_factor) {
+  views = std::clamp<size_t>(views, 1, 6);
+  const size_t viewpoint = (std::min(view, views - 1) * 6) / views;
+  Points posed;
+  if (any_pose) posed = place_on_ground(rotate_points(full, random_rotation(object_seed(pose_seed, std::to_string(view)))));
+  const Points& cloud = any_pose ? posed : full;
+  const std::vector<Vec3> cameras = paper_viewpoints(cloud);
+  if (viewpoint >= cameras.size()) return Cloud{};
+  return hidden_point_removal(cloud, cameras[viewpoint], hpr_radius_factor);
+}
+
 std::vector<uint32_t> top_down_order(const Points& points) {
   std::vector<uint32_t> order(points.size());
   std::iota(order.begin(), order.end(), 0u);

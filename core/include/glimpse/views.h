@@ -83,6 +83,22 @@ std::vector<uint32_t> hidden_point_removal_indices(const Points& points, const V
 // centroid. Empty input gives no viewpoints.
 std::vector<Vec3> paper_viewpoints(const Points& points);
 
+// ---- the protocol's views of one object (sec. 3.4): the lab, the client and the tests share them ----
+
+// The seed of one object's samples and poses, from (seed, "category/id"): the same wherever and in
+// whatever order the object is listed, so the client's views of a folder are the lab's.
+uint64_t object_seed(uint64_t seed, std::string_view key);
+
+// An object's full 3D cloud: `points` area-weighted samples (seeded), or its vertices when points is 0
+// or the mesh has no area.
+Points object_cloud(const Mesh& mesh, size_t points, uint64_t seed);
+
+// View `view` of `views` evenly spaced among the 6 of paper_viewpoints, by hidden point removal. An
+// object without a natural up is first turned to a random pose of its own for this view (seeded by
+// pose_seed and the view) and put on the ground.
+Cloud object_view(const Points& full, size_t view, size_t views, bool any_pose, uint64_t pose_seed,
+                  double hpr_radius_factor = 100.0);
+
 // ---- top-to-bottom exploring sequence (sec. 4) ----
 
 // Point indices by descending z; ties by ascending index; NaN z last.
