@@ -4,6 +4,8 @@
 #include <atomic>
 #include <cctype>
 #include <chrono>
+#include <cmath>
+#include <cstdio>
 #include <map>
 #include <set>
 #include <string>
@@ -69,6 +71,7 @@ Expected<CloudFeatures> cloud_features(const Cloud& cloud, const TrainParams& pa
   if (!f.ok()) return f.error();
   if (cancel && cancel()) return cancelled("feature extraction cancelled");
   out.points = f->cloud.points.size();
+  out.extent_m = bounds(f->cloud.points).extent().maxCoeff();
   for (const Keypoint& k : f->keypoints) out.positions.push_back(k.position);
   out.descriptors = std::move(f->descriptors);
   if (needs(methods, Method::kUSH)) out.ush = upright_histogram(f->cloud.points, f->surfaces, params.ush);
@@ -361,6 +364,11 @@ Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainP
   for (const auto& d : data) objects.insert(d.category + "/" + d.object_id);
   model.stats.objects = objects.size();
   for (const auto& c : f) model.stats.keypoints += c.positions.size();
+  model.stats.min_extent_m = INFINITY;
+  for (const auto& c : f) {
+    model.stats.min_extent_m = std::min(model.stats.min_extent_m, c.extent_m);
+    model.stats.max_extent_m = std::max(model.stats.max_extent_m, c.extent_m);
+  }
   model.stats.categories = model.categories;
   model.stats.clouds_per_category.assign(model.categories.size(), 0);
   for (int l : labels) ++model.stats.clouds_per_category[static_cast<size_t>(l)];
@@ -372,9 +380,39 @@ Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainP
 
 // ---- Classification -------------------------------------------------------------------------------
 
+std::string size_warning(const TrainingStats& stats, const Cloud& cloud) {
+  if (!(stats.max_extent_m > 0) || cloud.points.empty()) return {};
+  Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
+  for (const Vec3& p : cloud.points)
+    if (p.allFinite()) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  const float extent = (hi - lo).maxCoeff();
+  if (!std::isfinite(extent)) return {};
+  char known[96];
+  std::snprintf(known, sizeof known, "the model knows %.2g-%.2g m objects", stats.min_extent_m, stats.max_extent_m);
+  char buf[256];
+  if (extent > 4 * stats.max_extent_m) {
+    const char* unit = extent > 300 * stats.max_extent_m ? "millimetres" : extent > 30 * stats.max_extent_m ? "centimetres" : "another unit";
+    std::snprintf(buf, sizeof buf, "the cloud spans %.3g m, %s: %s? Clouds are in metres", extent, known, unit);
+    return buf;
+  }
+  if (extent < stats.min_extent_m / 4) {
+    std::snprintf(buf, sizeof buf, "the cloud spans only %.3g m, %s: another unit (clouds are in metres)?", extent, known);
+    return buf;
+  }
+  return {};
+}
+
+Status check_feature_version(const Model& model) {
+  if (model.feature_version == kFeaturePipelineVersion) return {};
+  return failed_precondition("the model was trained with feature pipeline version " +
+                             std::to_string(model.feature_version) + ", this build computes version " +
+                             std::to_string(kFeaturePipelineVersion) + ": its references do not match new features; retrain it");
+}
+
 Expected<Classification> classify(const Model& model, const Cloud& cloud, std::optional<Method> method,
                                   const CancelFn& cancel) {
   if (!model.impl) return failed_precondition("the model is not trained");
+  if (Status s = check_feature_version(model); !s.ok()) return s.error();
   const Method m = method.value_or(model.default_method);
   if (!needs(model.methods, m))
     return invalid_argument(std::string("the model was not trained for method '") + method_name(m) + "'");
@@ -394,6 +432,7 @@ Expected<Classification> classify(const Model& model, const Cloud& cloud, std::o
   c.winner = argmax(scores);
   c.points = f->points;
   c.keypoints = f->positions.size();
+  c.warning = size_warning(model.stats, cloud);
   return c;
 }
 

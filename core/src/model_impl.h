@@ -35,6 +35,7 @@ struct CloudFeatures {
   std::optional<Eigen::VectorXf> ush;
   std::optional<Eigen::VectorXf> size;  // visible_size: the size-only baseline
   size_t points = 0;
+  float extent_m = 0;  // the largest bounding-box extent of the cleaned cloud
 };
 
 // The methods a model needs computed for `method` (fusion expands to its components).
@@ -68,6 +69,9 @@ Expected<Model> train_on_features(std::vector<TrainingSample> samples, const Tra
 Calibration calibrate(const ModelImpl& impl, Method method, const std::vector<Eigen::MatrixXd>& histograms,
                       const std::vector<int>& labels, const std::vector<int>& objects,
                       const std::vector<std::string>& object_categories, int categories, int threads);
+
+// A failed precondition naming both versions when the model's features were computed differently.
+Status check_feature_version(const Model& model);
 
 // Scores of `method` (fusion: the mean of its components' scores).
 Eigen::VectorXd method_scores(const ModelImpl& impl, Method method, const CloudFeatures& f);

@@ -23,7 +23,8 @@ namespace {
 
 constexpr char kMagic[8] = {'G', 'L', 'M', 'P', 'S', 'M', 'D', 'L'};
 // 1: stage slots of the first 5 methods. 2: a u8 slot count first (USH is method 6). 3: the size-only
-// baseline (method 7) and the calibration after the stages.
+// baseline (method 7), the calibration after the stages, the feature pipeline version and the training
+// extents after the statistics.
 constexpr uint32_t kFormatVersion = 3;
 constexpr uint32_t kOldestReadableVersion = 1;
 
@@ -308,6 +309,9 @@ std::vector<uint8_t> serialize(const Model& model) {
   w.f64(model.stats.seconds);
   w.u32(static_cast<uint32_t>(model.stats.clouds_per_category.size()));
   for (size_t n : model.stats.clouds_per_category) w.u64(n);
+  w.u32(model.feature_version);
+  w.f64(model.stats.min_extent_m);
+  w.f64(model.stats.max_extent_m);
 
   const bool trained = model.impl != nullptr;
   w.u8(trained ? 1 : 0);
@@ -383,6 +387,15 @@ Expected<Model> deserialize(std::span<const uint8_t> bytes) {
   const uint32_t nper = r.u32("stats");
   if (nper != ncat) r.fail("per-category statistics do not match the categories");
   for (uint32_t i = 0; i < nper && !r.failed(); ++i) model.stats.clouds_per_category.push_back(r.u64("stats"));
+  model.feature_version = 1;  // formats 1 and 2 came before the version was recorded
+  if (version >= 3) {
+    model.feature_version = r.u32("feature version");
+    model.stats.min_extent_m = static_cast<float>(r.f64("extent"));
+    model.stats.max_extent_m = static_cast<float>(r.f64("extent"));
+    if (!r.failed() && !(model.stats.min_extent_m >= 0 && model.stats.max_extent_m >= model.stats.min_extent_m &&
+                         model.stats.max_extent_m < 1e7f))
+      r.fail("training extents out of range");
+  }
   model.stats.categories = model.categories;
 
   const bool trained = r.u8("trained flag") == 1;

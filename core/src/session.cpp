@@ -293,6 +293,7 @@ void track_decision(DecisionTrack& t, const std::vector<double>& scores, size_t 
 Expected<std::unique_ptr<ScanSession>> ScanSession::create(std::shared_ptr<const Model> model,
                                                             const SessionParams& params) {
   if (!model || !model->impl) return failed_precondition("the session needs a trained model");
+  if (Status s = check_feature_version(*model); !s.ok()) return s.error();
   const Method method = params.method.value_or(model->default_method);
   if (std::find(model->methods.begin(), model->methods.end(), method) == model->methods.end())
     return invalid_argument(std::string("the model was not trained for method '") + method_name(method) + "'");

@@ -200,6 +200,42 @@ TEST(Calibration, ATrainedModelMeasuresItsDefaultMethodOnHeldOutObjects) {
   EXPECT_EQ(calibration(Model{}).held_out, 0u);
 }
 
+TEST(Classify, WarnsWhenTheCloudIsFarOutsideTheSizesLearnt) {
+  const Trained& t = trained();
+  EXPECT_GT(t.model.stats.min_extent_m, 0.f);
+  EXPECT_GT(t.model.stats.max_extent_m, t.model.stats.min_extent_m);
+  const Cloud& view = t.test.front().cloud;
+  auto c = classify(t.model, view);
+  ASSERT_TRUE(c.ok());
+  EXPECT_TRUE(c->warning.empty()) << c->warning;
+  Cloud mm = view;  // the same scan in millimetres
+  for (Vec3& p : mm.points) p *= 1000.f;
+  if (mm.sensor) *mm.sensor *= 1000.f;
+  auto big = classify(t.model, mm);
+  ASSERT_TRUE(big.ok()) << big.error().message;
+  EXPECT_NE(big->warning.find("millimetres"), std::string::npos) << big->warning;
+  EXPECT_NE(big->warning.find("the model knows"), std::string::npos) << big->warning;
+  TrainingStats stats;
+  stats.min_extent_m = 0.1f, stats.max_extent_m = 2.f;
+  Cloud tiny;
+  tiny.points = {Vec3(0, 0, 0), Vec3(0.001f, 0.002f, 0.001f)};
+  EXPECT_NE(size_warning(stats, tiny).find("only"), std::string::npos);
+  EXPECT_TRUE(size_warning(TrainingStats{}, mm).empty());  // a model that knows no sizes says nothing
+}
+
+TEST(Classify, RefusesAModelOfAnotherFeaturePipelineVersion) {
+  Model old = trained().model;
+  old.feature_version = kFeaturePipelineVersion - 1;
+  auto c = classify(old, trained().test.front().cloud);
+  ASSERT_FALSE(c.ok());
+  EXPECT_EQ(c.error().code, ErrorCode::kFailedPrecondition);
+  EXPECT_NE(c.error().message.find("feature pipeline version " + std::to_string(kFeaturePipelineVersion - 1)),
+            std::string::npos) << c.error().message;
+  auto back = deserialize(serialize(old));  // the version is stored
+  ASSERT_TRUE(back.ok());
+  EXPECT_EQ(back->feature_version, kFeaturePipelineVersion - 1);
+}
+
 TEST(Serialize, RoundTripGivesIdenticalScores) {
   const Trained& t = trained();
   const std::vector<uint8_t> bytes = serialize(t.model);

@@ -47,7 +47,16 @@ struct TrainingStats {
   std::vector<std::string> categories;
   std::vector<size_t> clouds_per_category;
   double seconds = 0;
+  // The largest bounding-box extent of the clouds learnt (views and prefixes), smallest and largest, m:
+  // what sizes the model knows, so a cloud far outside them (a scan in millimetres) gets a warning.
+  float min_extent_m = 0, max_extent_m = 0;
 };
+
+// The version of the feature pipeline (cleaning, radii, surfaces, keypoints, descriptors, histograms):
+// raised whenever a change moves the numbers a cloud's features come out as. A model stores the version
+// it was trained with; classifying with a model of another version is refused (its references would be
+// compared with features computed differently).
+inline constexpr uint32_t kFeaturePipelineVersion = 3;
 
 // What a model measured of its own decisions on held-out folds of its training set (inner
 // cross-validation by object, TrainParams::calibration_folds), so no threshold is set on the clouds it
@@ -70,6 +79,7 @@ struct Model {
   std::vector<std::string> categories;
   std::vector<Method> methods;  // methods this model can classify with
   Method default_method = Method::kFusion;
+  uint32_t feature_version = kFeaturePipelineVersion;  // models of format 1-2 read as version 1
   TrainingStats stats;
   std::shared_ptr<const ModelImpl> impl;  // immutable after training; shared by sessions/threads
 };
@@ -83,7 +93,12 @@ struct Classification {
   size_t keypoints = 0;
   double feature_ms = 0;
   double decision_ms = 0;
+  std::string warning;  // for a person: e.g. the cloud is far larger than anything the model learnt
 };
+
+// A warning when the cloud's largest extent is more than 4x outside the extents the model learnt
+// ("the cloud spans 1700 m, the model knows 0.03-2.1 m objects: millimetres?"); empty otherwise.
+std::string size_warning(const TrainingStats& stats, const Cloud& cloud);
 
 // Fold (0..folds-1) of every object: per category, the objects are shuffled (seeded) and dealt round
 // robin, so each fold holds floor or ceil(n / folds) objects of every category. Used by training's own
