@@ -361,21 +361,6 @@ int nearest_centre(const MatrixXd& centres, const VectorXd& x) {
   return best;
 }
 
-int nearest_centre_l1(const MatrixXd& centres, const VectorXd& x) {
-  assert(centres.rows() == 0 || centres.cols() == x.size());
-  int best = -1;
-  double best_d = std::numeric_limits<double>::infinity();
-  for (Index j = 0; j < centres.rows(); ++j) {
-    const VectorXd c = centres.row(j).transpose();
-    const double dj = sum_abs_diff(c.data(), x.data(), x.size());
-    if (best < 0 || dj < best_d) {
-      best_d = dj;
-      best = static_cast<int>(j);
-    }
-  }
-  return best;
-}
-
 std::vector<int> assign(const MatrixXd& centres, const MatrixXd& rows, int threads) {
   std::vector<int> labels(static_cast<size_t>(rows.rows()), -1);
   if (centres.rows() == 0 || rows.rows() == 0) return labels;
@@ -392,23 +377,6 @@ double l1(const VectorXd& a, const VectorXd& b) {
   return sum_abs_diff(a.data(), b.data(), a.size());
 }
 
-double l2(const VectorXd& a, const VectorXd& b) {
-  if (double bad = checked_size(a, b); bad != 0) return bad;
-  return std::sqrt(squared_l2(a.data(), b.data(), a.size()));
-}
-
-double chi2(const VectorXd& a, const VectorXd& b) {
-  if (double bad = checked_size(a, b); bad != 0) return bad;
-  double s = 0;
-  for (Index j = 0; j < a.size(); ++j) {
-    const double sum = a[j] + b[j];
-    if (sum > 0) s += (a[j] - b[j]) * (a[j] - b[j]) / sum;
-  }
-  return 0.5 * s;
-}
-
 double l1(const Eigen::VectorXf& a, const Eigen::VectorXf& b) { return l1(VectorXd(a.cast<double>()), VectorXd(b.cast<double>())); }
-double l2(const Eigen::VectorXf& a, const Eigen::VectorXf& b) { return l2(VectorXd(a.cast<double>()), VectorXd(b.cast<double>())); }
-double chi2(const Eigen::VectorXf& a, const Eigen::VectorXf& b) { return chi2(VectorXd(a.cast<double>()), VectorXd(b.cast<double>())); }
 
 }  // namespace glimpse

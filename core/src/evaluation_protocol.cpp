@@ -14,7 +14,8 @@
 #include <set>
 
 #include "glimpse/evaluation.h"
-#include "glimpse/geometry.h"
+#include "glimpse/neighbourhoods.h"
+#include "glimpse/surface_fit.h"
 #include "glimpse/views.h"
 #include "model_impl.h"
 #include "parallel.h"

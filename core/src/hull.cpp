@@ -7,7 +7,7 @@ extern "C" {
 #include <libqhull_r/qhull_ra.h>
 }
 
-#include "glimpse/geometry.h"
+#include "glimpse/descriptor.h"
 
 namespace glimpse {
 

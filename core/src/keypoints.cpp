@@ -31,20 +31,8 @@ std::vector<Keypoint> characteristic_scale_keypoints(const NeighbourIndex& tree,
   // Accepted keypoints in a grid of cells as large as the largest claim, so "is this candidate inside
   // an accepted keypoint's sphere" looks at 27 cells, not at every point of the cloud.
   const float claim_max = std::max(max_radius, r);
-  struct Cell {
-    int32_t x, y, z;
-    bool operator==(const Cell&) const = default;
-  };
-  struct CellHash {
-    size_t operator()(const Cell& c) const {
-      return static_cast<size_t>(c.x) * 73856093u ^ static_cast<size_t>(c.y) * 19349663u ^ static_cast<size_t>(c.z) * 83492791u;
-    }
-  };
-  auto cell_of = [&](const Vec3& p) {
-    return Cell{grid_cell<int32_t>(p.x(), claim_max), grid_cell<int32_t>(p.y(), claim_max),
-                grid_cell<int32_t>(p.z(), claim_max)};
-  };
-  std::unordered_map<Cell, std::vector<uint32_t>, CellHash> accepted;  // cell -> keypoint slots
+  auto cell_of = [&](const Vec3& p) { return cell_key(p, claim_max); };
+  std::unordered_map<CellKey, std::vector<uint32_t>, CellKeyHash> accepted;  // cell -> keypoint slots
   auto inside_claim = [&](uint32_t k, const Vec3& p) {
     // Below the support radius r curvature is not resolved, so a claim is never smaller than r.
     const float claim = std::max(keypoints[k].characteristic_radius, r);
@@ -57,7 +45,7 @@ std::vector<Keypoint> characteristic_scale_keypoints(const NeighbourIndex& tree,
         if (inside_claim(k, p)) return true;
       return false;
     }
-    const Cell c = cell_of(p);
+    const CellKey c = cell_of(p);
     for (int dx = -1; dx <= 1; ++dx)
       for (int dy = -1; dy <= 1; ++dy)
         for (int dz = -1; dz <= 1; ++dz) {

@@ -7,7 +7,9 @@
 #include <string>
 
 #include "glimpse/features.h"
-#include "glimpse/geometry.h"
+#include "glimpse/neighbourhoods.h"
+#include "glimpse/preprocess.h"
+#include "glimpse/surface_fit.h"
 #include "glimpse/keypoints.h"
 #include "glimpse/upright_histogram.h"
 #include "model_impl.h"

@@ -1,6 +1,8 @@
 // Procedural shapes for the five categories of sec. 3.4, built from evenly tessellated primitives.
 #include "glimpse/zoo.h"
 
+#include "glimpse/spatial_hash.h"
+
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
@@ -140,17 +142,12 @@ class Builder {
   // Merges coincident vertices (seams, poles, shared box edges) and drops the collapsed triangles.
   Mesh finish() {
     const double q = 1e-3 * h_;
-    struct KeyHash {
-      size_t operator()(const Eigen::Vector3i& k) const {
-        return size_t(k.x()) * 73856093u ^ size_t(k.y()) * 19349663u ^ size_t(k.z()) * 83492791u;
-      }
-    };
-    std::unordered_map<Eigen::Vector3i, int, KeyHash> index;
+    std::unordered_map<CellKey, int, CellKeyHash> index;
     std::vector<int> remap(mesh_.vertices.size());
     Mesh out;
     for (size_t i = 0; i < mesh_.vertices.size(); ++i) {
       const Vec3& p = mesh_.vertices[i];
-      const Eigen::Vector3i key(int(std::lround(p.x() / q)), int(std::lround(p.y() / q)), int(std::lround(p.z() / q)));
+      const CellKey key{std::lround(p.x() / q), std::lround(p.y() / q), std::lround(p.z() / q)};  // nearest, not floor
       const auto [it, added] = index.emplace(key, int(out.vertices.size()));
       if (added) out.vertices.push_back(p);
       remap[i] = it->second;

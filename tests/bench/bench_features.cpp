@@ -12,7 +12,9 @@
 #include "scene.h"
 #include "glimpse/features.h"
 #include "glimpse/descriptor.h"
-#include "glimpse/geometry.h"
+#include "glimpse/neighbourhoods.h"
+#include "glimpse/preprocess.h"
+#include "glimpse/surface_fit.h"
 #include "glimpse/keypoints.h"
 
 namespace glimpse {

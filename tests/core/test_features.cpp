@@ -9,7 +9,11 @@
 
 #include "glimpse/descriptor.h"
 #include "glimpse/features.h"
-#include "glimpse/geometry.h"
+#include "glimpse/boundaries.h"
+#include "glimpse/neighbourhoods.h"
+#include "glimpse/normal_orientation.h"
+#include "glimpse/preprocess.h"
+#include "glimpse/surface_fit.h"
 #include "glimpse/keypoints.h"
 #include "glimpse/upright_histogram.h"
 #include "shapes.h"
@@ -115,45 +119,6 @@ TEST(LocalSurfaces, PropagationOrientsASphereConsistently) {
   EXPECT_EQ(outward, valid) << "every component is turned outward";
 }
 
-// The textbook fit local_surface must agree with: two-pass PCA, exact Gaussian weights, the full
-// weighted design matrix solved by column-pivoting QR, all in double precision.
-LocalSurface reference_surface(const Points& pts, uint32_t index, float r, const Vec3& viewpoint) {
-  LocalSurface s;
-  std::vector<uint32_t> nb;
-  for (uint32_t j = 0; j < pts.size(); ++j)
-    if ((pts[j] - pts[index]).squaredNorm() <= r * r) nb.push_back(j);
-  if (nb.size() < 8) return s;
-  Eigen::Vector3d c = Eigen::Vector3d::Zero();
-  for (uint32_t j : nb) c += pts[j].cast<double>();
-  c /= static_cast<double>(nb.size());
-  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-  for (uint32_t j : nb) cov += (pts[j].cast<double>() - c) * (pts[j].cast<double>() - c).transpose();
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
-  Eigen::Vector3d n = es.eigenvectors().col(0);
-  const Eigen::Vector3d p = pts[index].cast<double>();
-  if (n.dot(viewpoint.cast<double>() - p) < 0) n = -n;
-  const Eigen::Vector3d e1 = es.eigenvectors().col(2), e2 = n.cross(e1);
-  Eigen::MatrixXd A(nb.size(), 6);
-  Eigen::VectorXd z(nb.size());
-  for (size_t k = 0; k < nb.size(); ++k) {
-    const Eigen::Vector3d d = (pts[nb[k]].cast<double>() - p) / r;
-    const double x = d.dot(e1), y = d.dot(e2), sw = std::sqrt(std::exp(-2 * d.squaredNorm()));
-    A.row(static_cast<Eigen::Index>(k)) << 0.5 * x * x, x * y, 0.5 * y * y, x, y, 1;
-    A.row(static_cast<Eigen::Index>(k)) *= sw;
-    z[static_cast<Eigen::Index>(k)] = sw * d.dot(n);
-  }
-  const Eigen::VectorXd q = A.colPivHouseholderQr().solve(z);
-  const float p1 = float(q[0] / r), p2 = float(q[1] / r), p3 = float(q[2] / r), p4 = float(q[3]), p5 = float(q[4]);
-  const Eigen::Vector2f k = principal_curvatures(p1, p2, p3, p4, p5);
-  const Eigen::Vector2f l = harris_eigenvalues(p1, p2, p3, p4, p5);
-  s.normal = n.cast<float>();
-  s.k1 = k[0], s.k2 = k[1], s.lambda_min = l[0], s.lambda_max = l[1];
-  s.valid = true;
-  // Where the two smallest PCA axes nearly tie the normal is ill-defined: callers skip such points.
-  s.neighbours = (es.eigenvalues()[1] - es.eigenvalues()[0]) > 1e-3 * es.eigenvalues()[2] ? 1 : 0;
-  return s;
-}
-
 TEST(LocalSurfaces, AgreeWithATextbookFit) {
   // A noisy scene of flat faces, edges, corners, a ball and a thin post, seen from one side.
   Points pts = test::jitter(test::cube(0.3f, 0.01f), 0.0008f, 11);
@@ -166,7 +131,7 @@ TEST(LocalSurfaces, AgreeWithATextbookFit) {
   const auto fast = local_surfaces(tree, r, viewpoint, {});
   size_t compared = 0;
   for (uint32_t i = 0; i < cloud.points.size(); i += 7) {
-    const LocalSurface ref = reference_surface(cloud.points, i, r, viewpoint);
+    const LocalSurface ref = reference_local_surface(cloud.points, i, r, viewpoint);
     ASSERT_EQ(fast[i].valid, ref.valid) << "point " << i;
     if (!ref.valid || ref.neighbours == 0) continue;
     ++compared;
@@ -302,13 +267,15 @@ TEST(Boundary, GapTestAgreesWithMeasuredAngles) {
 TEST(Keypoints, BoundaryOfAViewGivesNone) {
   // A hemisphere cap seen from above: strongly curved everywhere, but its rim is a view boundary.
   Points cap;
-  for (const Vec3& p : test::sphere(0.05f, 2000))
-    if (p.z() > 0.015f) cap.push_back(p);
+  // (1500 points: the rim's half neighbourhoods fit spuriously high curvatures, 67 of them are
+  // candidates the boundary test must turn away.)
+  for (const Vec3& p : test::sphere(0.05f, 1500))
+    if (p.z() > 0.01f) cap.push_back(p);
   auto with = extract({cap, Vec3(0, 0, 1)});
   ASSERT_TRUE(with.ok());
   ASSERT_FALSE(with->keypoints.empty());
   const float r = with->diagnostics.support_radius_m;
-  const float rim_z = 0.015f;
+  const float rim_z = 0.01f;
   for (const Keypoint& kp : with->keypoints) {
     // Distance from the rim circle, along the surface roughly: vertical gap is a lower bound.
     EXPECT_GT(kp.position.z() - rim_z, 0.5f * r) << "keypoint too close to the rim";
@@ -481,11 +448,28 @@ TEST(GridCell, ClampsInsteadOfOverflowing) {
   EXPECT_EQ(grid_cell<int32_t>(NAN, 1.f), 0);
 }
 
-TEST(Clean, VoxelDownsampleAveragesEachCell) {
-  Cloud c{{Vec3(0.01f, 0.01f, 0.01f), Vec3(0.03f, 0.03f, 0.03f), Vec3(0.51f, 0, 0)}, std::nullopt};
-  Cloud d = voxel_downsample(c, 0.1f);
-  ASSERT_EQ(d.points.size(), 2u);
-  EXPECT_TRUE(d.points[0].isApprox(Vec3(0.02f, 0.02f, 0.02f)));
+TEST(Clean, AChunkedScanKeepsWhatItsWholeCloudKeeps) {
+  // Points on a coarse lattice, each sent two or three times in a shuffled order, some nearly equal.
+  std::mt19937 rng(4);
+  Points all;
+  for (int i = 0; i < 3000; ++i) {
+    const Vec3 p(float(rng() % 40) * 0.01f, float(rng() % 40) * 0.01f, float(rng() % 5) * 0.01f);
+    all.push_back(p);
+    if (i % 3 == 0) all.push_back(p + Vec3(0.0004f, 0, 0));  // within a 1 mm tolerance cell, or not
+  }
+  for (float tolerance : {0.f, 0.001f, 0.005f}) {
+    SCOPED_TRACE(tolerance);
+    CleanReport report;
+    const Cloud whole = clean({all, std::nullopt}, tolerance, &report);
+    EXPECT_EQ(report.kept + report.duplicates, all.size());
+    EXPECT_GT(report.duplicates, 0u);
+    DuplicateFilter filter(tolerance);  // fed in chunks of 7, growing its table as it goes
+    Points kept;
+    for (size_t begin = 0; begin < all.size(); begin += 7)
+      for (size_t i = begin; i < std::min(all.size(), begin + 7); ++i)
+        if (filter.keep(all[i])) kept.push_back(all[i]);
+    EXPECT_EQ(kept, whole.points);
+  }
 }
 
 TEST(Hull, VolumeOfACubeAndAFlatSet) {

@@ -79,20 +79,14 @@ struct KMeansResult {
 Expected<KMeansResult> kmeans(const Eigen::MatrixXd& rows, const KMeansParams& params);
 
 // Index of the nearest centre (rows of `centres`), the lowest index on ties; -1 if there are none.
-int nearest_centre(const Eigen::MatrixXd& centres, const Eigen::VectorXd& x);     // L2
-int nearest_centre_l1(const Eigen::MatrixXd& centres, const Eigen::VectorXd& x);  // L1, as sec. 4
+int nearest_centre(const Eigen::MatrixXd& centres, const Eigen::VectorXd& x);  // L2
 // nearest_centre for every row of `rows`; threads as in KMeansParams.
 std::vector<int> assign(const Eigen::MatrixXd& centres, const Eigen::MatrixXd& rows, int threads = 0);
 
 // ---- Distances of the decision stage. Sizes must match (asserted; +infinity in release builds).
 
 double l1(const Eigen::VectorXd& a, const Eigen::VectorXd& b);  // sec. 4: robust to occlusion
-double l2(const Eigen::VectorXd& a, const Eigen::VectorXd& b);
-// 0.5 * sum (a - b)^2 / (a + b) over bins with a + b > 0; for non-negative histograms.
-double chi2(const Eigen::VectorXd& a, const Eigen::VectorXd& b);
-// Float overloads for descriptors such as vfh() / esf() (accumulated in double).
+// Float overload for descriptors such as vfh() / esf() (accumulated in double).
 double l1(const Eigen::VectorXf& a, const Eigen::VectorXf& b);
-double l2(const Eigen::VectorXf& a, const Eigen::VectorXf& b);
-double chi2(const Eigen::VectorXf& a, const Eigen::VectorXf& b);
 
 }  // namespace glimpse

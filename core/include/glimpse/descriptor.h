@@ -4,10 +4,12 @@
 #pragma once
 
 #include <array>
+#include <span>
 #include <vector>
 
-#include "glimpse/geometry.h"
 #include "glimpse/keypoints.h"
+#include "glimpse/neighbourhoods.h"
+#include "glimpse/surface_fit.h"
 
 namespace glimpse {
 
@@ -22,6 +24,9 @@ enum DescriptorField : int {
   kRho2 = 10,           // eq. 9, metres
   kHullVolume = 11,     // m^3
 };
+
+// Volume of the convex hull of the points (qhull); 0 for fewer than 4 or coplanar points.
+double convex_hull_volume(std::span<const Vec3> points);
 
 struct DescriptorParams {
   float large_window_supports = 2.5f;  // the large-window normal uses R = this x r (sec. 2.3, eq. 4)

@@ -8,7 +8,9 @@
 #include "glimpse/cloud.h"
 #include "glimpse/descriptor.h"
 #include "glimpse/expected.h"
-#include "glimpse/geometry.h"
+#include "glimpse/neighbourhoods.h"
+#include "glimpse/preprocess.h"
+#include "glimpse/surface_fit.h"
 #include "glimpse/keypoints.h"
 
 namespace glimpse {

@@ -10,7 +10,9 @@
 #include <vector>
 
 #include "glimpse/cloud.h"
-#include "glimpse/geometry.h"
+#include "glimpse/boundaries.h"
+#include "glimpse/neighbourhoods.h"
+#include "glimpse/surface_fit.h"
 
 namespace glimpse {
 

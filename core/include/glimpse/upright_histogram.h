@@ -17,7 +17,7 @@
 #include <vector>
 
 #include "glimpse/cloud.h"
-#include "glimpse/geometry.h"
+#include "glimpse/surface_fit.h"
 
 namespace glimpse {
 

@@ -1,0 +1,171 @@
+#include "glimpse/neighbourhoods.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <nanoflann.hpp>
+
+namespace glimpse {
+
+namespace {
+struct PointsAdaptor {
+  const Points* pts;
+  size_t kdtree_get_point_count() const { return pts->size(); }
+  float kdtree_get_pt(size_t i, size_t dim) const { return (*pts)[i][static_cast<int>(dim)]; }
+  template <class BBox>
+  bool kdtree_get_bbox(BBox&) const { return false; }
+};
+using Tree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, PointsAdaptor>,
+                                                 PointsAdaptor, 3, uint32_t>;
+}  // namespace
+
+struct KdTree::Impl {
+  explicit Impl(const Points& p) : adaptor{&p}, tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16)) {
+    if (!p.empty()) tree.buildIndex();
+  }
+  PointsAdaptor adaptor;
+  Tree tree;
+};
+
+KdTree::KdTree(const Points& points) : impl_(std::make_unique<Impl>(points)) {}
+KdTree::~KdTree() = default;
+KdTree::KdTree(KdTree&&) noexcept = default;
+KdTree& KdTree::operator=(KdTree&&) noexcept = default;
+const Points& KdTree::points() const { return *impl_->adaptor.pts; }
+
+void KdTree::radius(const Vec3& query, float radius, std::vector<Neighbour>& out) const {
+  out.clear();
+  if (impl_->adaptor.pts->empty()) return;
+  // nanoflann 1.4 returns (index, squared distance) pairs; it wants the squared radius.
+  thread_local std::vector<std::pair<uint32_t, float>> found;
+  found.clear();
+  nanoflann::SearchParams params(32, 0.f, false);
+  impl_->tree.radiusSearch(query.data(), radius * radius, found, params);
+  out.reserve(found.size());
+  for (const auto& [i, d] : found) out.push_back({i, d});
+}
+
+void KdTree::nearest(const Vec3& query, size_t k, std::vector<Neighbour>& out) const {
+  out.clear();
+  k = std::min(k, impl_->adaptor.pts->size());
+  if (k == 0) return;
+  thread_local std::vector<uint32_t> idx;
+  thread_local std::vector<float> dist;
+  idx.resize(k);
+  dist.resize(k);
+  const size_t n = impl_->tree.knnSearch(query.data(), k, idx.data(), dist.data());
+  for (size_t i = 0; i < n; ++i) out.push_back({idx[i], dist[i]});
+}
+
+// ---- VoxelIndex ----------------------------------------------------------------------------------
+
+VoxelIndex::VoxelIndex(float cell_m) : cell_(cell_m > 0 ? cell_m : 1.f) {}
+
+uint32_t VoxelIndex::add(const Vec3& p) {
+  const auto i = static_cast<uint32_t>(points_.size());
+  points_.push_back(p);
+  cells_[key(p)].push_back(i);
+  return i;
+}
+
+void VoxelIndex::radius(const Vec3& q, float radius, std::vector<Neighbour>& out) const {
+  out.clear();
+  const float r2 = radius * radius;
+  const CellKey lo = key(q - Vec3::Constant(radius)), hi = key(q + Vec3::Constant(radius));
+  const double span = (double(hi.x) - lo.x + 1) * (double(hi.y) - lo.y + 1) * (double(hi.z) - lo.z + 1);
+  if (span > static_cast<double>(cells_.size())) {
+    // A query larger than the whole set: visiting the occupied cells is cheaper than the empty ones.
+    for (const auto& [k, members] : cells_)
+      for (uint32_t i : members) {
+        const float d = (points_[i] - q).squaredNorm();
+        if (d <= r2) out.push_back({i, d});
+      }
+    return;
+  }
+  for (int64_t x = lo.x; x <= hi.x; ++x)
+    for (int64_t y = lo.y; y <= hi.y; ++y)
+      for (int64_t z = lo.z; z <= hi.z; ++z) {
+        const auto it = cells_.find({x, y, z});
+        if (it == cells_.end()) continue;
+        for (uint32_t i : it->second) {
+          const float d = (points_[i] - q).squaredNorm();
+          if (d <= r2) out.push_back({i, d});
+        }
+      }
+}
+
+void VoxelIndex::nearest(const Vec3& q, size_t k, std::vector<Neighbour>& out) const {
+  out.clear();
+  k = std::min(k, points_.size());
+  if (k == 0) return;
+  // Grow the search radius until k points are inside it; the k nearest are then exact.
+  float radius = cell_;
+  for (;;) {
+    this->radius(q, radius, out);
+    if (out.size() >= k) break;
+    radius *= 2;
+  }
+  auto order = [](const Neighbour& a, const Neighbour& b) {
+    return a.distance_sq != b.distance_sq ? a.distance_sq < b.distance_sq : a.index < b.index;
+  };
+  std::partial_sort(out.begin(), out.begin() + static_cast<std::ptrdiff_t>(k), out.end(), order);
+  out.resize(k);
+}
+
+float median_knn_distance(const NeighbourIndex& tree, size_t k, size_t sample) {
+  const Points& pts = tree.points();
+  if (pts.size() < 2 || k == 0) return 0.f;
+  k = std::min(k, pts.size() - 1);
+  const size_t step = std::max<size_t>(1, pts.size() / std::max<size_t>(sample, 1));
+  std::vector<size_t> at;
+  for (size_t i = 0; i < pts.size(); i += step) at.push_back(i);
+  std::vector<Neighbour> nn;
+  auto kth = [&](size_t i) {
+    tree.nearest(pts[i], k + 1, nn);  // the point itself comes first
+    return std::sqrt(nn[k].distance_sq);
+  };
+  auto median = [](std::vector<float>& v) {
+    auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+    std::nth_element(v.begin(), mid, v.end());
+    return *mid;
+  };
+  // A k-nearest search costs about two radius searches, so: the exact k-th distance at a few samples
+  // gives a radius R a little above the typical one; at every sample the k-th smallest distance
+  // within R is exact, and a sample with fewer than k + 1 points within R has its k-th distance
+  // beyond R. While those are fewer than half, the median is exactly the one of the k-th distances.
+  std::vector<float> pilot;
+  for (size_t j = 0; j < at.size(); j += std::max<size_t>(1, at.size() / 16)) pilot.push_back(kth(at[j]));
+  const float R = 1.2f * median(pilot);
+  std::vector<float> d;
+  d.reserve(at.size());
+  auto closer = [](const Neighbour& a, const Neighbour& b) { return a.distance_sq < b.distance_sq; };
+  for (size_t i : at) {
+    tree.radius(pts[i], R, nn);
+    if (nn.size() < k + 1) {
+      d.push_back(std::numeric_limits<float>::infinity());
+      continue;
+    }
+    std::nth_element(nn.begin(), nn.begin() + static_cast<std::ptrdiff_t>(k), nn.end(), closer);
+    d.push_back(std::sqrt(nn[k].distance_sq));
+  }
+  const float m = median(d);
+  if (std::isfinite(m)) return m;
+  for (size_t j = 0; j < at.size(); ++j) d[j] = kth(at[j]);
+  return median(d);
+}
+
+float snap_radius(float r) {
+  if (!(r > 0) || !std::isfinite(r)) return r;
+  return std::exp2(std::round(8.f * std::log2(r)) / 8.f);
+}
+
+Density estimate_density(const NeighbourIndex& index, float fixed_radius_m, int support_neighbours) {
+  Density d;
+  d.knn_distance_m = median_knn_distance(index, static_cast<size_t>(std::max(1, support_neighbours)));
+  d.support_radius_m = fixed_radius_m > 0 ? fixed_radius_m : snap_radius(d.knn_distance_m);
+  d.normal_radius_m = d.support_radius_m;
+  d.boundary_band_m = d.support_radius_m;
+  return d;
+}
+
+}  // namespace glimpse
