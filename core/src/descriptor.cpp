@@ -58,8 +58,7 @@ Descriptor local_descriptor(const NeighbourIndex& tree, const std::vector<LocalS
   const Points& pts = tree.points();
   const LocalSurface& s = surfaces[kp.index];
 
-  tree.radius(kp.position, r, nb);
-  std::sort(nb.begin(), nb.end(), [](const Neighbour& a, const Neighbour& b) { return a.index < b.index; });
+  tree.radius(kp.position, r, nb);  // ascending index
   std::vector<Vec3> hood;
   hood.reserve(nb.size());
   for (const Neighbour& q : nb) hood.push_back(pts[q.index]);

@@ -66,6 +66,30 @@ float automatic_normal_radius(const PclCloud& pc, pcl::search::KdTree<pcl::Point
 
 }  // namespace
 
+namespace {
+// Sec. 3.1: VFH with the viewpoint direction and the surface shape (size) component, over the points
+// in `kept` (those with a normal).
+Expected<Eigen::VectorXf> vfh_signature(const Cloud& cloud, const PclCloud::Ptr& pc, const PclNormals::Ptr& normals,
+                                        const pcl::IndicesPtr& kept,
+                                        const pcl::search::KdTree<pcl::PointXYZ>::Ptr& tree,
+                                        const GlobalDescriptorParams& params) {
+  pcl::VFHEstimation<pcl::PointXYZ, pcl::Normal, pcl::VFHSignature308> est;
+  est.setInputCloud(pc);
+  est.setIndices(kept);
+  est.setInputNormals(normals);
+  est.setSearchMethod(tree);  // unused by VFH itself, but PCL would build one
+  const Vec3 vp = cloud.sensor.value_or(Vec3::Zero());
+  est.setViewPoint(vp.x(), vp.y(), vp.z());
+  est.setFillSizeComponent(params.fill_size_component);
+  pcl::PointCloud<pcl::VFHSignature308> out;
+  est.compute(out);
+  if (out.size() != 1) return internal_error("vfh: pcl::VFHEstimation produced no signature");
+  Eigen::VectorXf h = Eigen::Map<const Eigen::VectorXf>(out[0].histogram, kVfhSize);
+  if (!h.allFinite()) return internal_error("vfh: non-finite histogram");
+  return h;
+}
+}  // namespace
+
 Expected<Eigen::VectorXf> vfh(const Cloud& cloud, const GlobalDescriptorParams& params) {
   if (Status s = validate(cloud, "vfh"); !s) return s.error();
   if (!std::isfinite(params.normal_radius_m)) return invalid_argument("vfh: normal_radius_m is not finite");
@@ -133,22 +157,29 @@ Expected<Eigen::VectorXf> vfh(const Cloud& cloud, const GlobalDescriptorParams& 
     return invalid_argument("vfh: only " + std::to_string(kept->size()) + " of " + std::to_string(pc->size()) +
                             " points have a normal within " + std::to_string(radius) +
                             " m; increase normal_radius_m");
+  return vfh_signature(cloud, pc, normals, kept, tree, params);
+}
 
-  // Sec. 3.1: VFH with the viewpoint direction and the surface shape (size) component.
-  pcl::VFHEstimation<pcl::PointXYZ, pcl::Normal, pcl::VFHSignature308> est;
-  est.setInputCloud(pc);
-  est.setIndices(kept);
-  est.setInputNormals(normals);
-  est.setSearchMethod(tree);  // unused by VFH itself, but PCL would build one
-  const Vec3 vp = cloud.sensor.value_or(Vec3::Zero());
-  est.setViewPoint(vp.x(), vp.y(), vp.z());
-  est.setFillSizeComponent(params.fill_size_component);
-  pcl::PointCloud<pcl::VFHSignature308> out;
-  est.compute(out);
-  if (out.size() != 1) return internal_error("vfh: pcl::VFHEstimation produced no signature");
-  Eigen::VectorXf h = Eigen::Map<const Eigen::VectorXf>(out[0].histogram, kVfhSize);
-  if (!h.allFinite()) return internal_error("vfh: non-finite histogram");
-  return h;
+Expected<Eigen::VectorXf> vfh_with_normals(const Cloud& cloud, const std::vector<Vec3>& normals,
+                                           const GlobalDescriptorParams& params) {
+  if (Status s = validate(cloud, "vfh"); !s) return s.error();
+  if (normals.size() != cloud.points.size()) return invalid_argument("vfh: one normal per point is needed");
+  PclCloud::Ptr pc = to_pcl(cloud.points);
+  PclNormals::Ptr pn(new PclNormals);
+  pn->resize(pc->size());
+  pcl::IndicesPtr kept(new pcl::Indices);
+  kept->reserve(pc->size());
+  for (size_t i = 0; i < normals.size(); ++i) {
+    const Vec3& n = normals[i];
+    (*pn)[i].normal_x = n.x(), (*pn)[i].normal_y = n.y(), (*pn)[i].normal_z = n.z();
+    if (n.allFinite() && n.squaredNorm() > 0.5f) kept->push_back(static_cast<pcl::index_t>(i));
+  }
+  pn->is_dense = kept->size() == pc->size();
+  if (kept->size() < static_cast<size_t>(kMinGlobalDescriptorPoints))
+    return invalid_argument("vfh: only " + std::to_string(kept->size()) + " of " + std::to_string(pc->size()) +
+                            " points have a normal");
+  pcl::search::KdTree<pcl::PointXYZ>::Ptr tree(new pcl::search::KdTree<pcl::PointXYZ>);
+  return vfh_signature(cloud, pc, pn, kept, tree, params);
 }
 
 // ---------------------------------------------------------------------------------------------------

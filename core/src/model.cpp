@@ -61,35 +61,42 @@ bool needs(const std::vector<Method>& methods, Method m) {
 
 }  // namespace
 
+Expected<CloudFeatures> method_features(const FeatureState& f, const TrainParams& params,
+                                        const std::vector<Method>& methods, int threads) {
+  CloudFeatures out;
+  out.points = f.cloud.points.size();
+  out.extent_m = bounds(f.cloud.points).extent().maxCoeff();
+  for (const Keypoint& k : f.keypoints) out.positions.push_back(k.position);
+  out.descriptors = f.descriptors;
+  if (needs(methods, Method::kUSH)) out.ush = upright_histogram(f.cloud.points, f.surfaces, params.ush);
+  if (needs(methods, Method::kSize)) out.size = visible_size(f.cloud.points);
+  if (needs(methods, Method::kVFH)) {
+    GlobalDescriptorParams gp = params.global;
+    gp.threads = threads;
+    std::vector<Vec3> normals(f.cloud.points.size(), Vec3::Zero());
+    for (size_t i = 0; i < f.surfaces.size() && i < normals.size(); ++i)
+      if (f.surfaces[i].valid) normals[i] = f.surfaces[i].normal;
+    auto v = vfh_with_normals(f.cloud, normals, gp);
+    if (!v.ok()) return v.error();
+    out.vfh = std::move(*v);
+  }
+  if (needs(methods, Method::kESF)) {
+    auto e = esf(f.cloud, params.seed);
+    if (!e.ok()) return e.error();
+    out.esf = std::move(*e);
+  }
+  return out;
+}
+
 Expected<CloudFeatures> cloud_features(const Cloud& cloud, const TrainParams& params,
                                        const std::vector<Method>& methods, int threads, const CancelFn& cancel) {
-  CloudFeatures out;
   FeatureParams fp = params.features;
   fp.surface.threads = threads;
   fp.find_keypoints = std::any_of(methods.begin(), methods.end(), uses_keypoints);
   auto f = extract(cloud, fp, cancel);
   if (!f.ok()) return f.error();
   if (cancel && cancel()) return cancelled("feature extraction cancelled");
-  out.points = f->cloud.points.size();
-  out.extent_m = bounds(f->cloud.points).extent().maxCoeff();
-  for (const Keypoint& k : f->keypoints) out.positions.push_back(k.position);
-  out.descriptors = std::move(f->descriptors);
-  if (needs(methods, Method::kUSH)) out.ush = upright_histogram(f->cloud.points, f->surfaces, params.ush);
-  if (needs(methods, Method::kSize)) out.size = visible_size(f->cloud.points);
-  if (needs(methods, Method::kVFH)) {
-    GlobalDescriptorParams gp = params.global;
-    gp.threads = threads;
-    auto v = vfh(f->cloud, gp);
-    if (!v.ok()) return v.error();
-    out.vfh = std::move(*v);
-    if (cancel && cancel()) return cancelled("feature extraction cancelled");
-  }
-  if (needs(methods, Method::kESF)) {
-    auto e = esf(f->cloud, params.seed);
-    if (!e.ok()) return e.error();
-    out.esf = std::move(*e);
-  }
-  return out;
+  return method_features(*f, params, methods, threads);
 }
 
 Eigen::VectorXd method_histogram(const ModelImpl& impl, Method method, const CloudFeatures& f) {

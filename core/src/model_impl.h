@@ -41,7 +41,13 @@ struct CloudFeatures {
 // The methods a model needs computed for `method` (fusion expands to its components).
 std::vector<Method> component_methods(const ModelImpl& impl, Method method);
 
-// Features for the given methods; keypoint features only when one of them needs keypoints.
+// What the given methods need of a feature state: keypoint positions and descriptors, and the
+// whole-cloud descriptors (USH and size from the points and surfaces, VFH over the surfaces' normals,
+// ESF). Shared by whole clouds (cloud_features) and streams (ScanSession).
+Expected<CloudFeatures> method_features(const FeatureState& state, const TrainParams& params,
+                                        const std::vector<Method>& methods, int threads);
+
+// extract() + method_features; keypoints only when one of the methods needs them.
 Expected<CloudFeatures> cloud_features(const Cloud& cloud, const TrainParams& params,
                                        const std::vector<Method>& methods, int threads,
                                        const CancelFn& cancel = {});

@@ -17,6 +17,19 @@ struct PointsAdaptor {
 };
 using Tree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, PointsAdaptor>,
                                                  PointsAdaptor, 3, uint32_t>;
+
+// Neighbourhoods in ascending index order: every sum over a neighbourhood then adds in the same order
+// whichever index found it, so a kd-tree over a cloud and the voxel hash of the same scan give
+// bit-identical surfaces. Insertion sort: neighbourhoods are a few dozen points, mostly in order.
+void sort_by_index(std::vector<Neighbour>& v) {
+  for (size_t i = 1; i < v.size(); ++i) {
+    const Neighbour x = v[i];
+    size_t j = i;
+    for (; j > 0 && v[j - 1].index > x.index; --j) v[j] = v[j - 1];
+    v[j] = x;
+  }
+}
+
 }  // namespace
 
 struct KdTree::Impl {
@@ -40,21 +53,35 @@ void KdTree::radius(const Vec3& query, float radius, std::vector<Neighbour>& out
   thread_local std::vector<std::pair<uint32_t, float>> found;
   found.clear();
   nanoflann::SearchParams params(32, 0.f, false);
-  impl_->tree.radiusSearch(query.data(), radius * radius, found, params);
+  // Distances and the boundary test as VoxelIndex computes them, so both indexes return the same
+  // neighbourhoods to the last bit: nanoflann's own (summed in another order) only preselects.
+  const float r2 = radius * radius;
+  impl_->tree.radiusSearch(query.data(), r2 * (1.f + 1e-4f), found, params);
   out.reserve(found.size());
-  for (const auto& [i, d] : found) out.push_back({i, d});
+  const Points& pts = *impl_->adaptor.pts;
+  for (const auto& [i, d] : found)
+    if (const float e = (pts[i] - query).squaredNorm(); e <= r2) out.push_back({i, e});
+  sort_by_index(out);
 }
 
 void KdTree::nearest(const Vec3& query, size_t k, std::vector<Neighbour>& out) const {
   out.clear();
   k = std::min(k, impl_->adaptor.pts->size());
   if (k == 0) return;
+  // A few more candidates than asked, re-measured and ordered as VoxelIndex does (distance, then
+  // index), so ties and last-bit differences cannot pick another k-th neighbour.
+  const size_t want = std::min(k + 8, impl_->adaptor.pts->size());
   thread_local std::vector<uint32_t> idx;
   thread_local std::vector<float> dist;
-  idx.resize(k);
-  dist.resize(k);
-  const size_t n = impl_->tree.knnSearch(query.data(), k, idx.data(), dist.data());
-  for (size_t i = 0; i < n; ++i) out.push_back({idx[i], dist[i]});
+  idx.resize(want);
+  dist.resize(want);
+  const size_t n = impl_->tree.knnSearch(query.data(), want, idx.data(), dist.data());
+  const Points& pts = *impl_->adaptor.pts;
+  for (size_t i = 0; i < n; ++i) out.push_back({idx[i], (pts[idx[i]] - query).squaredNorm()});
+  std::sort(out.begin(), out.end(), [](const Neighbour& a, const Neighbour& b) {
+    return a.distance_sq != b.distance_sq ? a.distance_sq < b.distance_sq : a.index < b.index;
+  });
+  out.resize(std::min(k, out.size()));
 }
 
 // ---- VoxelIndex ----------------------------------------------------------------------------------
@@ -80,6 +107,7 @@ void VoxelIndex::radius(const Vec3& q, float radius, std::vector<Neighbour>& out
         const float d = (points_[i] - q).squaredNorm();
         if (d <= r2) out.push_back({i, d});
       }
+    sort_by_index(out);
     return;
   }
   for (int64_t x = lo.x; x <= hi.x; ++x)
@@ -92,6 +120,7 @@ void VoxelIndex::radius(const Vec3& q, float radius, std::vector<Neighbour>& out
           if (d <= r2) out.push_back({i, d});
         }
       }
+  sort_by_index(out);
 }
 
 void VoxelIndex::nearest(const Vec3& q, size_t k, std::vector<Neighbour>& out) const {

@@ -16,6 +16,15 @@ void orient_normals_propagated(const NeighbourIndex& tree, std::vector<LocalSurf
     s.k1 = -s.k2;
     s.k2 = -k1;
   };
+  // The signs a caller hands in must not matter (a growing scan refits some points and not others):
+  // start from a canonical sign, the normal's first non-zero of z, y, x positive. A component whose
+  // outward test below is a tie (a lone point) then keeps that sign, whatever came before.
+  for (LocalSurface& s : surfaces) {
+    if (!s.valid) continue;
+    const Vec3& m = s.normal;
+    const float key = m.z() != 0 ? m.z() : m.y() != 0 ? m.y() : m.x();
+    if (key < 0) flip(s);
+  }
   // Components are grown from roots in a fixed order (highest point first, ties by index); within a
   // component each normal is flipped to agree with its parent in the spanning tree.
   std::vector<uint32_t> roots(n);

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <numeric>
 
+#include "glimpse/features.h"
 #include "glimpse/session.h"
 #include "glimpse/train_params.h"
 #include "glimpse/views.h"
@@ -32,29 +33,96 @@ const std::shared_ptr<const Model>& fixed_radius_model() {
   return m;
 }
 
-std::vector<Cloud> chunks_of(const Cloud& view, size_t n, bool random, uint64_t seed) {
-  std::vector<uint32_t> order;
-  if (random) {
-    order.resize(view.points.size());
-    std::iota(order.begin(), order.end(), 0u);
-    std::mt19937_64 rng(seed);
+const std::shared_ptr<const Model>& automatic_radius_model() {
+  static const auto m = trained_model(0);
+  return m;
+}
+
+enum class Order { kTopDown, kRandom, kSweep };
+
+// The view's points in the given order, cut into chunks of random sizes (about `n` chunks, seeded).
+std::vector<Cloud> chunks_of(const Cloud& view, size_t n, Order order_kind, uint64_t seed, bool sensor = true) {
+  std::vector<uint32_t> order(view.points.size());
+  std::iota(order.begin(), order.end(), 0u);
+  std::mt19937_64 rng(seed);
+  if (order_kind == Order::kRandom) {
     for (size_t i = order.size(); i > 1; --i) std::swap(order[i - 1], order[rng() % i]);
-  } else {
+  } else if (order_kind == Order::kTopDown) {
     order = top_down_order(view.points);
+  } else {  // a sweep along x, as a scanner passing by
+    std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return view.points[a].x() < view.points[b].x(); });
   }
-  std::vector<Cloud> out(n);
-  for (size_t i = 0; i < order.size(); ++i) {
-    Cloud& c = out[i * n / order.size()];
-    c.sensor = view.sensor;
-    c.points.push_back(view.points[order[i]]);
+  std::vector<Cloud> out;
+  for (size_t i = 0; i < order.size();) {
+    const size_t mean = std::max<size_t>(1, order.size() / std::max<size_t>(1, n));
+    const size_t size = n == 1 ? order.size() : 1 + rng() % (2 * mean);
+    Cloud c;
+    if (sensor) c.sensor = view.sensor;
+    for (size_t k = 0; k < size && i < order.size(); ++k, ++i) c.points.push_back(view.points[order[i]]);
+    out.push_back(std::move(c));
   }
   return out;
 }
 
-Decision stream(const std::shared_ptr<const Model>& model, const std::vector<Cloud>& chunks, Method method) {
+Cloud concatenated(const std::vector<Cloud>& chunks) {
+  Cloud all;
+  for (const Cloud& c : chunks) {
+    all.points.insert(all.points.end(), c.points.begin(), c.points.end());
+    if (c.sensor) all.sensor = c.sensor;
+  }
+  return all;
+}
+
+void expect_same_state(const FeatureState& a, const FeatureState& b) {
+  ASSERT_EQ(a.cloud.points, b.cloud.points);
+  EXPECT_EQ(a.diagnostics.support_radius_m, b.diagnostics.support_radius_m);
+  EXPECT_EQ(a.diagnostics.density.knn_distance_m, b.diagnostics.density.knn_distance_m);
+  ASSERT_EQ(a.surfaces.size(), b.surfaces.size());
+  for (size_t i = 0; i < a.surfaces.size(); ++i) {
+    ASSERT_EQ(a.surfaces[i].valid, b.surfaces[i].valid) << "point " << i;
+    EXPECT_EQ(a.surfaces[i].normal, b.surfaces[i].normal) << "point " << i;
+    EXPECT_EQ(a.surfaces[i].k1, b.surfaces[i].k1) << "point " << i;
+    EXPECT_EQ(a.surfaces[i].k2, b.surfaces[i].k2) << "point " << i;
+    EXPECT_EQ(a.surfaces[i].lambda_min, b.surfaces[i].lambda_min) << "point " << i;
+  }
+  ASSERT_EQ(a.keypoints.size(), b.keypoints.size());
+  for (size_t k = 0; k < a.keypoints.size(); ++k) {
+    EXPECT_EQ(a.keypoints[k].index, b.keypoints[k].index) << "keypoint " << k;
+    EXPECT_EQ(a.descriptors[k], b.descriptors[k]) << "keypoint " << k;
+  }
+}
+
+// The invariant: however a cloud arrives — any chunking, top-down, random or sweep order, with or
+// without a sensor, automatic or fixed radius — a scan ends on the state extract() gives the
+// accumulated cloud, bit for bit (both visit neighbourhoods in index order).
+TEST(ScanFeatures, EndOnTheStateExtractGivesTheAccumulatedCloud) {
+  const std::vector<LabelledCloud> views = test::synthetic_views(1, 1, 71);
+  for (float radius : {0.f, 0.025f}) {
+    FeatureParams params;
+    params.surface.support_radius_m = radius;
+    params.surface.threads = 1;
+    for (const LabelledCloud& view : views)
+      for (bool sensor : {true, false})
+        for (Order order : {Order::kTopDown, Order::kRandom, Order::kSweep})
+          for (size_t n : {1u, 3u, 17u}) {
+            SCOPED_TRACE(view.category + (sensor ? " with" : " without") + " a sensor, order " +
+                         std::to_string(int(order)) + ", ~" + std::to_string(n) + " chunks, r " + std::to_string(radius));
+            const std::vector<Cloud> chunks = chunks_of(view.cloud, n, order, 7 * n + size_t(order), sensor);
+            ScanFeatures scan(params);
+            for (const Cloud& c : chunks) ASSERT_TRUE(scan.add(c).ok());
+            ASSERT_TRUE(scan.ready());
+            auto whole = extract(concatenated(chunks), params);
+            ASSERT_TRUE(whole.ok()) << whole.error().message;
+            expect_same_state(scan.state(), *whole);
+            EXPECT_FALSE(scan.state().keypoints.empty());
+          }
+  }
+}
+
+Decision stream(const std::shared_ptr<const Model>& model, const std::vector<Cloud>& chunks, Method method,
+                bool finish = false) {
   SessionParams sp;
   sp.method = method;
-  sp.min_points_for_radius = 1;  // the model fixes r: start at once
   auto session = ScanSession::create(model, sp);
   EXPECT_TRUE(session.ok());
   Decision d;
@@ -63,54 +131,40 @@ Decision stream(const std::shared_ptr<const Model>& model, const std::vector<Clo
     EXPECT_TRUE(r.ok()) << r.error().message;
     if (r.ok()) d = *r;
   }
+  if (finish) {
+    auto r = (*session)->finish();
+    EXPECT_TRUE(r.ok());
+    if (r.ok()) d = *r;
+  }
   return d;
 }
 
-TEST(ScanSession, StreamingEndsLikeTheWholeView) {
-  const auto& model = fixed_radius_model();
-  ASSERT_TRUE(model);
-  for (uint64_t seed : {21u, 22u}) {
-    const auto views = test::synthetic_views(1, 1, seed);
-    for (const LabelledCloud& view : views) {
-      auto whole = classify(*model, view.cloud, Method::kBoK);
-      ASSERT_TRUE(whole.ok()) << whole.error().message;
-      for (size_t n : {1u, 4u, 12u}) {
-        for (bool random : {false, true}) {
-          const Decision d = stream(model, chunks_of(view.cloud, n, random, seed), Method::kBoK);
-          SCOPED_TRACE(view.category + " in " + std::to_string(n) + (random ? " random" : " top-down") + " chunks");
+// And a finished stream's raw scores are Classify's of the accumulated cloud, for every method.
+TEST(ScanSession, FinishedStreamScoresAreClassifysOfTheWholeCloud) {
+  for (const auto* model : {&fixed_radius_model(), &automatic_radius_model()}) {
+    ASSERT_TRUE(*model);
+    for (const LabelledCloud& view : test::synthetic_views(1, 1, 81))
+      for (bool sensor : {true, false})
+        for (Method m : {Method::kBoK, Method::kUSH, Method::kVFH, Method::kESF, Method::kSize, Method::kFusion}) {
+          SCOPED_TRACE(view.category + " " + method_name(m) + (sensor ? " with" : " without") + " a sensor");
+          const std::vector<Cloud> chunks = chunks_of(view.cloud, 9, Order::kTopDown, 3, sensor);
+          auto whole = classify(**model, concatenated(chunks), m);
+          ASSERT_TRUE(whole.ok()) << whole.error().message;
+          const Decision d = stream(*model, chunks, m, true);
+          EXPECT_TRUE(d.final);
           EXPECT_EQ(d.points, whole->points);
-          // Same keypoints up to float summation order in the neighbourhood fits (tolerance: 1 in 20).
-          EXPECT_NEAR(static_cast<double>(d.keypoints), static_cast<double>(whole->keypoints),
-                      std::max(1.0, 0.05 * static_cast<double>(whole->keypoints)));
-          if (n == 1) {
-            EXPECT_EQ(d.winner, whole->winner);
-          }
+          EXPECT_EQ(d.keypoints, whole->keypoints);
+          ASSERT_EQ(d.raw_scores.size(), whole->scores.size());
+          for (size_t c = 0; c < d.raw_scores.size(); ++c) EXPECT_EQ(d.raw_scores[c], whole->scores[c]) << c;
         }
-      }
-    }
   }
-}
-
-TEST(ScanSession, FinalDecisionAgreesWithClassifyOnMostViews) {
-  const auto& model = fixed_radius_model();
-  ASSERT_TRUE(model);
-  int agree = 0, total = 0;
-  for (const LabelledCloud& view : test::synthetic_views(2, 1, 31)) {
-    auto whole = classify(*model, view.cloud, Method::kFusion);
-    ASSERT_TRUE(whole.ok());
-    const Decision d = stream(model, chunks_of(view.cloud, 8, false, 1), Method::kFusion);
-    agree += d.winner == whole->winner;
-    ++total;
-  }
-  // Streamed scores are smoothed over the history and VFH/ESF lag up to 10 % of the points.
-  EXPECT_GE(agree, total - 1);
 }
 
 TEST(ScanSession, DuplicateOverlappingAndEmptyChunksChangeNothing) {
   const auto& model = fixed_radius_model();
   ASSERT_TRUE(model);
   const LabelledCloud view = test::synthetic_views(1, 1, 41)[1];
-  const auto chunks = chunks_of(view.cloud, 6, false, 0);
+  const auto chunks = chunks_of(view.cloud, 6, Order::kTopDown, 0);
   SessionParams sp;
   sp.method = Method::kBoK;
   auto session = *ScanSession::create(model, sp);
@@ -137,15 +191,17 @@ TEST(ScanSession, DuplicateOverlappingAndEmptyChunksChangeNothing) {
 TEST(ScanSession, NothingToDecideBeforeEnoughPoints) {
   auto model = fixed_radius_model();
   ASSERT_TRUE(model);
-  SessionParams sp;
-  sp.min_points_for_radius = 300;
-  auto session = *ScanSession::create(model, sp);
+  auto session = *ScanSession::create(model, {});
   const LabelledCloud view = test::synthetic_views(1, 1, 51)[0];
-  auto first = session->add(Cloud{{view.cloud.points.begin(), view.cloud.points.begin() + 50}, view.cloud.sensor});
+  auto first = session->add(Cloud{{view.cloud.points.begin(), view.cloud.points.begin() + 15}, view.cloud.sensor});
   ASSERT_TRUE(first.ok());
-  EXPECT_EQ(first->winner, -1);
-  EXPECT_EQ(first->points, 50u);
+  EXPECT_EQ(first->winner, -1);  // fewer than FeatureParams::min_points (20)
+  EXPECT_EQ(first->points, 15u);
   EXPECT_FALSE(first->settled);
+  auto second = session->add(Cloud{{view.cloud.points.begin() + 15, view.cloud.points.begin() + 400}, view.cloud.sensor});
+  ASSERT_TRUE(second.ok());
+  EXPECT_GE(second->winner, 0);
+  EXPECT_EQ(second->chunk_index, 1u);
 }
 
 TEST(ScanSession, LimitsAndBadInput) {
@@ -155,15 +211,19 @@ TEST(ScanSession, LimitsAndBadInput) {
   EXPECT_EQ(ScanSession::create(std::make_shared<const Model>()).error().code, ErrorCode::kFailedPrecondition);
 
   SessionParams sp;
-  sp.max_chunks = 2;
+  sp.max_chunks = 3;
   sp.max_chunk_points = 100;
   sp.max_points = 150;
   auto session = *ScanSession::create(model, sp);
-  Cloud nan{{Vec3(0, 0, 0), Vec3(NAN, 0, 0)}, std::nullopt};
-  auto bad = session->add(nan);
+  Cloud far{{Vec3(0, 0, 0), Vec3(3e6f, 0, 0)}, std::nullopt};
+  auto bad = session->add(far);
   ASSERT_FALSE(bad.ok());
   EXPECT_EQ(bad.error().code, ErrorCode::kInvalidArgument);
-  EXPECT_NE(bad.error().message.find("point 1"), std::string::npos);
+  EXPECT_NE(bad.error().message.find("point 1 of chunk 0"), std::string::npos) << bad.error().message;
+  Cloud nan{{Vec3(0, 0, 0), Vec3(NAN, 0, 0)}, std::nullopt};  // dropped and counted, as extract() does
+  auto dropped = session->add(nan);
+  ASSERT_TRUE(dropped.ok()) << dropped.error().message;
+  EXPECT_EQ(dropped->points, 1u);
 
   const LabelledCloud view = test::synthetic_views(1, 1, 61)[0];
   Cloud big{{view.cloud.points.begin(), view.cloud.points.begin() + 101}, std::nullopt};

@@ -94,6 +94,7 @@ class FakeSession final : public ScanSession {
     d.keypoints = c.keypoints;
     d.categories = c.categories;
     d.scores = c.scores;
+    d.raw_scores = c.scores;
     d.winner = c.winner;
     d.category_changes = last_.category_changes + (last_.winner >= 0 && last_.winner != d.winner ? 1 : 0);
     d.winner_held_chunks = last_.winner == d.winner ? last_.winner_held_chunks + 1 : 1;
@@ -101,6 +102,10 @@ class FakeSession final : public ScanSession {
     d.confidence = 0.7;
     last_ = d;
     return d;
+  }
+  Expected<Decision> finish() override {
+    last_.final = true;
+    return last_;
   }
   const Decision& last() const override { return last_; }
 

@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <vector>
 
 #include "glimpse/cloud.h"
 #include "glimpse/expected.h"
@@ -38,6 +39,11 @@ struct GlobalDescriptorParams {
 // points coincident, or too few points with a defined normal even at the automatic radius.
 // Never returns a vector with NaN or Inf.
 Expected<Eigen::VectorXf> vfh(const Cloud& cloud, const GlobalDescriptorParams& params = {});
+// The same over given normals, one per point, already oriented (a zero normal: undefined, the point is
+// left out): the recogniser passes its local surfaces' normals (PCA over the support radius r, the one
+// density estimate every radius derives from), so nothing is estimated twice. normal_radius_m unused.
+Expected<Eigen::VectorXf> vfh_with_normals(const Cloud& cloud, const std::vector<Vec3>& normals,
+                                           const GlobalDescriptorParams& params = {});
 
 // Ensemble of Shape Functions (Wohlkinger & Vincze 2011): PCL's ESFEstimation algorithm and histogram
 // layout, re-implemented with a seeded std::mt19937_64 (PCL's calls srand(time) and rand(), so it is

@@ -24,7 +24,7 @@ class NeighbourIndex {
  public:
   virtual ~NeighbourIndex() = default;
   // Every point within `radius` of `query` (the query point itself included when it is in the set),
-  // in an order that depends only on the point set.
+  // in ascending index order (sums over a neighbourhood do not depend on which index found it).
   virtual void radius(const Vec3& query, float radius, std::vector<Neighbour>& out) const = 0;
   // The `k` nearest points, nearest first (ties by index).
   virtual void nearest(const Vec3& query, size_t k, std::vector<Neighbour>& out) const = 0;

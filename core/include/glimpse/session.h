@@ -20,13 +20,10 @@ struct SessionParams {
   size_t max_points = 1'000'000;     // accumulated (after duplicate removal)
   size_t max_chunks = 10'000;
   size_t max_chunk_points = 200'000;
-  // The support radius r is fixed once the scan has this many points (from their density, as
-  // extract() does for a whole cloud) unless the model fixes it. Duplicates are what extract() calls
-  // duplicates (the model's duplicate_tolerance_m; 0 = identical points), found in a voxel hash of
-  // cell r, so re-sent and overlapping chunks change nothing.
-  size_t min_points_for_radius = 300;
-  // Whole-cloud descriptors (VFH, ESF) are recomputed when the scan grew by this fraction since the
-  // last time, so their cost per chunk stays bounded (amortised) as the scan grows.
+  // The features are ScanFeatures' (features.h): the state extract() gives the accumulated points,
+  // density and radius included, duplicates by the rule of clean(). VFH and ESF describe the whole
+  // cloud and cost what it holds, so they are recomputed when the scan grew by this fraction since
+  // the last time (amortised cost per chunk) and always by finish(); USH and size every chunk.
   double global_refresh_growth = 0.2;
   // Settling (sec. 4, "the decision is consolidating"): confidence combines the margin between the
   // best two smoothed scores and how steadily the winner held over the last decisions.
@@ -46,11 +43,13 @@ struct SessionParams {
 };
 
 struct Decision {
-  size_t chunk_index = 0;           // 0-based index of the chunk this answers
+  size_t chunk_index = 0;           // 0-based index of the chunk this answers (finish: the last one's)
   size_t points = 0;                // accumulated, after duplicate removal
   size_t keypoints = 0;
   std::vector<std::string> categories;
-  std::vector<double> scores;       // one per category, in [0, 1]
+  std::vector<double> scores;       // one per category, in [0, 1]: smoothed over the chunks so far
+  std::vector<double> raw_scores;   // this chunk's own scores (after finish: Classify's of the cloud)
+  bool final = false;               // the answer of finish(): every feature of the whole scan
   int winner = -1;                  // -1 while there is nothing to decide on
   int category_changes = 0;         // how often the winner changed so far
   int winner_held_chunks = 0;       // consecutive chunks the current winner has held
@@ -77,6 +76,9 @@ class ScanSession {
   virtual ~ScanSession() = default;
   // Adds a chunk (points in the session's common frame) and returns the updated decision.
   virtual Expected<Decision> add(const Cloud& chunk) = 0;
+  // The scanner is done: every feature brought up to date on the whole scan (VFH and ESF too), so the
+  // raw scores are Classify's of the accumulated cloud; the smoothed track takes them in as a last step.
+  virtual Expected<Decision> finish() = 0;
   virtual const Decision& last() const = 0;
 };
 

@@ -1,0 +1,166 @@
+// ScanFeatures: the feature state of a growing scan, kept equal to extract() of the points so far.
+// Only neighbourhoods that new points touched are refitted; everything is redone when the density's
+// snapped radius moves (rarely: 9 % steps).
+#include <algorithm>
+#include <chrono>
+
+#include "features_impl.h"
+#include "glimpse/features.h"
+#include "glimpse/normal_orientation.h"
+
+namespace glimpse {
+
+struct ScanFeatures::Impl {
+  explicit Impl(const FeatureParams& p) : params(p), filter(p.duplicate_tolerance_m) {}
+
+  void refit_all();
+  void refit_touched(const std::vector<uint32_t>& added);
+  void orient();
+
+  FeatureParams params;
+  DuplicateFilter filter;
+  FeatureState st;
+  std::vector<std::optional<Vec3>> viewpoint;  // per point: the sensor of the chunk it came in
+  std::optional<Vec3> sensor;
+  std::unique_ptr<VoxelIndex> index;           // cells of the support radius
+  BoundaryMemo memo;
+  std::vector<std::optional<Descriptor>> cache;
+  std::vector<uint32_t> epoch;  // scratch marks for "already collected"
+  uint32_t epoch_now = 0;
+  bool sensorless = false;      // some point came without a sensor: orientation by propagation
+};
+
+void ScanFeatures::Impl::refit_all() {
+  const float r = st.diagnostics.support_radius_m;
+  index = std::make_unique<VoxelIndex>(r);
+  for (const Vec3& p : st.cloud.points) index->add(p);
+  const size_t n = st.cloud.points.size();
+  st.surfaces.assign(n, {});
+  std::vector<Neighbour> scratch;
+  for (uint32_t i = 0; i < n; ++i)
+    st.surfaces[i] = local_surface(*index, i, r, viewpoint[i], params.surface.min_neighbours, scratch);
+  memo = {};
+  cache.assign(n, std::nullopt);
+}
+
+void ScanFeatures::Impl::refit_touched(const std::vector<uint32_t>& added) {
+  const float r = st.diagnostics.support_radius_m;
+  const size_t n = st.cloud.points.size();
+  st.surfaces.resize(n);
+  cache.resize(n);
+  epoch.resize(n, 0);
+  ++epoch_now;
+  // Every point within r of a new point has a new neighbourhood.
+  std::vector<uint32_t> touched;
+  std::vector<Neighbour> near;
+  for (uint32_t i : added) {
+    index->radius(st.cloud.points[i], r, near);
+    for (const Neighbour& q : near)
+      if (epoch[q.index] != epoch_now) epoch[q.index] = epoch_now, touched.push_back(q.index);
+  }
+  std::sort(touched.begin(), touched.end());
+  if (params.keypoints.exclude_boundary) {
+    memo.boundary.resize(n, -1);
+    memo.touches_boundary.resize(n, -1);
+  }
+  for (uint32_t i : touched) {
+    st.surfaces[i] = local_surface(*index, i, r, viewpoint[i], params.surface.min_neighbours, near);
+    // Its boundary status may have changed, and so may "touches a boundary" of its neighbours.
+    if (params.keypoints.exclude_boundary) {
+      memo.boundary[i] = -1;
+      for (const Neighbour& q : near) memo.touches_boundary[q.index] = -1;
+    }
+  }
+  // Descriptors read normals up to r away and the large window (R) around the keypoint.
+  const float reach = std::max(1.f, params.descriptor.large_window_supports) * r + r;
+  for (uint32_t i : added) {
+    index->radius(st.cloud.points[i], reach, near);
+    for (const Neighbour& q : near) cache[q.index].reset();
+  }
+}
+
+void ScanFeatures::Impl::orient() {
+  if (!sensorless) return;
+  // Propagation over the whole scan, as extract() orients a cloud without a sensor; its result does not
+  // depend on the signs the normals had, but a normal it turns changes the descriptors around it.
+  std::vector<float> before(st.surfaces.size());
+  for (size_t i = 0; i < st.surfaces.size(); ++i) before[i] = st.surfaces[i].normal.x() + 2 * st.surfaces[i].normal.y();
+  orient_normals_propagated(*index, st.surfaces);
+  for (size_t i = 0; i < st.surfaces.size(); ++i)
+    if (before[i] != st.surfaces[i].normal.x() + 2 * st.surfaces[i].normal.y()) {
+      std::fill(cache.begin(), cache.end(), std::nullopt);
+      return;
+    }
+}
+
+ScanFeatures::ScanFeatures(const FeatureParams& params) : impl_(std::make_unique<Impl>(params)) {}
+ScanFeatures::~ScanFeatures() = default;
+ScanFeatures::ScanFeatures(ScanFeatures&&) noexcept = default;
+ScanFeatures& ScanFeatures::operator=(ScanFeatures&&) noexcept = default;
+
+bool ScanFeatures::ready() const { return impl_->index != nullptr; }
+const FeatureState& ScanFeatures::state() const { return impl_->st; }
+size_t ScanFeatures::points() const { return impl_->st.cloud.points.size(); }
+const std::optional<Vec3>& ScanFeatures::sensor() const { return impl_->sensor; }
+
+Expected<size_t> ScanFeatures::add(const Cloud& chunk, const CancelFn& cancel) {
+  Impl& m = *impl_;
+  if (Status s = check_cloud(chunk, "the chunk"); !s.ok()) return s.error();
+  FeatureState& st = m.st;
+  FeatureDiagnostics& diag = st.diagnostics;
+  if (chunk.sensor) m.sensor = chunk.sensor;
+  auto t0 = std::chrono::steady_clock::now();
+  std::vector<uint32_t> added;
+  for (const Vec3& p : chunk.points) {
+    ++diag.clean.input;
+    if (!p.allFinite()) {
+      ++diag.clean.non_finite;
+      continue;
+    }
+    if (!m.filter.keep(p)) {
+      ++diag.clean.duplicates;
+      continue;
+    }
+    added.push_back(static_cast<uint32_t>(st.cloud.points.size()));
+    st.cloud.points.push_back(p);
+    m.viewpoint.push_back(chunk.sensor);
+    m.sensorless = m.sensorless || !chunk.sensor;
+  }
+  diag.clean.kept = st.cloud.points.size();
+  st.cloud.sensor = m.sensor;
+  diag.clean_ms += ms_since(t0);
+  if (added.empty() || st.cloud.points.size() < m.params.min_points) return added.size();
+
+  // The density of everything so far, estimated as extract() estimates it for the same points.
+  t0 = std::chrono::steady_clock::now();
+  Density density;
+  if (m.index) {
+    for (uint32_t i : added) m.index->add(st.cloud.points[i]);
+    density = estimate_density(*m.index, m.params.surface.support_radius_m, m.params.surface.support_neighbours);
+  } else {
+    density = estimate_density(KdTree(st.cloud.points), m.params.surface.support_radius_m,
+                               m.params.surface.support_neighbours);
+  }
+  diag.index_ms += ms_since(t0);
+  if (!(density.support_radius_m > 0)) return added.size();  // every point coincides so far
+  t0 = std::chrono::steady_clock::now();
+  const bool moved = !m.index || density.support_radius_m != diag.support_radius_m;
+  diag.density = density;
+  if (moved) {
+    diag.radius_changes += m.index != nullptr;
+    diag.support_radius_m = density.support_radius_m;
+    m.refit_all();
+  } else {
+    m.refit_touched(added);  // the new points are in the index already: the density needed them
+  }
+  m.orient();
+  count_valid_surfaces(st);
+  diag.surfaces_ms += ms_since(t0);
+  if (cancel && cancel()) return cancelled("feature extraction cancelled");
+  if (m.params.find_keypoints && diag.valid_surfaces > 0)
+    find_keypoints_and_descriptors(*m.index, st, m.params, m.params.keypoints.exclude_boundary ? &m.memo : nullptr,
+                                   &m.cache);
+  return added.size();
+}
+
+}  // namespace glimpse
