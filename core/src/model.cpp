@@ -63,6 +63,13 @@ bool needs(const std::vector<Method>& methods, Method m) {
 
 Expected<CloudFeatures> method_features(const FeatureState& f, const TrainParams& params,
                                         const std::vector<Method>& methods, int threads) {
+  // Every method but ESF and size reads the local surfaces (USH, VFH's normals, keypoints): without one
+  // there is nothing to judge, and a histogram of nothing would still name a winner.
+  const bool surfaces_needed = std::any_of(methods.begin(), methods.end(), [](Method m) {
+    return m != Method::kESF && m != Method::kSize && m != Method::kFusion;
+  });
+  if (surfaces_needed && f.diagnostics.valid_surfaces == 0)
+    return invalid_argument(f.diagnostics.note.empty() ? "no local surface could be fitted" : f.diagnostics.note);
   CloudFeatures out;
   out.points = f.cloud.points.size();
   out.extent_m = bounds(f.cloud.points).extent().maxCoeff();

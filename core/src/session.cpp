@@ -37,7 +37,7 @@ class Session final : public ScanSession {
     return fp;
   }
   Status check(const Cloud& chunk) const;
-  void update_method_features(bool whole_cloud_too);
+  bool update_method_features(bool whole_cloud_too);
   void decide();
 
   std::shared_ptr<const Model> model_;
@@ -47,6 +47,7 @@ class Session final : public ScanSession {
   std::vector<Method> components_;
   ScanFeatures features_;
   CloudFeatures method_features_;
+  bool have_features_ = false;
   size_t global_at_points_ = 0;
   size_t chunks_ = 0;
   DecisionTrack track_;
@@ -66,13 +67,14 @@ Status Session::check(const Cloud& chunk) const {
 }
 
 // The per-method features of the state: keypoints, USH and size every time; VFH and ESF when the scan
-// grew enough since their last computation, or when asked (finish).
-void Session::update_method_features(bool whole_cloud_too) {
+// grew enough since their last computation, or when asked (finish). False while the scan has nothing the
+// methods can read (no local surface yet: a line, copies of one point), so nothing is decided.
+bool Session::update_method_features(bool whole_cloud_too) {
   const FeatureState& st = features_.state();
   std::vector<Method> now, global;
   for (Method m : components_) (m == Method::kVFH || m == Method::kESF ? global : now).push_back(m);
   auto cheap = method_features(st, impl_.params, now, 1);
-  if (!cheap.ok()) return;
+  if (!cheap.ok()) return false;
   CloudFeatures f = std::move(*cheap);
   f.vfh = method_features_.vfh;
   f.esf = method_features_.esf;
@@ -89,6 +91,8 @@ void Session::update_method_features(bool whole_cloud_too) {
     global_at_points_ = n;
   }
   method_features_ = std::move(f);
+  have_features_ = true;
+  return true;
 }
 
 void Session::decide() {
@@ -124,6 +128,7 @@ Expected<Decision> Session::add(const Cloud& chunk) {
   last_.points = features_.points();
   if (!features_.ready()) return last_;  // nothing to decide on yet
   if (*kept > 0 || last_.raw_scores.empty()) update_method_features(false);
+  if (!have_features_) return last_;  // undecided: nothing to judge yet
   last_.keypoints = method_features_.positions.size();
   decide();
   return last_;
@@ -131,7 +136,7 @@ Expected<Decision> Session::add(const Cloud& chunk) {
 
 Expected<Decision> Session::finish() {
   if (!features_.ready()) return last_;
-  update_method_features(true);
+  if (!update_method_features(true) && !have_features_) return last_;
   last_.keypoints = method_features_.positions.size();
   decide();
   last_.final = true;

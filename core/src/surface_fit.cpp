@@ -185,6 +185,12 @@ LocalSurface local_surface(const NeighbourIndex& tree, uint32_t index, float r,
   Eigen::Matrix3d cov;
   cov << sxx, sxy, sxz, sxy, syy, syz, sxz, syz, szz;
   cov = cov * inv_m - mean * mean.transpose();
+  // A surface needs neighbours spread in two directions: the sum of the principal 2x2 minors is
+  // l1 l2 + l1 l3 + l2 l3, about l1 l2 on a surface and ~0 when the points lie on a line (l2/l1 < 1e-6,
+  // a spread across the line under 1/1000 of the spread along it), where no quadric is determined.
+  const double minors = cov(0, 0) * cov(1, 1) + cov(0, 0) * cov(2, 2) + cov(1, 1) * cov(2, 2) -
+                        cov(0, 1) * cov(0, 1) - cov(0, 2) * cov(0, 2) - cov(1, 2) * cov(1, 2);
+  if (!(minors > 1e-6 * cov.trace() * cov.trace())) return s;
   Eigen::Vector3d n;
   if (!smallest_eigenvector(cov, n)) return s;
   if (viewpoint && n.dot((*viewpoint - p).cast<double>()) < 0) n = -n;

@@ -21,6 +21,9 @@ LocalSurface reference_local_surface(const Points& pts, uint32_t index, float r,
   Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
   for (uint32_t j : nb) cov += (pts[j].cast<double>() - c) * (pts[j].cast<double>() - c).transpose();
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
+  // Neighbours on a line (l2 / l1 <= 1e-6) determine no surface.
+  const Eigen::Vector3d l = es.eigenvalues();
+  if (!(l[2] * l[1] + l[2] * l[0] + l[1] * l[0] > 1e-6 * cov.trace() * cov.trace())) return s;
   Eigen::Vector3d n = es.eigenvectors().col(0);
   const Eigen::Vector3d p = pts[index].cast<double>();
   if (n.dot(viewpoint.cast<double>() - p) < 0) n = -n;
@@ -37,9 +40,9 @@ LocalSurface reference_local_surface(const Points& pts, uint32_t index, float r,
   const Eigen::VectorXd q = A.colPivHouseholderQr().solve(z);
   const float p1 = float(q[0] / r), p2 = float(q[1] / r), p3 = float(q[2] / r), p4 = float(q[3]), p5 = float(q[4]);
   const Eigen::Vector2f k = principal_curvatures(p1, p2, p3, p4, p5);
-  const Eigen::Vector2f l = harris_eigenvalues(p1, p2, p3, p4, p5);
+  const Eigen::Vector2f h = harris_eigenvalues(p1, p2, p3, p4, p5);
   s.normal = n.cast<float>();
-  s.k1 = k[0], s.k2 = k[1], s.lambda_min = l[0], s.lambda_max = l[1];
+  s.k1 = k[0], s.k2 = k[1], s.lambda_min = h[0], s.lambda_max = h[1];
   s.valid = true;
   // Where the two smallest PCA axes nearly tie the normal is ill-defined: callers skip such points.
   s.neighbours = (es.eigenvalues()[1] - es.eigenvalues()[0]) > 1e-3 * es.eigenvalues()[2] ? 1 : 0;

@@ -408,7 +408,21 @@ TEST(Extract, BadInput) {
   auto collinear = extract(line);
   ASSERT_TRUE(collinear.ok()) << collinear.error().message;
   EXPECT_TRUE(collinear->keypoints.empty());
-  EXPECT_FALSE(collinear->diagnostics.note.empty());
+  EXPECT_EQ(collinear->diagnostics.valid_surfaces, 0u);  // points on a line determine no surface
+  EXPECT_NE(collinear->diagnostics.note.find("collinear"), std::string::npos);
+  // A slanted line too (float rounding puts its points a hair off the line).
+  Cloud slanted;
+  for (int i = 0; i < 500; ++i) slanted.points.emplace_back(0.001f * i, 0.002f * i, 0.003f * i);
+  auto s = extract(slanted);
+  ASSERT_TRUE(s.ok());
+  EXPECT_EQ(s->diagnostics.valid_surfaces, 0u);
+  // A thin rod 1 mm across, sampled densely, still is a surface.
+  Cloud rod;
+  for (int i = 0; i < 2000; ++i)
+    rod.points.emplace_back(0.0005f * std::cos(0.7f * i), 0.0005f * std::sin(0.7f * i), 0.0001f * i);
+  auto thin = extract(rod);
+  ASSERT_TRUE(thin.ok());
+  EXPECT_GT(thin->diagnostics.valid_surfaces, 1000u);
 
   Cloud mixed{test::cube(0.2f, 0.01f), std::nullopt};
   const size_t finite = mixed.points.size();

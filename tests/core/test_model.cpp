@@ -107,6 +107,12 @@ TEST(Classify, Errors) {
   auto wrong = classify(*m, t.test.front().cloud, Method::kBoK);
   ASSERT_FALSE(wrong.ok());
   EXPECT_NE(wrong.error().message.find("bok"), std::string::npos);
+  Cloud line;  // no surface to judge: an error naming why, not a confident winner
+  for (int i = 0; i < 3000; ++i) line.points.emplace_back(0.001f * i, 0.002f * i, 0.003f * i);
+  auto collinear = classify(t.model, line);
+  ASSERT_FALSE(collinear.ok());
+  EXPECT_EQ(collinear.error().code, ErrorCode::kInvalidArgument);
+  EXPECT_NE(collinear.error().message.find("collinear"), std::string::npos) << collinear.error().message;
   bool cancelled_called = false;
   auto cancelled = classify(t.model, t.test.front().cloud, std::nullopt, [&] { return cancelled_called = true; });
   ASSERT_FALSE(cancelled.ok());

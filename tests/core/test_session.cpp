@@ -204,6 +204,23 @@ TEST(ScanSession, NothingToDecideBeforeEnoughPoints) {
   EXPECT_EQ(second->chunk_index, 1u);
 }
 
+TEST(ScanSession, ALineStaysUndecided) {
+  auto model = fixed_radius_model();
+  ASSERT_TRUE(model);
+  auto session = *ScanSession::create(model, {});
+  for (int k = 0; k < 4; ++k) {
+    Cloud chunk;
+    for (int i = 0; i < 500; ++i) chunk.points.emplace_back(0.001f * float(500 * k + i), 0.f, 0.5f);
+    auto d = session->add(chunk);
+    ASSERT_TRUE(d.ok()) << d.error().message;
+    EXPECT_EQ(d->winner, -1) << "chunk " << k;  // no surface, nothing to judge: no winner
+    EXPECT_FALSE(d->settled);
+  }
+  auto end = session->finish();
+  ASSERT_TRUE(end.ok());
+  EXPECT_EQ(end->winner, -1);
+}
+
 TEST(ScanSession, LimitsAndBadInput) {
   auto model = fixed_radius_model();
   ASSERT_TRUE(model);

@@ -201,7 +201,7 @@ TEST_F(BadInput, EveryCaseGetsItsStatusAndTheServerKeepsServing) {
        "1 usable points"},
       {"classify collinear points", [&] { return B::Classify(Line(3000)); }, StatusCode::INVALID_ARGUMENT, "collinear"},
       {"classify points 1e-30 m apart", [&] { return B::Classify(Noise(3000, 1e-30f)); }, StatusCode::INVALID_ARGUMENT,
-       "degenerate"},
+       "every point coincides"},
       {"classify a flat square (valid, no keypoints)", [&] { return B::Classify(Plane(3000)); }, StatusCode::OK, ""},
       {"classify coordinates of 1e30 m", [&] { return B::Classify(Noise(3000, 1e30f)); }, StatusCode::INVALID_ARGUMENT,
        "beyond +-1e6 m"},
