@@ -44,7 +44,7 @@ Status EmitZoo(const TrainOptions& o, const Emit& emit) {
   return {};
 }
 
-// Shows TrainProgress on stderr: a bar redrawn in place on a terminal, else a line per stage and
+// Shows v1::TrainProgress on stderr: a bar redrawn in place on a terminal, else a line per stage and
 // per 10 %.
 class ProgressView {
  public:

@@ -92,15 +92,15 @@ v1::PointCloud CloudToProto(const Cloud& cloud) {
   return msg;
 }
 
-Expected<std::optional<Method>> MethodFromProto(int method) {
-  if (method == v1::METHOD_UNSPECIFIED) return std::optional<Method>();
+Expected<std::optional<MethodId>> MethodFromProto(int method) {
+  if (method == v1::METHOD_UNSPECIFIED) return std::optional<MethodId>();
   if (!v1::Method_IsValid(method))
     return invalid_argument("unknown method " + std::to_string(method) +
                             "; valid: METHOD_BOK, METHOD_BOG, METHOD_KGH, METHOD_VFH, METHOD_ESF, METHOD_FUSION, METHOD_USH, METHOD_SIZE");
-  return std::optional<Method>(static_cast<Method>(method - 1));  // the enums differ by UNSPECIFIED
+  return std::optional<MethodId>(static_cast<MethodId>(method - 1));  // the enums differ by UNSPECIFIED
 }
 
-v1::Method MethodToProto(Method method) { return static_cast<v1::Method>(static_cast<int>(method) + 1); }
+v1::Method MethodToProto(MethodId method) { return static_cast<v1::Method>(static_cast<int>(method) + 1); }
 
 Status ValidateModelName(std::string_view name) {
   if (name.empty()) return invalid_argument("model name is empty");
@@ -160,7 +160,7 @@ void ToProto(const ModelRecord& r, v1::ModelInfo* out) {
   out->mutable_created()->set_seconds(r.created_unix_ms / 1000);
   out->mutable_created()->set_nanos(static_cast<int32_t>(r.created_unix_ms % 1000) * 1'000'000);
   out->set_description(r.description);
-  for (Method m : r.methods) out->add_methods(MethodToProto(m));
+  for (MethodId m : r.methods) out->add_methods(MethodToProto(m));
   out->set_default_method(MethodToProto(r.default_method));
   for (const std::string& c : r.stats.categories) out->add_categories(c);
   if (!r.params.empty()) {
@@ -206,7 +206,7 @@ void ToProto(const Classification& c, v1::ClassifyResponse* out) {
   out->mutable_timings()->set_decision_ms(c.decision_ms);
 }
 
-void ToProto(const Decision& d, v1::Decision* out) {
+void ToProto(const StreamDecision& d, v1::Decision* out) {
   out->set_chunk_index(d.chunk_index);
   out->set_points(d.points);
   out->set_keypoints(d.keypoints);

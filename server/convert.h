@@ -22,8 +22,8 @@ v1::PointCloud CloudToProto(const Cloud& cloud);
 std::string PackPoints(const Points& points);
 
 // METHOD_UNSPECIFIED -> nullopt (the model's default); values outside the enum -> INVALID_ARGUMENT.
-Expected<std::optional<Method>> MethodFromProto(int method);
-v1::Method MethodToProto(Method method);
+Expected<std::optional<MethodId>> MethodFromProto(int method);
+v1::Method MethodToProto(MethodId method);
 
 // Names are 1-128 characters from [A-Za-z0-9._-].
 Status ValidateModelName(std::string_view name);
@@ -32,7 +32,7 @@ Expected<TrainSpec> TrainSpecFromProto(const v1::TrainHeader& header);
 
 void ToProto(const ModelRecord& record, v1::ModelInfo* out);
 void ToProto(const Classification& c, v1::ClassifyResponse* out);
-void ToProto(const Decision& d, v1::Decision* out);
+void ToProto(const StreamDecision& d, v1::Decision* out);
 
 // The one mapping from core errors to gRPC status codes. kCancelled becomes DEADLINE_EXCEEDED when
 // the deadline, not the caller, stopped the work.

@@ -50,10 +50,10 @@ Expected<TrainParams> ToTrainParams(const TrainSpec& spec) {
     *f.target = *v;
   }
   switch (p.decision()) {
-    case v1::DECISION_KIND_NEAREST_CENTRE: params.decision.kind = DecisionKind::kNearestCentre; break;
-    case v1::DECISION_KIND_NEAREST_NEIGHBOURS: params.decision.kind = DecisionKind::kNearestNeighbours; break;
-    case v1::DECISION_KIND_CENTRES: params.decision.kind = DecisionKind::kCentres; break;
-    case v1::DECISION_KIND_NEAREST_REFERENCE: params.decision.kind = DecisionKind::kNearestReference; break;
+    case v1::DECISION_KIND_NEAREST_CENTRE: params.decision.kind = DecisionRule::kNearestCentre; break;
+    case v1::DECISION_KIND_NEAREST_NEIGHBOURS: params.decision.kind = DecisionRule::kNearestNeighbours; break;
+    case v1::DECISION_KIND_CENTRES: params.decision.kind = DecisionRule::kCentres; break;
+    case v1::DECISION_KIND_NEAREST_REFERENCE: params.decision.kind = DecisionRule::kNearestReference; break;
     default: break;  // unspecified: core's default
   }
   if (p.has_seed()) params.seed = p.seed();
@@ -63,13 +63,13 @@ Expected<TrainParams> ToTrainParams(const TrainSpec& spec) {
 
 Engine CoreEngine() {
   Engine e;
-  e.train = [](const std::vector<LabelledCloud>& data, const TrainSpec& spec, const ProgressFn& progress,
+  e.train = [](const std::vector<TrainingCloud>& data, const TrainSpec& spec, const ProgressFn& progress,
                const CancelFn& cancel) -> Expected<Model> {
     auto params = ToTrainParams(spec);
     if (!params) return params.error();
     return glimpse::train(data, *params, progress, cancel);
   };
-  e.classify = [](const Model& model, const Cloud& cloud, std::optional<Method> method, const CancelFn& cancel) {
+  e.classify = [](const Model& model, const Cloud& cloud, std::optional<MethodId> method, const CancelFn& cancel) {
     return glimpse::classify(model, cloud, method, cancel);
   };
   e.serialize = [](const Model& model) { return glimpse::serialize(model); };

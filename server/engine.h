@@ -17,16 +17,16 @@ namespace glimpse::server {
 
 // What a Train header asks for, before it is mapped onto core's TrainParams.
 struct TrainSpec {
-  std::vector<Method> methods;  // empty: the recogniser's default set
-  std::optional<Method> default_method;
+  std::vector<MethodId> methods;  // empty: the recogniser's default set
+  std::optional<MethodId> default_method;
   v1::TrainParameters parameters;
 };
 
 struct Engine {
-  std::function<Expected<Model>(const std::vector<LabelledCloud>&, const TrainSpec&, const ProgressFn&,
+  std::function<Expected<Model>(const std::vector<TrainingCloud>&, const TrainSpec&, const ProgressFn&,
                                 const CancelFn&)>
       train;
-  std::function<Expected<Classification>(const Model&, const Cloud&, std::optional<Method>,
+  std::function<Expected<Classification>(const Model&, const Cloud&, std::optional<MethodId>,
                                          const CancelFn&)>
       classify;
   std::function<std::vector<uint8_t>(const Model&)> serialize;

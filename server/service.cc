@@ -20,7 +20,7 @@ std::string RefText(std::string_view name, uint32_t version) {
   return version ? std::string(name) + "@" + std::to_string(version) : std::string(name);
 }
 
-const char* MethodText(const std::optional<Method>& m) {
+const char* MethodText(const std::optional<MethodId>& m) {
   return m ? method_name(*m) : "default";
 }
 
@@ -153,7 +153,7 @@ grpc::Status GlimpseService::StreamClassify(grpc::ServerContext* ctx,
 
     std::unique_ptr<ScanSession> session;
     LoadedModel model;
-    Method method = Method::kFusion;
+    MethodId method = MethodId::kFusion;
     v1::ScanChunk chunk;
     while (stream->Read(&chunk)) {
       const auto start = options_.clock();
@@ -191,7 +191,7 @@ grpc::Status GlimpseService::StreamClassify(grpc::ServerContext* ctx,
       auto cloud = CloudFromProto(chunk.cloud(), options_.limits.max_points_per_cloud);
       if (!cloud) return Error{cloud.error().code, "chunk " + std::to_string(log.messages - 1) + ": " + cloud.error().message};
       log.points += cloud->points.size();
-      Decision decision;
+      StreamDecision decision;
       if (cloud->points.empty()) {
         decision = session->last();  // nothing new to fuse (e.g. a first chunk that only names the model)
       } else {
@@ -246,7 +246,7 @@ grpc::Status GlimpseService::Train(grpc::ServerContext* ctx,
     last.set_stage("received");
     last.set_clouds_received(input.clouds.size());
     stream->Write(last);
-    auto progress = [&](const TrainProgress& p) {
+    auto progress = [&](const TrainingProgress& p) {
       std::lock_guard lock(write_mutex);
       if (p.stage == "features") last.set_features_extracted(p.done);
       if (p.stage == "codebooks") {

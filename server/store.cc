@@ -66,25 +66,25 @@ constexpr const char* kMigrations[] = {
 };
 constexpr int kSchemaVersion = static_cast<int>(std::size(kMigrations));
 
-std::string MethodToken(Method m) { return method_name(m); }
+std::string MethodToken(MethodId m) { return method_name(m); }
 
-Expected<Method> ParseMethodToken(std::string_view token) {
+Expected<MethodId> ParseMethodToken(std::string_view token) {
   auto m = parse_method(token);
   if (!m.ok()) return data_loss("stored model names an unknown method '" + std::string(token) + "'");
   return *m;
 }
 
-std::string JoinMethods(const std::vector<Method>& methods) {
+std::string JoinMethods(const std::vector<MethodId>& methods) {
   std::string out;
-  for (Method m : methods) {
+  for (MethodId m : methods) {
     if (!out.empty()) out += ',';
     out += MethodToken(m);
   }
   return out;
 }
 
-Expected<std::vector<Method>> SplitMethods(const std::string& text) {
-  std::vector<Method> out;
+Expected<std::vector<MethodId>> SplitMethods(const std::string& text) {
+  std::vector<MethodId> out;
   std::stringstream in(text);
   for (std::string token; std::getline(in, token, ',');) {
     if (token.empty()) continue;

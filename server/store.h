@@ -30,10 +30,10 @@ struct ModelRecord {
   bool is_default = false;
   int64_t created_unix_ms = 0;
   std::string description;
-  std::vector<Method> methods;
-  Method default_method = Method::kFusion;
+  std::vector<MethodId> methods;
+  MethodId default_method = MethodId::kFusion;
   std::string params;  // the request's TrainParameters (JSON), as given
-  TrainingStats stats;  // categories and clouds_per_category in the model's order
+  TrainingSummary stats;  // categories and clouds_per_category in the model's order
   uint64_t size_bytes = 0;
   std::string sha256;  // hex digest of the blob
 };
@@ -42,10 +42,10 @@ struct ModelRecord {
 struct NewModel {
   std::string name;
   std::string description;
-  std::vector<Method> methods;
-  Method default_method = Method::kFusion;
+  std::vector<MethodId> methods;
+  MethodId default_method = MethodId::kFusion;
   std::string params;
-  TrainingStats stats;
+  TrainingSummary stats;
   std::vector<uint8_t> blob;
 };
 

@@ -18,7 +18,7 @@ struct TrainInput {
   std::string name;
   std::string description;
   TrainSpec spec;
-  std::vector<LabelledCloud> clouds;
+  std::vector<TrainingCloud> clouds;
   size_t points = 0;  // summed over clouds
 };
 

@@ -50,7 +50,7 @@ double settle_margin(std::vector<std::pair<double, bool>> decisions, double prec
   return best > 0 ? best : decisions.front().first + 1e-9;  // never right enough: settle on nothing seen
 }
 
-Calibration calibrate(const ModelImpl& impl, Method method, const std::vector<Eigen::MatrixXd>& histograms,
+Calibration calibrate(const ModelImpl& impl, MethodId method, const std::vector<Eigen::MatrixXd>& histograms,
                       const std::vector<int>& labels, const std::vector<int>& objects,
                       const std::vector<std::string>& object_categories, int categories, int threads) {
   const TrainParams& p = impl.params;
@@ -64,7 +64,7 @@ Calibration calibrate(const ModelImpl& impl, Method method, const std::vector<Ei
   for (const auto& [cat, n] : per_category)
     if (n < 2) return c;
   const std::vector<int> object_fold = stratified_folds(object_categories, folds, p.seed + 101);
-  const std::vector<Method> parts = component_methods(impl, method);
+  const std::vector<MethodId> parts = component_methods(impl, method);
   std::vector<std::pair<double, bool>> decisions;
   size_t correct = 0;
   for (int k = 0; k < folds; ++k) {
@@ -85,7 +85,7 @@ Calibration calibrate(const ModelImpl& impl, Method method, const std::vector<Ei
       Eigen::MatrixXd train_h(static_cast<Eigen::Index>(train_rows.size()), h.cols());
       for (size_t r = 0; r < train_rows.size(); ++r) train_h.row(static_cast<Eigen::Index>(r)) = h.row(train_rows[r]);
       DecisionParams dp = p.decision;
-      if (parts[j] == Method::kBoG) dp.max_pca_dims = p.bog_pca_dims;
+      if (parts[j] == MethodId::kBoG) dp.max_pca_dims = p.bog_pca_dims;
       auto stage = fit_decision(train_h, train_labels, categories, dp, p.seed + 10 + static_cast<uint64_t>(parts[j]),
                                 threads, train_groups);
       if (!stage.ok()) {

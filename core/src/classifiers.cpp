@@ -160,7 +160,7 @@ Eigen::VectorXd keypoint_global_histogram(const std::vector<Vec3>& positions, co
   return h;
 }
 
-// ---- Decision stage -------------------------------------------------------------------------------
+// ---- Decision stage -------------------------------------------------------------------------------------
 
 int argmax(const Eigen::VectorXd& scores) {
   int best = 0;
@@ -211,7 +211,7 @@ Expected<DecisionStage> fit_decision(const Eigen::MatrixXd& histograms, const st
   const Eigen::MatrixXd y = project(st.pca, histograms);
 
   std::vector<double> scale;
-  if (params.kind == DecisionKind::kNearestNeighbours || params.kind == DecisionKind::kNearestReference) {
+  if (params.kind == DecisionRule::kNearestNeighbours || params.kind == DecisionRule::kNearestReference) {
     st.references = y;
     st.labels = labels;
     // Scale: the median distance from a training vector to its nearest one of another object (the
@@ -224,7 +224,7 @@ Expected<DecisionStage> fit_decision(const Eigen::MatrixXd& histograms, const st
     }
   } else {
     // K-means centres of each category's training vectors (sec. 3.3.3); one per category = the paper.
-    const int per = params.kind == DecisionKind::kNearestCentre ? 1 : std::max(1, params.centres_per_category);
+    const int per = params.kind == DecisionRule::kNearestCentre ? 1 : std::max(1, params.centres_per_category);
     std::vector<Eigen::VectorXd> centres;
     for (int c = 0; c < categories; ++c) {
       Eigen::MatrixXd rows(per_category[c], y.cols());
@@ -266,7 +266,7 @@ Eigen::VectorXd decide(const DecisionStage& st, const Eigen::VectorXd& histogram
   std::vector<std::pair<double, Eigen::Index>> d(static_cast<size_t>(n));
   for (Eigen::Index i = 0; i < n; ++i) d[static_cast<size_t>(i)] = {l1_rows(st.references, i, y), i};
   Eigen::VectorXd scores = Eigen::VectorXd::Zero(st.categories);
-  if (st.kind == DecisionKind::kNearestNeighbours) {
+  if (st.kind == DecisionRule::kNearestNeighbours) {
     const size_t k = std::min<size_t>(static_cast<size_t>(st.neighbours), d.size());
     std::partial_sort(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(k), d.end());
     // Votes of the k nearest, each weighted by how close it is relative to the nearest.

@@ -7,7 +7,7 @@
 
 namespace glimpse {
 
-Tally accuracy(std::span<const StageDecision> decisions, std::string_view stage, Method method) {
+Tally accuracy(std::span<const StageDecision> decisions, std::string_view stage, MethodId method) {
   Tally t;
   for (const StageDecision& d : decisions) {
     if (d.method != method || d.stage != stage) continue;
@@ -17,7 +17,7 @@ Tally accuracy(std::span<const StageDecision> decisions, std::string_view stage,
   return t;
 }
 
-double balanced_accuracy(std::span<const StageDecision> decisions, std::string_view stage, Method method,
+double balanced_accuracy(std::span<const StageDecision> decisions, std::string_view stage, MethodId method,
                          size_t categories) {
   std::vector<Tally> per(categories);
   for (const StageDecision& d : decisions) {
@@ -33,7 +33,7 @@ double balanced_accuracy(std::span<const StageDecision> decisions, std::string_v
 }
 
 void add_ablation(EvalResult& result, const EvalResult& other, const std::string& label) {
-  for (Method m : other.params.methods) {
+  for (MethodId m : other.params.methods) {
     AblationRow row;
     row.label = label;
     row.method = m;
@@ -48,7 +48,7 @@ void add_ablation(EvalResult& result, const EvalResult& other, const std::string
 }
 
 std::vector<std::vector<double>> confusion_percent(std::span<const StageDecision> decisions, std::string_view stage,
-                                                   Method method, size_t categories) {
+                                                   MethodId method, size_t categories) {
   std::vector<std::vector<double>> m(categories, std::vector<double>(categories, 0.0));
   std::vector<size_t> row_total(categories, 0);
   for (const StageDecision& d : decisions) {
@@ -69,7 +69,7 @@ size_t category_changes(std::span<const int> winners) {
   return changes;
 }
 
-std::vector<ExplorationTrace> exploration_traces(std::span<const StageDecision> decisions, Method method,
+std::vector<ExplorationTrace> exploration_traces(std::span<const StageDecision> decisions, MethodId method,
                                                  const std::vector<size_t>& grid) {
   std::map<std::string, size_t> grid_index;
   for (size_t g = 0; g < grid.size(); ++g)

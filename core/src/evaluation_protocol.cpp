@@ -28,17 +28,17 @@ using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-bool contains(const std::vector<Method>& v, Method m) { return std::find(v.begin(), v.end(), m) != v.end(); }
+bool contains(const std::vector<MethodId>& v, MethodId m) { return std::find(v.begin(), v.end(), m) != v.end(); }
 
 // The base methods whose features the evaluated methods need (fusion brings its components).
-std::vector<Method> feature_methods(const TrainParams& tp) {
-  std::vector<Method> base;
-  auto add = [&](Method m) {
-    if (m != Method::kFusion && !contains(base, m)) base.push_back(m);
+std::vector<MethodId> feature_methods(const TrainParams& tp) {
+  std::vector<MethodId> base;
+  auto add = [&](MethodId m) {
+    if (m != MethodId::kFusion && !contains(base, m)) base.push_back(m);
   };
-  for (Method m : tp.methods) add(m);
-  if (contains(tp.methods, Method::kFusion))
-    for (Method m : tp.fusion_of) add(m);
+  for (MethodId m : tp.methods) add(m);
+  if (contains(tp.methods, MethodId::kFusion))
+    for (MethodId m : tp.fusion_of) add(m);
   return base;
 }
 
@@ -82,7 +82,7 @@ struct Protocol {
   const EvalProgressFn& progress;
   int threads = 1;
   TrainParams tp;
-  std::vector<Method> base;
+  std::vector<MethodId> base;
   int folds = 1;                 // models trained: the CV folds, or 1 for a cross-source evaluation
   std::vector<Points> full;      // full 3D cloud per object (sec. 3.4)
   std::vector<View> views;
@@ -474,7 +474,7 @@ void flag_problems(Protocol& P) {
   size_t tested_views = 0;
   for (size_t v = 0; v < P.views.size(); ++v) tested_views += P.tested(v);
   const double chance = 100.0 / double(r.categories.size());
-  for (Method m : P.params.methods) {
+  for (MethodId m : P.params.methods) {
     const Tally t = accuracy(r.decisions, "full", m);
     if (t.total && t.percent() < chance + 10)
       r.notes.push_back(std::string(method_name(m)) + " is near chance on full views (" +
@@ -525,8 +525,8 @@ void flag_problems(Protocol& P) {
     r.notes.push_back("features failed on " + std::to_string(g.clouds) + " clouds (views and prefixes) of " +
                       std::to_string(g.objects.size()) + " objects (" + list + "), e.g. " + g.example);
   }
-  if (contains(P.params.methods, Method::kBoK) || contains(P.params.methods, Method::kBoG) ||
-      contains(P.params.methods, Method::kKGH)) {
+  if (contains(P.params.methods, MethodId::kBoK) || contains(P.params.methods, MethodId::kBoG) ||
+      contains(P.params.methods, MethodId::kKGH)) {
     size_t no_keypoints = 0;
     for (size_t v = 0; v < P.views.size(); ++v)
       no_keypoints += P.tested(v) && P.slots[v].ok && P.slots[v].features.positions.empty();

@@ -67,17 +67,17 @@ constexpr PaperDiagonal kPaperTables[] = {
     {"25kp", {{{56, 0, 39, 61}, {89, 100, 94, 89}, {16, 72, 28, 50}, {67, 50, 89, 78}, {78, 0, 89, 50}}}},
 };
 
-int paper_method_column(Method m) {
+int paper_method_column(MethodId m) {
   switch (m) {
-    case Method::kVFH: return 0;
-    case Method::kKGH: return 1;
-    case Method::kBoK: return 2;
-    case Method::kBoG: return 3;
+    case MethodId::kVFH: return 0;
+    case MethodId::kKGH: return 1;
+    case MethodId::kBoK: return 2;
+    case MethodId::kBoG: return 3;
     default: return -1;
   }
 }
 
-double paper_diagonal(std::string_view stage, const std::string& category, Method m) {
+double paper_diagonal(std::string_view stage, const std::string& category, MethodId m) {
   static const char* const kOrder[] = {"human", "chair", "table", "mechanic", "fourleg"};
   const int col = paper_method_column(m);
   if (col < 0) return kNaN;
@@ -95,16 +95,16 @@ std::vector<std::string> main_stage_names(const EvalResult& r) {
   return out;
 }
 
-std::string method_label(Method m) {
+std::string method_label(MethodId m) {
   switch (m) {
-    case Method::kBoK: return "BoK";
-    case Method::kBoG: return "BoG";
-    case Method::kKGH: return "KGH";
-    case Method::kVFH: return "VFH";
-    case Method::kESF: return "ESF";
-    case Method::kUSH: return "USH";
-    case Method::kSize: return "Size only";
-    case Method::kFusion: return "Fusion";
+    case MethodId::kBoK: return "BoK";
+    case MethodId::kBoG: return "BoG";
+    case MethodId::kKGH: return "KGH";
+    case MethodId::kVFH: return "VFH";
+    case MethodId::kESF: return "ESF";
+    case MethodId::kUSH: return "USH";
+    case MethodId::kSize: return "Size only";
+    case MethodId::kFusion: return "Fusion";
   }
   return "?";
 }
@@ -115,9 +115,9 @@ const StageStats* stats_of(const EvalResult& r, std::string_view stage) {
   return nullptr;
 }
 
-std::string join_methods(const std::vector<Method>& ms) {
+std::string join_methods(const std::vector<MethodId>& ms) {
   std::string s;
-  for (Method m : ms) s += (s.empty() ? "" : ", ") + std::string(method_name(m));
+  for (MethodId m : ms) s += (s.empty() ? "" : ", ") + std::string(method_name(m));
   return s;
 }
 
@@ -201,14 +201,14 @@ void write_protocol(std::ostringstream& o, const EvalResult& r) {
   o << "| codebooks | BoK " << t.bok_clusters << ", BoG " << t.bog_keypoint_clusters << "x" << t.bog_volume_clusters
     << " -> " << t.bog_pca_dims << " dims, KGH " << t.kgh_clusters << "x" << t.kgh_distance_bins
     << (t.normalise_histograms ? ", histograms normalised" : "") << " | BoK 60, BoG 6x5 -> 65, KGH 8x15 |\n";
-  const char* kind = t.decision.kind == DecisionKind::kNearestCentre ? "nearest centre"
-                     : t.decision.kind == DecisionKind::kCentres   ? "several centres per category"
-                     : t.decision.kind == DecisionKind::kNearestReference
+  const char* kind = t.decision.kind == DecisionRule::kNearestCentre ? "nearest centre"
+                     : t.decision.kind == DecisionRule::kCentres   ? "several centres per category"
+                     : t.decision.kind == DecisionRule::kNearestReference
                          ? "nearest reference per category (every training vector; softmin scores)"
                          : "k-NN";
   o << "| decision | " << kind;
-  if (t.decision.kind == DecisionKind::kNearestNeighbours) o << " (k = " << t.decision.neighbours << ")";
-  if (t.decision.kind == DecisionKind::kCentres) o << " (" << t.decision.centres_per_category << " per category)";
+  if (t.decision.kind == DecisionRule::kNearestNeighbours) o << " (k = " << t.decision.neighbours << ")";
+  if (t.decision.kind == DecisionRule::kCentres) o << " (" << t.decision.centres_per_category << " per category)";
   o << ", L1 | one K-means centre per category, L1 |\n";
   o << "| exploration grid (category changes) | keypoint counts ";
   for (size_t i = 0; i < r.grid.size(); ++i) o << (i ? ", " : "") << r.grid[i];
@@ -227,7 +227,7 @@ void write_accuracy(std::ostringstream& o, const EvalResult& r) {
   o << "\n|---|";
   for (size_t i = 0; i < stages.size(); ++i) o << "---:|";
   o << "\n";
-  for (Method m : r.params.methods) {
+  for (MethodId m : r.params.methods) {
     o << "| " << method_label(m) << " |";
     for (const std::string& s : stages) {
       const Tally t = accuracy(r.decisions, s, m);
@@ -241,11 +241,11 @@ void write_accuracy(std::ostringstream& o, const EvalResult& r) {
   o << "| *best* |";
   for (const std::string& s : stages) {
     double best = -1;
-    Method bm = r.params.methods.front();
-    for (Method m : r.params.methods)
+    MethodId bm = r.params.methods.front();
+    for (MethodId m : r.params.methods)
       if (double a = accuracy(r.decisions, s, m).percent(); a > best) best = a, bm = m;
     double paper_best = kNaN;
-    for (Method m : {Method::kVFH, Method::kKGH, Method::kBoK, Method::kBoG}) {
+    for (MethodId m : {MethodId::kVFH, MethodId::kKGH, MethodId::kBoK, MethodId::kBoG}) {
       const double pa = paper_accuracy(m, s);
       if (!std::isnan(pa) && (std::isnan(paper_best) || pa > paper_best)) paper_best = pa;
     }
@@ -268,7 +268,7 @@ void write_accuracy(std::ostringstream& o, const EvalResult& r) {
   o << "\n|---|";
   for (size_t i = 0; i < stages.size(); ++i) o << "---:|";
   o << "\n";
-  for (Method m : r.params.methods) {
+  for (MethodId m : r.params.methods) {
     o << "| " << method_label(m) << " |";
     for (const std::string& s : stages) o << " " << pct(balanced_accuracy(r.decisions, s, m, r.categories.size()), 1) << " |";
     o << "\n";
@@ -277,7 +277,7 @@ void write_accuracy(std::ostringstream& o, const EvalResult& r) {
 }
 
 void write_size(std::ostringstream& o, const EvalResult& r) {
-  const bool size_method = std::find(r.params.methods.begin(), r.params.methods.end(), Method::kSize) != r.params.methods.end();
+  const bool size_method = std::find(r.params.methods.begin(), r.params.methods.end(), MethodId::kSize) != r.params.methods.end();
   if (!size_method && r.ablations.empty()) return;
   const std::vector<std::string> stages = main_stage_names(r);
   o << "## How much is size\n\n";
@@ -292,13 +292,13 @@ void write_size(std::ostringstream& o, const EvalResult& r) {
   o << " |\n|---|";
   for (size_t i = 0; i < 2 * stages.size(); ++i) o << "---:|";
   o << "\n";
-  auto real_row = [&](Method m) {
+  auto real_row = [&](MethodId m) {
     o << "| " << method_label(m) << " |";
     for (const std::string& s : stages) o << " " << pct(accuracy(r.decisions, s, m).percent(), 1) << " |";
     for (const std::string& s : stages) o << " " << pct(balanced_accuracy(r.decisions, s, m, r.categories.size()), 1) << " |";
     o << "\n";
   };
-  if (size_method) real_row(Method::kSize);
+  if (size_method) real_row(MethodId::kSize);
   for (const AblationRow& a : r.ablations) {
     if (std::find(r.params.methods.begin(), r.params.methods.end(), a.method) != r.params.methods.end()) real_row(a.method);
     o << "| " << method_label(a.method) << ", " << a.label << " |";
@@ -355,10 +355,10 @@ void write_confusions(std::ostringstream& o, const EvalResult& r) {
     for (size_t i = 0; i < r.categories.size(); ++i) o << "---:|";
     o << "---:|\n";
     std::vector<std::vector<std::vector<double>>> conf;
-    for (Method m : r.params.methods) conf.push_back(confusion_percent(r.decisions, stage, m, r.categories.size()));
+    for (MethodId m : r.params.methods) conf.push_back(confusion_percent(r.decisions, stage, m, r.categories.size()));
     for (size_t q = 0; q < r.categories.size(); ++q) {
       for (size_t mi = 0; mi < r.params.methods.size(); ++mi) {
-        const Method m = r.params.methods[mi];
+        const MethodId m = r.params.methods[mi];
         const char* label = paper_category_label(r.categories[q]);
         o << "| " << (mi == 0 ? (label ? label : r.categories[q].c_str()) : "") << " | " << method_label(m) << " |";
         for (size_t c = 0; c < r.categories.size(); ++c) {
@@ -451,7 +451,7 @@ std::string streams_csv(const EvalResult& r) {
   return o.str();
 }
 
-double paper_accuracy(Method method, std::string_view stage) {
+double paper_accuracy(MethodId method, std::string_view stage) {
   const int col = paper_method_column(method);
   if (col < 0) return kNaN;
   static constexpr double kFull[] = {64, 89, 89, 83}, k10[] = {57, 32, 64, 54}, k20[] = {60, 44, 68, 66};
@@ -562,7 +562,7 @@ std::string summary_table(const EvalResult& r) {
   o << "method  ";
   for (const std::string& s : stages) o << std::string(std::max<int>(1, 14 - int(s.size())), ' ') << s;
   o << "\n";
-  for (Method m : r.params.methods) {
+  for (MethodId m : r.params.methods) {
     std::string name = method_label(m);
     o << name << std::string(std::max<int>(1, 8 - int(name.size())), ' ');
     for (const std::string& s : stages) {

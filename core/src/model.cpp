@@ -19,33 +19,33 @@
 
 namespace glimpse {
 
-const char* method_name(Method m) {
+const char* method_name(MethodId m) {
   switch (m) {
-    case Method::kBoK: return "bok";
-    case Method::kBoG: return "bog";
-    case Method::kKGH: return "kgh";
-    case Method::kVFH: return "vfh";
-    case Method::kESF: return "esf";
-    case Method::kUSH: return "ush";
-    case Method::kSize: return "size";
-    case Method::kFusion: return "fusion";
+    case MethodId::kBoK: return "bok";
+    case MethodId::kBoG: return "bog";
+    case MethodId::kKGH: return "kgh";
+    case MethodId::kVFH: return "vfh";
+    case MethodId::kESF: return "esf";
+    case MethodId::kUSH: return "ush";
+    case MethodId::kSize: return "size";
+    case MethodId::kFusion: return "fusion";
   }
   return "unknown";
 }
 
-Expected<Method> parse_method(std::string_view name) {
+Expected<MethodId> parse_method(std::string_view name) {
   std::string lower(name);
   for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  for (Method m : kAllMethods)
+  for (MethodId m : kAllMethods)
     if (lower == method_name(m)) return m;
   return invalid_argument("unknown method '" + std::string(name) + "' (valid: bok, bog, kgh, vfh, esf, ush, size, fusion)");
 }
 
-std::vector<Method> component_methods(const ModelImpl& impl, Method method) {
-  if (method != Method::kFusion) return {method};
-  std::vector<Method> out;
-  for (Method m : impl.params.fusion_of)
-    if (m != Method::kFusion && impl.stages[static_cast<int>(m)]) out.push_back(m);
+std::vector<MethodId> component_methods(const ModelImpl& impl, MethodId method) {
+  if (method != MethodId::kFusion) return {method};
+  std::vector<MethodId> out;
+  for (MethodId m : impl.params.fusion_of)
+    if (m != MethodId::kFusion && impl.stages[static_cast<int>(m)]) out.push_back(m);
   return out;
 }
 
@@ -55,18 +55,18 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
-bool needs(const std::vector<Method>& methods, Method m) {
+bool needs(const std::vector<MethodId>& methods, MethodId m) {
   return std::find(methods.begin(), methods.end(), m) != methods.end();
 }
 
 }  // namespace
 
 Expected<CloudFeatures> method_features(const FeatureState& f, const TrainParams& params,
-                                        const std::vector<Method>& methods, int threads) {
+                                        const std::vector<MethodId>& methods, int threads) {
   // Every method but ESF and size reads the local surfaces (USH, VFH's normals, keypoints): without one
   // there is nothing to judge, and a histogram of nothing would still name a winner.
-  const bool surfaces_needed = std::any_of(methods.begin(), methods.end(), [](Method m) {
-    return m != Method::kESF && m != Method::kSize && m != Method::kFusion;
+  const bool surfaces_needed = std::any_of(methods.begin(), methods.end(), [](MethodId m) {
+    return m != MethodId::kESF && m != MethodId::kSize && m != MethodId::kFusion;
   });
   if (surfaces_needed && f.diagnostics.valid_surfaces == 0)
     return invalid_argument(f.diagnostics.note.empty() ? "no local surface could be fitted" : f.diagnostics.note);
@@ -75,9 +75,9 @@ Expected<CloudFeatures> method_features(const FeatureState& f, const TrainParams
   out.extent_m = bounds(f.cloud.points).extent().maxCoeff();
   for (const Keypoint& k : f.keypoints) out.positions.push_back(k.position);
   out.descriptors = f.descriptors;
-  if (needs(methods, Method::kUSH)) out.ush = upright_histogram(f.cloud.points, f.surfaces, params.ush);
-  if (needs(methods, Method::kSize)) out.size = visible_size(f.cloud.points);
-  if (needs(methods, Method::kVFH)) {
+  if (needs(methods, MethodId::kUSH)) out.ush = upright_histogram(f.cloud.points, f.surfaces, params.ush);
+  if (needs(methods, MethodId::kSize)) out.size = visible_size(f.cloud.points);
+  if (needs(methods, MethodId::kVFH)) {
     GlobalDescriptorParams gp = params.global;
     gp.threads = threads;
     std::vector<Vec3> normals(f.cloud.points.size(), Vec3::Zero());
@@ -87,7 +87,7 @@ Expected<CloudFeatures> method_features(const FeatureState& f, const TrainParams
     if (!v.ok()) return v.error();
     out.vfh = std::move(*v);
   }
-  if (needs(methods, Method::kESF)) {
+  if (needs(methods, MethodId::kESF)) {
     auto e = esf(f.cloud, params.seed);
     if (!e.ok()) return e.error();
     out.esf = std::move(*e);
@@ -96,7 +96,7 @@ Expected<CloudFeatures> method_features(const FeatureState& f, const TrainParams
 }
 
 Expected<CloudFeatures> cloud_features(const Cloud& cloud, const TrainParams& params,
-                                       const std::vector<Method>& methods, int threads, const CancelFn& cancel) {
+                                       const std::vector<MethodId>& methods, int threads, const CancelFn& cancel) {
   FeatureParams fp = params.features;
   fp.surface.threads = threads;
   fp.find_keypoints = std::any_of(methods.begin(), methods.end(), uses_keypoints);
@@ -106,31 +106,31 @@ Expected<CloudFeatures> cloud_features(const Cloud& cloud, const TrainParams& pa
   return method_features(*f, params, methods, threads);
 }
 
-Eigen::VectorXd method_histogram(const ModelImpl& impl, Method method, const CloudFeatures& f) {
+Eigen::VectorXd method_histogram(const ModelImpl& impl, MethodId method, const CloudFeatures& f) {
   const TrainParams& p = impl.params;
   switch (method) {
-    case Method::kBoK:
+    case MethodId::kBoK:
       return bag_of_keypoints(keypoint_words(impl.bok, f.descriptors), p.bok_clusters, p.normalise_histograms);
-    case Method::kBoG:
+    case MethodId::kBoG:
       return bag_of_graphs(local_graphs(f.positions, keypoint_words(impl.bog, f.descriptors)), impl.graphs,
                            p.normalise_histograms);
-    case Method::kKGH:
+    case MethodId::kKGH:
       return keypoint_global_histogram(f.positions, keypoint_words(impl.kgh, f.descriptors), p.kgh_clusters,
                                        p.kgh_distance_bins, impl.kgh_max_distance_m, p.normalise_histograms);
-    case Method::kVFH: return f.vfh ? Eigen::VectorXd(f.vfh->cast<double>()) : Eigen::VectorXd::Zero(kVfhSize);
-    case Method::kESF: return f.esf ? Eigen::VectorXd(f.esf->cast<double>()) : Eigen::VectorXd::Zero(kEsfSize);
-    case Method::kUSH:
+    case MethodId::kVFH: return f.vfh ? Eigen::VectorXd(f.vfh->cast<double>()) : Eigen::VectorXd::Zero(kVfhSize);
+    case MethodId::kESF: return f.esf ? Eigen::VectorXd(f.esf->cast<double>()) : Eigen::VectorXd::Zero(kEsfSize);
+    case MethodId::kUSH:
       return f.ush ? Eigen::VectorXd(f.ush->cast<double>()) : Eigen::VectorXd::Zero(kUprightHistogramSize);
-    case Method::kSize: return f.size ? Eigen::VectorXd(f.size->cast<double>()) : Eigen::VectorXd::Zero(kVisibleSizeSize);
-    case Method::kFusion: break;
+    case MethodId::kSize: return f.size ? Eigen::VectorXd(f.size->cast<double>()) : Eigen::VectorXd::Zero(kVisibleSizeSize);
+    case MethodId::kFusion: break;
   }
   return {};
 }
 
-Eigen::VectorXd method_scores(const ModelImpl& impl, Method method, const CloudFeatures& f) {
-  const std::vector<Method> parts = component_methods(impl, method);
+Eigen::VectorXd method_scores(const ModelImpl& impl, MethodId method, const CloudFeatures& f) {
+  const std::vector<MethodId> parts = component_methods(impl, method);
   Eigen::VectorXd sum;
-  for (Method m : parts) {
+  for (MethodId m : parts) {
     const Eigen::VectorXd s = decide(*impl.stages[static_cast<int>(m)], method_histogram(impl, m, f));
     sum = sum.size() ? Eigen::VectorXd(sum + s) : s;
   }
@@ -171,13 +171,13 @@ Status validate(const std::vector<Sample>& data, const TrainParams& params) {
   return {};
 }
 
-std::vector<Method> base_methods(const TrainParams& params) {
-  std::vector<Method> base;
-  for (Method m : params.methods)
-    if (m != Method::kFusion && !needs(base, m)) base.push_back(m);
-  if (needs(params.methods, Method::kFusion))
-    for (Method m : params.fusion_of)
-      if (m != Method::kFusion && !needs(base, m)) base.push_back(m);
+std::vector<MethodId> base_methods(const TrainParams& params) {
+  std::vector<MethodId> base;
+  for (MethodId m : params.methods)
+    if (m != MethodId::kFusion && !needs(base, m)) base.push_back(m);
+  if (needs(params.methods, MethodId::kFusion))
+    for (MethodId m : params.fusion_of)
+      if (m != MethodId::kFusion && !needs(base, m)) base.push_back(m);
   return base;
 }
 
@@ -196,12 +196,12 @@ Eigen::MatrixXd pooled_descriptors(const std::vector<CloudFeatures>& feats, size
 
 }  // namespace
 
-Expected<Model> train(const std::vector<LabelledCloud>& data, const TrainParams& params, const ProgressFn& progress,
+Expected<Model> train(const std::vector<TrainingCloud>& data, const TrainParams& params, const ProgressFn& progress,
                       const CancelFn& cancel) {
   const auto t0 = std::chrono::steady_clock::now();
   if (Status s = validate(data, params); !s.ok()) return s.error();
   auto cancelled_now = [&] { return cancel && cancel(); };
-  const std::vector<Method> base = base_methods(params);
+  const std::vector<MethodId> base = base_methods(params);
 
   // The clouds to learn from: each training cloud whole, then its top-down prefixes (0 = whole).
   struct Job {
@@ -237,7 +237,7 @@ Expected<Model> train(const std::vector<LabelledCloud>& data, const TrainParams&
   std::vector<TrainingSample> samples;
   samples.reserve(jobs.size());
   for (size_t j = 0; j < jobs.size(); ++j) {
-    const LabelledCloud& d = data[jobs[j].cloud];
+    const TrainingCloud& d = data[jobs[j].cloud];
     if (!feats[j].ok()) {
       // A whole cloud must work; a prefix too small or too thin for a method is only skipped.
       if (jobs[j].prefix && feats[j].error().code == ErrorCode::kInvalidArgument) continue;
@@ -254,7 +254,7 @@ Expected<Model> train(const std::vector<LabelledCloud>& data, const TrainParams&
     // Statistics count the clouds given, not the prefixes made of them.
     model->stats.clouds = data.size();
     std::fill(model->stats.clouds_per_category.begin(), model->stats.clouds_per_category.end(), 0);
-    for (const LabelledCloud& d : data)
+    for (const TrainingCloud& d : data)
       ++model->stats.clouds_per_category[static_cast<size_t>(
           std::find(model->categories.begin(), model->categories.end(), d.category) - model->categories.begin())];
     model->stats.seconds = ms_since(t0) / 1000.0;
@@ -289,7 +289,7 @@ Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainP
     object_of.push_back(object_index.emplace(key, static_cast<int>(object_index.size())).first->second);
   }
 
-  const std::vector<Method> base = base_methods(params);
+  const std::vector<MethodId> base = base_methods(params);
   const int threads = resolve_threads(params.threads);
   std::vector<CloudFeatures> f;
   f.reserve(data.size());
@@ -303,27 +303,27 @@ Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainP
     return fit_keypoint_codebook(pooled, {clusters, params.codebook_explained_variance, params.kmeans_restarts,
                                           params.seed + salt, threads});
   };
-  auto with_method = [&](Method m, const Error& e) {
+  auto with_method = [&](MethodId m, const Error& e) {
     return Error{e.code, std::string(method_name(m)) + ": " + e.message};
   };
-  if (needs(base, Method::kBoK)) {
+  if (needs(base, MethodId::kBoK)) {
     auto cb = codebook(params.bok_clusters, 1);
-    if (!cb.ok()) return with_method(Method::kBoK, cb.error());
+    if (!cb.ok()) return with_method(MethodId::kBoK, cb.error());
     impl->bok = std::move(*cb);
   }
-  if (needs(base, Method::kBoG)) {
+  if (needs(base, MethodId::kBoG)) {
     auto cb = codebook(params.bog_keypoint_clusters, 2);
-    if (!cb.ok()) return with_method(Method::kBoG, cb.error());
+    if (!cb.ok()) return with_method(MethodId::kBoG, cb.error());
     impl->bog = std::move(*cb);
     std::vector<std::vector<LocalGraph>> graphs;
     for (const auto& c : f) graphs.push_back(local_graphs(c.positions, keypoint_words(impl->bog, c.descriptors)));
     auto voc = fit_graph_vocabulary(graphs, params.bog_keypoint_clusters, params.bog_volume_clusters, params.seed + 3);
-    if (!voc.ok()) return with_method(Method::kBoG, voc.error());
+    if (!voc.ok()) return with_method(MethodId::kBoG, voc.error());
     impl->graphs = std::move(*voc);
   }
-  if (needs(base, Method::kKGH)) {
+  if (needs(base, MethodId::kKGH)) {
     auto cb = codebook(params.kgh_clusters, 4);
-    if (!cb.ok()) return with_method(Method::kKGH, cb.error());
+    if (!cb.ok()) return with_method(MethodId::kKGH, cb.error());
     impl->kgh = std::move(*cb);
     // Distance bins span the largest keypoint distance seen in training (robustly: its 95th percentile).
     std::vector<float> spans;
@@ -342,7 +342,7 @@ Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainP
   // 3. Global histograms and decision stages (sec. 3.3).
   size_t done = 0;
   std::vector<Eigen::MatrixXd> histograms(kMethodCount);
-  for (Method m : base) {
+  for (MethodId m : base) {
     Eigen::MatrixXd& h = histograms[static_cast<size_t>(m)];
     for (size_t i = 0; i < f.size(); ++i) {
       const Eigen::VectorXd row = method_histogram(*impl, m, f[i]);
@@ -350,7 +350,7 @@ Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainP
       h.row(static_cast<Eigen::Index>(i)) = row.transpose();
     }
     DecisionParams dp = params.decision;
-    if (m == Method::kBoG) dp.max_pca_dims = params.bog_pca_dims;
+    if (m == MethodId::kBoG) dp.max_pca_dims = params.bog_pca_dims;
     auto stage = fit_decision(h, labels, static_cast<int>(model.categories.size()), dp,
                               params.seed + 10 + static_cast<uint64_t>(m), threads, object_of);
     if (!stage.ok()) return with_method(m, stage.error());
@@ -359,9 +359,9 @@ Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainP
     if (cancelled_now()) return cancelled("training cancelled");
   }
 
-  for (Method m : kAllMethods)
+  for (MethodId m : kAllMethods)
     if (needs(params.methods, m)) model.methods.push_back(m);
-  if (needs(model.methods, Method::kFusion) && component_methods(*impl, Method::kFusion).empty())
+  if (needs(model.methods, MethodId::kFusion) && component_methods(*impl, MethodId::kFusion).empty())
     return invalid_argument("fusion needs at least one of its component methods (fusion_of)");
   model.default_method = needs(model.methods, params.default_method) ? params.default_method : model.methods.front();
   // 4. Calibration of the default method on held-out folds of the training objects.
@@ -394,7 +394,7 @@ Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainP
 
 // ---- Classification -------------------------------------------------------------------------------
 
-std::string size_warning(const TrainingStats& stats, const Cloud& cloud) {
+std::string size_warning(const TrainingSummary& stats, const Cloud& cloud) {
   if (!(stats.max_extent_m > 0) || cloud.points.empty()) return {};
   Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
   for (const Vec3& p : cloud.points)
@@ -423,11 +423,11 @@ Status check_feature_version(const Model& model) {
                              std::to_string(kFeaturePipelineVersion) + ": its references do not match new features; retrain it");
 }
 
-Expected<Classification> classify(const Model& model, const Cloud& cloud, std::optional<Method> method,
+Expected<Classification> classify(const Model& model, const Cloud& cloud, std::optional<MethodId> method,
                                   const CancelFn& cancel) {
   if (!model.impl) return failed_precondition("the model is not trained");
   if (Status s = check_feature_version(model); !s.ok()) return s.error();
-  const Method m = method.value_or(model.default_method);
+  const MethodId m = method.value_or(model.default_method);
   if (!needs(model.methods, m))
     return invalid_argument(std::string("the model was not trained for method '") + method_name(m) + "'");
   const ModelImpl& impl = *model.impl;

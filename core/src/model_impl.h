@@ -21,10 +21,10 @@ struct ModelImpl {
   KeypointCodebook kgh;
   GraphVocabulary graphs;
   float kgh_max_distance_m = 1;
-  std::array<std::optional<DecisionStage>, kMethodCount> stages;  // indexed by Method; never kFusion
+  std::array<std::optional<DecisionStage>, kMethodCount> stages;  // indexed by MethodId; never kFusion
 };
 
-inline bool uses_keypoints(Method m) { return m == Method::kBoK || m == Method::kBoG || m == Method::kKGH; }
+inline bool uses_keypoints(MethodId m) { return m == MethodId::kBoK || m == MethodId::kBoG || m == MethodId::kKGH; }
 
 // What the methods of a model need from one cloud.
 struct CloudFeatures {
@@ -39,21 +39,21 @@ struct CloudFeatures {
 };
 
 // The methods a model needs computed for `method` (fusion expands to its components).
-std::vector<Method> component_methods(const ModelImpl& impl, Method method);
+std::vector<MethodId> component_methods(const ModelImpl& impl, MethodId method);
 
 // What the given methods need of a feature state: keypoint positions and descriptors, and the
 // whole-cloud descriptors (USH and size from the points and surfaces, VFH over the surfaces' normals,
 // ESF). Shared by whole clouds (cloud_features) and streams (ScanSession).
 Expected<CloudFeatures> method_features(const FeatureState& state, const TrainParams& params,
-                                        const std::vector<Method>& methods, int threads);
+                                        const std::vector<MethodId>& methods, int threads);
 
 // extract() + method_features; keypoints only when one of the methods needs them.
 Expected<CloudFeatures> cloud_features(const Cloud& cloud, const TrainParams& params,
-                                       const std::vector<Method>& methods, int threads,
+                                       const std::vector<MethodId>& methods, int threads,
                                        const CancelFn& cancel = {});
 
 // The global histogram of one base method (every method but fusion).
-Eigen::VectorXd method_histogram(const ModelImpl& impl, Method method, const CloudFeatures& f);
+Eigen::VectorXd method_histogram(const ModelImpl& impl, MethodId method, const CloudFeatures& f);
 
 // A training cloud as it is learnt: turned by a random tilt of up to params.tilt_deg (seeded by
 // params.seed and `salt`); its top-down prefixes are cut from this turned cloud.
@@ -72,7 +72,7 @@ Expected<Model> train_on_features(std::vector<TrainingSample> samples, const Tra
 // Inner cross-validation of `method`'s decision stages over params.calibration_folds folds of the
 // training objects (`objects[i]` the object of row i, `object_categories` per object); histograms[m] the
 // training rows of base method m. The codebooks are the model's own (fitted without labels).
-Calibration calibrate(const ModelImpl& impl, Method method, const std::vector<Eigen::MatrixXd>& histograms,
+Calibration calibrate(const ModelImpl& impl, MethodId method, const std::vector<Eigen::MatrixXd>& histograms,
                       const std::vector<int>& labels, const std::vector<int>& objects,
                       const std::vector<std::string>& object_categories, int categories, int threads);
 
@@ -80,6 +80,6 @@ Calibration calibrate(const ModelImpl& impl, Method method, const std::vector<Ei
 Status check_feature_version(const Model& model);
 
 // Scores of `method` (fusion: the mean of its components' scores).
-Eigen::VectorXd method_scores(const ModelImpl& impl, Method method, const CloudFeatures& f);
+Eigen::VectorXd method_scores(const ModelImpl& impl, MethodId method, const CloudFeatures& f);
 
 }  // namespace glimpse

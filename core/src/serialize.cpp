@@ -207,13 +207,13 @@ bool from_double(T& v, double d) {
   return true;
 }
 
-void write_methods(Writer& w, const std::vector<Method>& ms) {
+void write_methods(Writer& w, const std::vector<MethodId>& ms) {
   w.u32(static_cast<uint32_t>(ms.size()));
-  for (Method m : ms) w.u8(static_cast<uint8_t>(m));
+  for (MethodId m : ms) w.u8(static_cast<uint8_t>(m));
 }
-std::vector<Method> read_methods(Reader& r) {
+std::vector<MethodId> read_methods(Reader& r) {
   const uint32_t n = r.u32("method list");
-  std::vector<Method> ms;
+  std::vector<MethodId> ms;
   if (n > 64) {
     r.fail("method list too long");
     return ms;
@@ -221,7 +221,7 @@ std::vector<Method> read_methods(Reader& r) {
   for (uint32_t i = 0; i < n; ++i) {
     const uint8_t m = r.u8("method");
     if (m >= kMethodCount) r.fail("unknown method code " + std::to_string(m));
-    ms.push_back(static_cast<Method>(m));
+    ms.push_back(static_cast<MethodId>(m));
   }
   return ms;
 }
@@ -275,8 +275,8 @@ void write_stage(Writer& w, const DecisionStage& s) {
 DecisionStage read_stage(Reader& r, int categories, Eigen::Index histogram_size) {
   DecisionStage s;
   const uint8_t kind = r.u8("decision kind");
-  if (kind > static_cast<uint8_t>(DecisionKind::kNearestReference)) r.fail("unknown decision kind");
-  s.kind = static_cast<DecisionKind>(kind);
+  if (kind > static_cast<uint8_t>(DecisionRule::kNearestReference)) r.fail("unknown decision kind");
+  s.kind = static_cast<DecisionRule>(kind);
   s.categories = r.i32("decision categories");
   s.neighbours = r.i32("decision neighbours");
   s.pca = read_pca(r);
@@ -379,7 +379,7 @@ Expected<Model> deserialize(std::span<const uint8_t> bytes) {
   if (ncat > 100000) r.fail("too many categories");
   for (uint32_t i = 0; i < ncat && !r.failed(); ++i) model.categories.push_back(r.str("category name"));
   model.methods = read_methods(r);
-  model.default_method = static_cast<Method>(r.u8("default method"));
+  model.default_method = static_cast<MethodId>(r.u8("default method"));
   model.stats.clouds = r.u64("stats");
   model.stats.objects = r.u64("stats");
   model.stats.keypoints = r.u64("stats");
@@ -415,24 +415,24 @@ Expected<Model> deserialize(std::span<const uint8_t> bytes) {
         r.fail(std::string("parameter ") + name + " has an impossible value");
     });
     p.methods = read_methods(r);
-    p.default_method = static_cast<Method>(r.u8("default method"));
+    p.default_method = static_cast<MethodId>(r.u8("default method"));
     p.fusion_of = read_methods(r);
     const int max_clusters = 100000;
     if (p.bok_clusters < 2 || p.bok_clusters > max_clusters || p.bog_keypoint_clusters < 2 ||
         p.bog_keypoint_clusters > 40 || p.kgh_clusters < 2 || p.kgh_clusters > 1000 || p.kgh_distance_bins < 1 ||
         p.kgh_distance_bins > 10000 || p.bog_volume_clusters < 1 || p.bog_volume_clusters > 1000)
       r.fail("codebook sizes out of range");
-    auto used = [&](Method m) {
-      for (Method q : p.methods)
+    auto used = [&](MethodId m) {
+      for (MethodId q : p.methods)
         if (q == m) return true;
-      if (std::find(p.methods.begin(), p.methods.end(), Method::kFusion) != p.methods.end())
-        for (Method q : p.fusion_of)
+      if (std::find(p.methods.begin(), p.methods.end(), MethodId::kFusion) != p.methods.end())
+        for (MethodId q : p.fusion_of)
           if (q == m) return true;
       return false;
     };
-    impl->bok = read_codebook(r, used(Method::kBoK), p.bok_clusters);
-    impl->bog = read_codebook(r, used(Method::kBoG), p.bog_keypoint_clusters);
-    impl->kgh = read_codebook(r, used(Method::kKGH), p.kgh_clusters);
+    impl->bok = read_codebook(r, used(MethodId::kBoK), p.bok_clusters);
+    impl->bog = read_codebook(r, used(MethodId::kBoG), p.bog_keypoint_clusters);
+    impl->kgh = read_codebook(r, used(MethodId::kKGH), p.kgh_clusters);
     impl->graphs.keypoint_clusters = r.i32("graph clusters");
     const uint32_t nvol = r.u32("volume centres");
     if (nvol > 1000) r.fail("too many volume centres");
@@ -443,7 +443,7 @@ Expected<Model> deserialize(std::span<const uint8_t> bytes) {
       impl->graphs.types.push_back(r.u64("graph type"));
       if (i && impl->graphs.types[i] <= impl->graphs.types[i - 1]) r.fail("graph types not sorted");
     }
-    if (used(Method::kBoG) && !r.failed() &&
+    if (used(MethodId::kBoG) && !r.failed() &&
         (impl->graphs.keypoint_clusters != p.bog_keypoint_clusters || impl->graphs.log_volume_centres.empty()))
       r.fail("inconsistent graph vocabulary");
     impl->kgh_max_distance_m = static_cast<float>(r.f64("KGH distance"));
@@ -455,19 +455,19 @@ Expected<Model> deserialize(std::span<const uint8_t> bytes) {
     const uint32_t slots = version == 1 ? 5 : r.u8("stage slots");
     if (!r.failed() && slots > kMethodCount) r.fail("more decision stages than methods this build knows");
     for (int m = 0; m < kMethodCount && !r.failed(); ++m) {
-      const Method method = static_cast<Method>(m);
+      const MethodId method = static_cast<MethodId>(m);
       if (static_cast<uint32_t>(m) < slots && r.u8("stage flag") == 1) {
-        if (method == Method::kFusion) r.fail("fusion has no decision stage of its own");
+        if (method == MethodId::kFusion) r.fail("fusion has no decision stage of its own");
         else impl->stages[m] = read_stage(r, static_cast<int>(ncat), sizes[m]);
       }
-      if (!r.failed() && method != Method::kFusion && used(method) != impl->stages[m].has_value())
+      if (!r.failed() && method != MethodId::kFusion && used(method) != impl->stages[m].has_value())
         r.fail(std::string("decision stage of ") + method_name(method) + " missing or unexpected");
     }
     if (version >= 3 && !r.failed()) {
       Calibration& c = impl->calibration;
       const uint8_t m = r.u8("calibration method");
       if (m >= kMethodCount) r.fail("unknown calibration method");
-      c.method = static_cast<Method>(m);
+      c.method = static_cast<MethodId>(m);
       c.settle_margin = r.f64("settle margin");
       c.held_out = r.u64("calibration count");
       c.held_out_accuracy = r.f64("calibration accuracy");
@@ -480,10 +480,10 @@ Expected<Model> deserialize(std::span<const uint8_t> bytes) {
   if (!r.failed() && r.left() != 0) r.fail(std::to_string(r.left()) + " unexpected trailing bytes");
   if (!r.failed()) {
     if (model.methods.empty()) r.fail("the model has no method");
-    for (Method m : model.methods)
-      if (model.impl && m != Method::kFusion && !model.impl->stages[static_cast<int>(m)]) r.fail("a listed method has no decision stage");
-    const bool fusion = std::find(model.methods.begin(), model.methods.end(), Method::kFusion) != model.methods.end();
-    if (fusion && model.impl && component_methods(*model.impl, Method::kFusion).empty())
+    for (MethodId m : model.methods)
+      if (model.impl && m != MethodId::kFusion && !model.impl->stages[static_cast<int>(m)]) r.fail("a listed method has no decision stage");
+    const bool fusion = std::find(model.methods.begin(), model.methods.end(), MethodId::kFusion) != model.methods.end();
+    if (fusion && model.impl && component_methods(*model.impl, MethodId::kFusion).empty())
       r.fail("fusion has no component method");
     if (std::find(model.methods.begin(), model.methods.end(), model.default_method) == model.methods.end())
       r.fail("the default method is not one of the model's methods");

@@ -15,7 +15,7 @@ namespace {
 
 class Session final : public ScanSession {
  public:
-  Session(std::shared_ptr<const Model> model, const SessionParams& params, Method method)
+  Session(std::shared_ptr<const Model> model, const SessionParams& params, MethodId method)
       : model_(std::move(model)), impl_(*model_->impl), params_(params), method_(method),
         components_(component_methods(impl_, method)), features_(feature_params()) {
     if (const Calibration& c = impl_.calibration;
@@ -25,9 +25,9 @@ class Session final : public ScanSession {
     last_.scores.assign(model_->categories.size(), 0.0);
   }
 
-  Expected<Decision> add(const Cloud& chunk) override;
-  Expected<Decision> finish() override;
-  const Decision& last() const override { return last_; }
+  Expected<StreamDecision> add(const Cloud& chunk) override;
+  Expected<StreamDecision> finish() override;
+  const StreamDecision& last() const override { return last_; }
 
  private:
   FeatureParams feature_params() const {
@@ -43,15 +43,15 @@ class Session final : public ScanSession {
   std::shared_ptr<const Model> model_;
   const ModelImpl& impl_;
   SessionParams params_;
-  Method method_;
-  std::vector<Method> components_;
+  MethodId method_;
+  std::vector<MethodId> components_;
   ScanFeatures features_;
   CloudFeatures method_features_;
   bool have_features_ = false;
   size_t global_at_points_ = 0;
   size_t chunks_ = 0;
   DecisionTrack track_;
-  Decision last_;
+  StreamDecision last_;
 };
 
 Status Session::check(const Cloud& chunk) const {
@@ -71,8 +71,8 @@ Status Session::check(const Cloud& chunk) const {
 // methods can read (no local surface yet: a line, copies of one point), so nothing is decided.
 bool Session::update_method_features(bool whole_cloud_too) {
   const FeatureState& st = features_.state();
-  std::vector<Method> now, global;
-  for (Method m : components_) (m == Method::kVFH || m == Method::kESF ? global : now).push_back(m);
+  std::vector<MethodId> now, global;
+  for (MethodId m : components_) (m == MethodId::kVFH || m == MethodId::kESF ? global : now).push_back(m);
   auto cheap = method_features(st, impl_.params, now, 1);
   if (!cheap.ok()) return false;
   CloudFeatures f = std::move(*cheap);
@@ -82,11 +82,11 @@ bool Session::update_method_features(bool whole_cloud_too) {
   const bool grown = !global_at_points_ || static_cast<double>(n) >= (1.0 + params_.global_refresh_growth) *
                                                                         static_cast<double>(global_at_points_);
   if (!global.empty() && (whole_cloud_too || grown)) {
-    for (Method m : global) {  // one may fail on a scan still too small for it: it keeps its last value
+    for (MethodId m : global) {  // one may fail on a scan still too small for it: it keeps its last value
       auto g = method_features(st, impl_.params, {m}, 1);
       if (!g.ok()) continue;
-      if (m == Method::kVFH) f.vfh = std::move(g->vfh);
-      if (m == Method::kESF) f.esf = std::move(g->esf);
+      if (m == MethodId::kVFH) f.vfh = std::move(g->vfh);
+      if (m == MethodId::kESF) f.esf = std::move(g->esf);
     }
     global_at_points_ = n;
   }
@@ -101,7 +101,7 @@ void Session::decide() {
   track_.decision.chunk_index = last_.chunk_index;
   track_decision(track_, last_.raw_scores, method_features_.positions.size(),
                  std::any_of(components_.begin(), components_.end(), uses_keypoints), params_);
-  const Decision& d = track_.decision;
+  const StreamDecision& d = track_.decision;
   last_.scores = d.scores;
   last_.winner = d.winner;
   last_.category_changes = d.category_changes;
@@ -110,7 +110,7 @@ void Session::decide() {
   last_.settled = d.settled;
 }
 
-Expected<Decision> Session::add(const Cloud& chunk) {
+Expected<StreamDecision> Session::add(const Cloud& chunk) {
   if (Status s = check(chunk); !s.ok()) return s.error();
   last_.chunk_index = chunks_++;
   last_.final = false;
@@ -134,7 +134,7 @@ Expected<Decision> Session::add(const Cloud& chunk) {
   return last_;
 }
 
-Expected<Decision> Session::finish() {
+Expected<StreamDecision> Session::finish() {
   if (!features_.ready()) return last_;
   if (!update_method_features(true) && !have_features_) return last_;
   last_.keypoints = method_features_.positions.size();
@@ -147,7 +147,7 @@ Expected<Decision> Session::finish() {
 
 void track_decision(DecisionTrack& t, const std::vector<double>& scores, size_t keypoints, bool keypoints_matter,
                     const SessionParams& params) {
-  Decision& d = t.decision;
+  StreamDecision& d = t.decision;
   if (t.smoothed.size() != scores.size()) t.smoothed = scores;
   else
     for (size_t i = 0; i < scores.size(); ++i) t.smoothed[i] = params.smoothing * scores[i] + (1 - params.smoothing) * t.smoothed[i];
@@ -181,7 +181,7 @@ Expected<std::unique_ptr<ScanSession>> ScanSession::create(std::shared_ptr<const
                                                             const SessionParams& params) {
   if (!model || !model->impl) return failed_precondition("the session needs a trained model");
   if (Status s = check_feature_version(*model); !s.ok()) return s.error();
-  const Method method = params.method.value_or(model->default_method);
+  const MethodId method = params.method.value_or(model->default_method);
   if (std::find(model->methods.begin(), model->methods.end(), method) == model->methods.end())
     return invalid_argument(std::string("the model was not trained for method '") + method_name(method) + "'");
   if (params.max_points == 0 || params.max_chunks == 0 || params.max_chunk_points == 0)

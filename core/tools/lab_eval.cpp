@@ -116,10 +116,10 @@ Expected<EvalParams> params_from(const EvalOptions& o) {
       return invalid_argument("--train-prefixes takes fractions in (0, 1), not '" + item + "'");
     if (o.train_on == "partial") p.train.partial_prefixes.push_back(f);
   }
-  if (o.decision == "nearest-centre") p.train.decision.kind = DecisionKind::kNearestCentre;
-  else if (o.decision == "centres") p.train.decision.kind = DecisionKind::kCentres;
-  else if (o.decision == "knn") p.train.decision.kind = DecisionKind::kNearestNeighbours;
-  else if (o.decision == "nearest") p.train.decision.kind = DecisionKind::kNearestReference;
+  if (o.decision == "nearest-centre") p.train.decision.kind = DecisionRule::kNearestCentre;
+  else if (o.decision == "centres") p.train.decision.kind = DecisionRule::kCentres;
+  else if (o.decision == "knn") p.train.decision.kind = DecisionRule::kNearestNeighbours;
+  else if (o.decision == "nearest") p.train.decision.kind = DecisionRule::kNearestReference;
   else return invalid_argument("--decision must be nearest-centre, centres, knn or nearest, not '" + o.decision + "'");
   if (!o.fusion_of.empty()) {
     p.train.fusion_of.clear();
@@ -127,7 +127,7 @@ Expected<EvalParams> params_from(const EvalOptions& o) {
     for (std::string name; std::getline(parts, name, ',');) {
       auto m = parse_method(name);
       if (!m.ok()) return m.error();
-      if (*m == Method::kFusion) return invalid_argument("--fusion-of: fusion cannot be its own component");
+      if (*m == MethodId::kFusion) return invalid_argument("--fusion-of: fusion cannot be its own component");
       p.train.fusion_of.push_back(*m);
     }
   }
@@ -210,8 +210,8 @@ Status size_blind_ablation(EvalResult& result, const std::vector<EvalObject>& ob
   if (p.methods.empty()) return {};
   p.stream_chunk_fraction = 0;
   p.explore_max_keypoints = 0;
-  const bool keypoints = std::any_of(p.methods.begin(), p.methods.end(), [](Method m) {
-    return m == Method::kBoK || m == Method::kBoG || m == Method::kKGH;
+  const bool keypoints = std::any_of(p.methods.begin(), p.methods.end(), [](MethodId m) {
+    return m == MethodId::kBoK || m == MethodId::kBoG || m == MethodId::kKGH;
   });
   if (!keypoints) std::erase_if(p.stages, [](const Stage& s) { return s.kind == StageKind::kKeypoints; });
   const auto t0 = std::chrono::steady_clock::now();

@@ -81,7 +81,7 @@ BENCHMARK(BM_PclVfhPipeline)->Unit(benchmark::kMillisecond);
 
 void BM_Classify(benchmark::State& state) {
   const Model* m = model();
-  const Method method = kAllMethods[state.range(0)];
+  const MethodId method = kAllMethods[state.range(0)];
   state.SetLabel(method_name(method));
   if (!m) {
     state.SkipWithError("training failed");

@@ -30,8 +30,8 @@ constexpr const char* kModelName = "bench";
 
 // Training set: single views (hidden point removal from the paper's six viewpoints, two of them) of
 // three zoo shapes per category, as `glimpse train --zoo --views 2` builds them.
-std::vector<LabelledCloud> TrainingViews() {
-  std::vector<LabelledCloud> data;
+std::vector<TrainingCloud> TrainingViews() {
+  std::vector<TrainingCloud> data;
   for (const LabelledMesh& m : make_zoo(3, /*seed=*/1)) {
     const Cloud full = mesh_vertices(m.mesh);
     const std::vector<Vec3> cameras = paper_viewpoints(full.points);

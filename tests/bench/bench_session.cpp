@@ -39,7 +39,7 @@ const std::vector<Cloud>& chunks() {
   return c;
 }
 
-std::shared_ptr<const Model> model(Method method) {
+std::shared_ptr<const Model> model(MethodId method) {
   TrainParams p;
   p.bok_clusters = 12;
   p.bog_keypoint_clusters = 3;
@@ -53,9 +53,9 @@ std::shared_ptr<const Model> model(Method method) {
 }
 
 // Latency of chunk number state.range(0) (1-based), after feeding the ones before it untimed.
-void BM_SessionChunk(benchmark::State& state, Method method) {
-  static std::shared_ptr<const Model> bok = model(Method::kBoK), fusion = model(Method::kFusion);
-  const auto& m = method == Method::kBoK ? bok : fusion;
+void BM_SessionChunk(benchmark::State& state, MethodId method) {
+  static std::shared_ptr<const Model> bok = model(MethodId::kBoK), fusion = model(MethodId::kFusion);
+  const auto& m = method == MethodId::kBoK ? bok : fusion;
   const size_t k = static_cast<size_t>(state.range(0));
   if (!m || chunks().size() < k) {
     state.SkipWithError("no model or too few chunks");
@@ -77,9 +77,9 @@ void BM_SessionChunk(benchmark::State& state, Method method) {
 // Whole-cloud descriptors (VFH, ESF in fusion) are refreshed when the scan grew by
 // SessionParams::global_refresh_growth, so one chunk may pay a refresh and the next none: their
 // per-chunk cost is the mean over the 10 chunks from state.range(0) on (amortised).
-void BM_SessionWindow(benchmark::State& state, Method method) {
-  static std::shared_ptr<const Model> bok = model(Method::kBoK), fusion = model(Method::kFusion);
-  const auto& m = method == Method::kBoK ? bok : fusion;
+void BM_SessionWindow(benchmark::State& state, MethodId method) {
+  static std::shared_ptr<const Model> bok = model(MethodId::kBoK), fusion = model(MethodId::kFusion);
+  const auto& m = method == MethodId::kBoK ? bok : fusion;
   const size_t first = static_cast<size_t>(state.range(0)), window = 10;
   if (!m || chunks().size() < first + window - 1) {
     state.SkipWithError("no model or too few chunks");
@@ -95,10 +95,10 @@ void BM_SessionWindow(benchmark::State& state, Method method) {
   state.counters["s_per_chunk"] = benchmark::Counter(static_cast<double>(window) * static_cast<double>(state.iterations()),
                                                       benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
 }
-BENCHMARK_CAPTURE(BM_SessionWindow, fusion, Method::kFusion)->Arg(5)->Arg(41)->Iterations(3)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_SessionWindow, fusion, MethodId::kFusion)->Arg(5)->Arg(41)->Iterations(3)->Unit(benchmark::kMillisecond);
 
-BENCHMARK_CAPTURE(BM_SessionChunk, bok, Method::kBoK)->Arg(1)->Arg(5)->Arg(25)->Arg(50)->Iterations(5)->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_SessionChunk, fusion, Method::kFusion)->Arg(5)->Arg(50)->Iterations(5)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_SessionChunk, bok, MethodId::kBoK)->Arg(1)->Arg(5)->Arg(25)->Arg(50)->Iterations(5)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_SessionChunk, fusion, MethodId::kFusion)->Arg(5)->Arg(50)->Iterations(5)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace glimpse

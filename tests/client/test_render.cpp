@@ -138,7 +138,7 @@ TEST(Render, DecisionJson) {
             "\"confidence\":0.41,\"model\":\"zoo\",\"version\":3,\"method\":\"fusion\",\"latency_ms\":12.5}");
 }
 
-TEST(Render, TrainProgress) {
+TEST(Render, TrainingProgress) {
   v1::TrainProgress p;
   p.set_stage("features");
   p.set_stage_done(12);

@@ -115,9 +115,9 @@ inline const std::vector<std::string>& synthetic_categories() {
 }
 
 // objects_per_category objects x views_per_object views each; object ids are unique per seed.
-inline std::vector<LabelledCloud> synthetic_views(int objects_per_category, int views_per_object, uint64_t seed,
+inline std::vector<TrainingCloud> synthetic_views(int objects_per_category, int views_per_object, uint64_t seed,
                                                   float spacing = 0.008f) {
-  std::vector<LabelledCloud> out;
+  std::vector<TrainingCloud> out;
   Rng rng(seed);
   for (const std::string& cat : synthetic_categories())
     for (int o = 0; o < objects_per_category; ++o) {

@@ -118,7 +118,7 @@ TEST(StageCuts, ExplorationGrid) {
 
 // ---- metrics ---------------------------------------------------------------------------------------
 
-StageDecision decision(std::string stage, Method m, int truth, int winner, int object = 0, double visible = 0.3) {
+StageDecision decision(std::string stage, MethodId m, int truth, int winner, int object = 0, double visible = 0.3) {
   StageDecision d;
   d.stage = std::move(stage);
   d.method = m;
@@ -131,21 +131,21 @@ StageDecision decision(std::string stage, Method m, int truth, int winner, int o
 
 TEST(Metrics, AccuracyAndConfusionOnAHandMadeList) {
   std::vector<StageDecision> d = {
-      decision("full", Method::kBoK, 0, 0), decision("full", Method::kBoK, 0, 0), decision("full", Method::kBoK, 0, 1),
-      decision("full", Method::kBoK, 0, -1),  // no decision: wrong, in no column
-      decision("full", Method::kBoK, 1, 1),   decision("full", Method::kBoK, 2, 0),
-      decision("10kp", Method::kBoK, 0, 1),   decision("full", Method::kVFH, 0, 0),
+      decision("full", MethodId::kBoK, 0, 0), decision("full", MethodId::kBoK, 0, 0), decision("full", MethodId::kBoK, 0, 1),
+      decision("full", MethodId::kBoK, 0, -1),  // no decision: wrong, in no column
+      decision("full", MethodId::kBoK, 1, 1),   decision("full", MethodId::kBoK, 2, 0),
+      decision("10kp", MethodId::kBoK, 0, 1),   decision("full", MethodId::kVFH, 0, 0),
   };
-  const Tally t = accuracy(d, "full", Method::kBoK);
+  const Tally t = accuracy(d, "full", MethodId::kBoK);
   EXPECT_EQ(t.total, 6u);
   EXPECT_EQ(t.correct, 3u);
   EXPECT_DOUBLE_EQ(t.percent(), 50.0);
-  EXPECT_EQ(accuracy(d, "10kp", Method::kBoK).correct, 0u);
-  EXPECT_EQ(accuracy(d, "full", Method::kVFH).correct, 1u);
-  EXPECT_EQ(accuracy(d, "20%", Method::kVFH).total, 0u);
-  EXPECT_DOUBLE_EQ(accuracy(d, "20%", Method::kVFH).percent(), 0.0);
+  EXPECT_EQ(accuracy(d, "10kp", MethodId::kBoK).correct, 0u);
+  EXPECT_EQ(accuracy(d, "full", MethodId::kVFH).correct, 1u);
+  EXPECT_EQ(accuracy(d, "20%", MethodId::kVFH).total, 0u);
+  EXPECT_DOUBLE_EQ(accuracy(d, "20%", MethodId::kVFH).percent(), 0.0);
 
-  const auto c = confusion_percent(d, "full", Method::kBoK, 3);
+  const auto c = confusion_percent(d, "full", MethodId::kBoK, 3);
   EXPECT_DOUBLE_EQ(c[0][0], 50.0);
   EXPECT_DOUBLE_EQ(c[0][1], 25.0);
   EXPECT_DOUBLE_EQ(c[0][2], 0.0);
@@ -165,14 +165,14 @@ TEST(Metrics, TracesAndChangeSummarySplitByFinalCorrectness) {
   std::vector<StageDecision> d;
   // View A (object 0, truth 0): 2, 0, 0 then full 0 -> correct, 1 change up to 10, 0 up to 1.
   for (auto [stage, w] : std::vector<std::pair<std::string, int>>{{"1kp", 2}, {"5kp", 0}, {"10kp", 0}, {"full", 0}})
-    d.push_back(decision(stage, Method::kBoK, 0, w, 0));
+    d.push_back(decision(stage, MethodId::kBoK, 0, w, 0));
   // View B (object 1, truth 1): 0, 1, 0 then full 0 -> incorrect, 2 changes up to 10, 1 up to 5.
   for (auto [stage, w] : std::vector<std::pair<std::string, int>>{{"1kp", 0}, {"5kp", 1}, {"10kp", 0}, {"full", 0}})
-    d.push_back(decision(stage, Method::kBoK, 1, w, 1));
-  d.push_back(decision("1kp", Method::kVFH, 1, 0, 1));  // another method: ignored
-  d.push_back(decision("5kp", Method::kBoK, 1, 1, 2));  // no full-view decision: skipped
+    d.push_back(decision(stage, MethodId::kBoK, 1, w, 1));
+  d.push_back(decision("1kp", MethodId::kVFH, 1, 0, 1));  // another method: ignored
+  d.push_back(decision("5kp", MethodId::kBoK, 1, 1, 2));  // no full-view decision: skipped
 
-  const std::vector<ExplorationTrace> traces = exploration_traces(d, Method::kBoK, grid);
+  const std::vector<ExplorationTrace> traces = exploration_traces(d, MethodId::kBoK, grid);
   ASSERT_EQ(traces.size(), 2u);
   EXPECT_TRUE(traces[0].correct());
   EXPECT_FALSE(traces[1].correct());
@@ -200,7 +200,7 @@ size_t occurrences(const std::string& text, const std::string& what) {
 // A hand-made result: two categories, one method, three stages.
 EvalResult small_result() {
   EvalResult r;
-  r.params.methods = {Method::kBoK};
+  r.params.methods = {MethodId::kBoK};
   r.params.stages = {{StageKind::kFull, 0}, {StageKind::kKeypoints, 10}, {StageKind::kFraction, 0.1}};
   r.params.folds = 2;
   r.source = "hand-made";
@@ -210,11 +210,11 @@ EvalResult small_result() {
   r.object_fold = {0, 1};
   r.object_points = {1000, 1200};
   r.grid = {1, 5, 10};
-  r.change_method = Method::kBoK;
+  r.change_method = MethodId::kBoK;
   for (const char* stage : {"full", "10kp", "10%", "1kp", "5kp"}) {
-    StageDecision a = decision(stage, Method::kBoK, 0, 0, 0, 0.25);
+    StageDecision a = decision(stage, MethodId::kBoK, 0, 0, 0, 0.25);
     a.scores = {0.75, 0.25};
-    StageDecision b = decision(stage, Method::kBoK, 1, std::string(stage) == "full" ? 0 : 1, 1, 0.375);
+    StageDecision b = decision(stage, MethodId::kBoK, 1, std::string(stage) == "full" ? 0 : 1, 1, 0.375);
     b.scores = {0.5, 0.5};
     r.decisions.push_back(a);
     r.decisions.push_back(b);
@@ -227,7 +227,7 @@ EvalResult small_result() {
   st.mean_keypoints = 9.875;
   st.mean_visible_percent = 31.25;
   r.stage_stats.push_back(st);
-  r.traces = exploration_traces(r.decisions, Method::kBoK, {1, 5, 10});
+  r.traces = exploration_traces(r.decisions, MethodId::kBoK, {1, 5, 10});
   r.changes = change_summary(r.traces, {10});
   r.timings.push_back({"features", 12.5, "2 clouds"});
   r.total_seconds = 13;
@@ -343,7 +343,7 @@ EvalParams reduced_params() {
   p.points_per_object = 3000;
   p.views_per_object = 3;
   p.folds = 2;
-  p.methods = {Method::kBoK, Method::kVFH, Method::kFusion};
+  p.methods = {MethodId::kBoK, MethodId::kVFH, MethodId::kFusion};
   p.explore_step = 25;
   p.seed = 7;
   return p;
@@ -373,9 +373,9 @@ TEST(RunEvaluation, ReducedProtocolOnTheZooIsWellAboveChance) {
   // poses, training views tilted up to 5 degrees, fusion of USH and VFH, VFH over the surfaces' normals):
   // full view fusion 83.3 %, VFH 55.0 %, 20 % visible fusion 83.3 %; streams: 66.7 % settle, at 9.8 %
   // visible on average, all right. 60 test views: one view is 1.7 points.
-  EXPECT_GE(accuracy(r->decisions, "full", Method::kFusion).percent(), 80.0);  // measured 83.3
-  EXPECT_GE(accuracy(r->decisions, "20%", Method::kFusion).percent(), 80.0);   // measured 83.3
-  EXPECT_GE(accuracy(r->decisions, "full", Method::kVFH).percent(), 51.0);     // measured 55.0
+  EXPECT_GE(accuracy(r->decisions, "full", MethodId::kFusion).percent(), 80.0);  // measured 83.3
+  EXPECT_GE(accuracy(r->decisions, "20%", MethodId::kFusion).percent(), 80.0);   // measured 83.3
+  EXPECT_GE(accuracy(r->decisions, "full", MethodId::kVFH).percent(), 51.0);     // measured 55.0
   EXPECT_FALSE(markdown_report(*r).empty());
   // Every test view streamed once, top to bottom, one entry per chunk, visible fraction growing.
   ASSERT_EQ(r->streams.size(), objects.size() * p.views_per_object);
@@ -387,9 +387,9 @@ TEST(RunEvaluation, ReducedProtocolOnTheZooIsWellAboveChance) {
   const SettleRow settled = settle_summary(r->streams, -1);
   EXPECT_GE(settled.precision_percent(), 95.0);  // measured 100 (40 of 60 views settled)
   EXPECT_GE(settled.settled_percent(), 60.0);    // measured 66.7
-  std::cout << "zoo reduced: full fusion " << accuracy(r->decisions, "full", Method::kFusion).percent() << " %, VFH "
-            << accuracy(r->decisions, "full", Method::kVFH).percent() << " %, 20 % fusion "
-            << accuracy(r->decisions, "20%", Method::kFusion).percent() << " %; streams settled "
+  std::cout << "zoo reduced: full fusion " << accuracy(r->decisions, "full", MethodId::kFusion).percent() << " %, VFH "
+            << accuracy(r->decisions, "full", MethodId::kVFH).percent() << " %, 20 % fusion "
+            << accuracy(r->decisions, "20%", MethodId::kFusion).percent() << " %; streams settled "
             << settled.settled_percent() << " % at " << settled.mean_visible_percent << " % visible, precision "
             << settled.precision_percent() << " %\n";
 
@@ -420,7 +420,7 @@ TEST(RunEvaluation, CrossSourceTrainsOneModelOnOneSourceAndTestsOnlyTheOther) {
   const std::vector<EvalObject> test = with_role(zoo_objects(3, 9), EvalRole::kTestOnly, "zoo-b");
   objects.insert(objects.end(), test.begin(), test.end());
   EvalParams p = reduced_params();
-  p.methods = {Method::kUSH, Method::kSize, Method::kFusion};
+  p.methods = {MethodId::kUSH, MethodId::kSize, MethodId::kFusion};
   p.stages = {{StageKind::kFull, 0}, {StageKind::kFraction, 0.1}, {StageKind::kFraction, 0.2}};
   p.explore_max_keypoints = 0;
   auto r = run_evaluation(objects, p, "two zoos");
@@ -441,11 +441,11 @@ TEST(RunEvaluation, CrossSourceTrainsOneModelOnOneSourceAndTestsOnlyTheOther) {
   EXPECT_NE(report.find("How much is size"), std::string::npos);
   // Chance is 20 %: a model of 4 zoo objects per category on 3 others of another seed (45 views, one is
   // 2.2 points). Measured: fusion full / 20 % 86.7 / 86.7, USH full 91.1, size only full 60.0.
-  const double fusion_full = accuracy(r->decisions, "full", Method::kFusion).percent();
-  const double fusion_20 = accuracy(r->decisions, "20%", Method::kFusion).percent();
+  const double fusion_full = accuracy(r->decisions, "full", MethodId::kFusion).percent();
+  const double fusion_20 = accuracy(r->decisions, "20%", MethodId::kFusion).percent();
   std::cout << "two zoos: fusion full " << fusion_full << " %, 20 % " << fusion_20 << " %, size only full "
-            << accuracy(r->decisions, "full", Method::kSize).percent() << " %, USH full "
-            << accuracy(r->decisions, "full", Method::kUSH).percent() << " %\n";
+            << accuracy(r->decisions, "full", MethodId::kSize).percent() << " %, USH full "
+            << accuracy(r->decisions, "full", MethodId::kUSH).percent() << " %\n";
   EXPECT_GE(fusion_full, 82.0);  // measured 86.7
   EXPECT_GE(fusion_20, 82.0);    // measured 86.7
   // Cross-validated and test-only objects do not mix; training-only ones may join a cross-validation.
@@ -461,16 +461,16 @@ TEST(Metrics, BalancedAccuracyWeighsEveryCategoryTheSame) {
   auto add = [&](int truth, int winner) {
     StageDecision x;
     x.stage = "full";
-    x.method = Method::kUSH;
+    x.method = MethodId::kUSH;
     x.truth = truth;
     x.winner = winner;
     d.push_back(x);
   };
   for (int i = 0; i < 9; ++i) add(0, 0);  // category 0: 9 of 9
   add(1, 0);                              // category 1: 0 of 1
-  EXPECT_NEAR(accuracy(d, "full", Method::kUSH).percent(), 90.0, 1e-9);
-  EXPECT_NEAR(balanced_accuracy(d, "full", Method::kUSH, 3), 50.0, 1e-9);  // category 2 has no view: left out
-  EXPECT_EQ(balanced_accuracy(d, "20%", Method::kUSH, 3), 0.0);
+  EXPECT_NEAR(accuracy(d, "full", MethodId::kUSH).percent(), 90.0, 1e-9);
+  EXPECT_NEAR(balanced_accuracy(d, "full", MethodId::kUSH, 3), 50.0, 1e-9);  // category 2 has no view: left out
+  EXPECT_EQ(balanced_accuracy(d, "20%", MethodId::kUSH, 3), 0.0);
 }
 
 TEST(Objects, CommonHeightMakesEveryObjectOneHeightOnTheGround) {
@@ -493,22 +493,22 @@ TEST(RunEvaluation, ReducedProtocolOnShrec) {
   auto objects = load_dataset_objects(dir, 42, 10);
   ASSERT_TRUE(objects.ok()) << objects.error().message;
   EvalParams p = reduced_params();
-  p.methods = {Method::kBoK, Method::kFusion};
+  p.methods = {MethodId::kBoK, MethodId::kFusion};
   p.seed = 42;
   auto r = run_evaluation(*objects, p, "shrec");
   ASSERT_TRUE(r.ok()) << r.error().message;
   // Floors just under what was measured (10 objects per category, 2 folds, 3 views, 3000 points, seed 42;
   // 150 test views, one is 0.7 points); raise them as recognition improves.
-  EXPECT_GE(accuracy(r->decisions, "full", Method::kFusion).percent(), 93.0);  // measured 95.3
-  EXPECT_GE(accuracy(r->decisions, "20%", Method::kFusion).percent(), 93.0);   // measured 96.0
-  EXPECT_GE(accuracy(r->decisions, "full", Method::kBoK).percent(), 48.0);     // measured 50.7
+  EXPECT_GE(accuracy(r->decisions, "full", MethodId::kFusion).percent(), 93.0);  // measured 95.3
+  EXPECT_GE(accuracy(r->decisions, "20%", MethodId::kFusion).percent(), 93.0);   // measured 96.0
+  EXPECT_GE(accuracy(r->decisions, "full", MethodId::kBoK).percent(), 48.0);     // measured 50.7
   const SettleRow settled = settle_summary(r->streams, -1);
   EXPECT_GE(settled.settled_percent(), 83.0);    // measured 86.7 (130 of 150 views)
   EXPECT_GE(settled.precision_percent(), 94.0);  // measured 96.9
   EXPECT_LE(settled.mean_visible_percent, 10.0); // measured 7.4
-  std::cout << "shrec reduced: full fusion " << accuracy(r->decisions, "full", Method::kFusion).percent()
-            << " %, 20 % fusion " << accuracy(r->decisions, "20%", Method::kFusion).percent() << " %, full BoK "
-            << accuracy(r->decisions, "full", Method::kBoK).percent() << " %; streams settled "
+  std::cout << "shrec reduced: full fusion " << accuracy(r->decisions, "full", MethodId::kFusion).percent()
+            << " %, 20 % fusion " << accuracy(r->decisions, "20%", MethodId::kFusion).percent() << " %, full BoK "
+            << accuracy(r->decisions, "full", MethodId::kBoK).percent() << " %; streams settled "
             << settled.settled_percent() << " % at " << settled.mean_visible_percent << " % visible, precision "
             << settled.precision_percent() << " %\n";
 }
@@ -532,16 +532,16 @@ TEST(RunEvaluation, ReducedCrossSourceShrecToPsb) {
   for (EvalObject& o : *train) o.role = EvalRole::kTrainOnly, objects.push_back(std::move(o));
   for (EvalObject& o : *test) o.role = EvalRole::kTestOnly, objects.push_back(std::move(o));
   EvalParams p = reduced_params();
-  p.methods = {Method::kSize, Method::kFusion};
+  p.methods = {MethodId::kSize, MethodId::kFusion};
   p.stages = {{StageKind::kFull, 0}, {StageKind::kFraction, 0.1}, {StageKind::kFraction, 0.2}};
   p.explore_max_keypoints = 0;
   p.seed = 42;
   auto r = run_evaluation(objects, p, "shrec -> psb");
   ASSERT_TRUE(r.ok()) << r.error().message;
-  const double full = accuracy(r->decisions, "full", Method::kFusion).percent();
-  const double p10 = accuracy(r->decisions, "10%", Method::kFusion).percent();
-  const double p20 = accuracy(r->decisions, "20%", Method::kFusion).percent();
-  const double size = accuracy(r->decisions, "full", Method::kSize).percent();
+  const double full = accuracy(r->decisions, "full", MethodId::kFusion).percent();
+  const double p10 = accuracy(r->decisions, "10%", MethodId::kFusion).percent();
+  const double p20 = accuracy(r->decisions, "20%", MethodId::kFusion).percent();
+  const double size = accuracy(r->decisions, "full", MethodId::kSize).percent();
   const SettleRow settled = settle_summary(r->streams, -1);
   std::cout << "shrec -> psb reduced: fusion full " << full << " %, 10 % " << p10 << " %, 20 % " << p20
             << " %, size only full " << size << " %; streams settled " << settled.settled_percent() << " % at "

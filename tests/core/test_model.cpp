@@ -27,7 +27,7 @@ TrainParams small_params() {
 
 struct Trained {
   Model model;
-  std::vector<LabelledCloud> test;
+  std::vector<TrainingCloud> test;
 };
 
 const Trained& trained() {
@@ -39,7 +39,7 @@ const Trained& trained() {
   return t;
 }
 
-double accuracy(const Model& model, const std::vector<LabelledCloud>& test, Method method) {
+double accuracy(const Model& model, const std::vector<TrainingCloud>& test, MethodId method) {
   int correct = 0;
   for (const auto& t : test) {
     auto c = classify(model, t.cloud, method);
@@ -49,16 +49,16 @@ double accuracy(const Model& model, const std::vector<LabelledCloud>& test, Meth
   return static_cast<double>(correct) / static_cast<double>(test.size());
 }
 
-class EveryMethod : public ::testing::TestWithParam<Method> {};
+class EveryMethod : public ::testing::TestWithParam<MethodId> {};
 
 // Chance is 1/3 on 24 test views of 12 unseen objects. Measured (18 training views, each learnt with
 // a tilt of up to 5 degrees): BoK 0.96, BoG 0.96, KGH 1.00, VFH 0.75, ESF 0.92, USH 1.00, size only
 // 0.92 (balls, boxes and cans of these sizes differ in height and extent), fusion 1.00. VFH describes
 // the view direction as much as the shape, so 18 random views teach it least (as the paper's Table 1).
-double floor_for(Method m) {
+double floor_for(MethodId m) {
   switch (m) {
-    case Method::kVFH: return 0.5;
-    case Method::kFusion: return 0.9;
+    case MethodId::kVFH: return 0.5;
+    case MethodId::kFusion: return 0.9;
     default: return 0.8;
   }
 }
@@ -100,11 +100,11 @@ TEST(Classify, Errors) {
   ASSERT_FALSE(untrained.ok());
   EXPECT_EQ(untrained.error().code, ErrorCode::kFailedPrecondition);
   TrainParams only_vfh = small_params();
-  only_vfh.methods = {Method::kVFH};
-  only_vfh.default_method = Method::kVFH;
+  only_vfh.methods = {MethodId::kVFH};
+  only_vfh.default_method = MethodId::kVFH;
   auto m = train(test::synthetic_views(2, 1, 5), only_vfh);
   ASSERT_TRUE(m.ok()) << m.error().message;
-  auto wrong = classify(*m, t.test.front().cloud, Method::kBoK);
+  auto wrong = classify(*m, t.test.front().cloud, MethodId::kBoK);
   ASSERT_FALSE(wrong.ok());
   EXPECT_NE(wrong.error().message.find("bok"), std::string::npos);
   Cloud line;  // no surface to judge: an error naming why, not a confident winner
@@ -137,17 +137,17 @@ TEST(Train, Errors) {
   auto tiny = train(data, small_params());
   ASSERT_FALSE(tiny.ok());
   EXPECT_NE(tiny.error().message.find(data[2].object_id), std::string::npos) << tiny.error().message;
-  std::vector<TrainProgress> seen;
-  auto cancelled = train(test::synthetic_views(2, 1, 3), small_params(), [&](const TrainProgress& p) { seen.push_back(p); },
+  std::vector<TrainingProgress> seen;
+  auto cancelled = train(test::synthetic_views(2, 1, 3), small_params(), [&](const TrainingProgress& p) { seen.push_back(p); },
                          [] { return true; });
   ASSERT_FALSE(cancelled.ok());
   EXPECT_EQ(cancelled.error().code, ErrorCode::kCancelled);
 }
 
 TEST(Train, ReportsProgressAndStatistics) {
-  std::vector<TrainProgress> seen;
+  std::vector<TrainingProgress> seen;
   auto data = test::synthetic_views(3, 2, 4);
-  auto m = train(data, small_params(), [&](const TrainProgress& p) { seen.push_back(p); });
+  auto m = train(data, small_params(), [&](const TrainingProgress& p) { seen.push_back(p); });
   ASSERT_TRUE(m.ok()) << m.error().message;
   ASSERT_FALSE(seen.empty());
   EXPECT_EQ(seen.back().stage, "done");
@@ -221,12 +221,12 @@ TEST(Classify, WarnsWhenTheCloudIsFarOutsideTheSizesLearnt) {
   ASSERT_TRUE(big.ok()) << big.error().message;
   EXPECT_NE(big->warning.find("millimetres"), std::string::npos) << big->warning;
   EXPECT_NE(big->warning.find("the model knows"), std::string::npos) << big->warning;
-  TrainingStats stats;
+  TrainingSummary stats;
   stats.min_extent_m = 0.1f, stats.max_extent_m = 2.f;
   Cloud tiny;
   tiny.points = {Vec3(0, 0, 0), Vec3(0.001f, 0.002f, 0.001f)};
   EXPECT_NE(size_warning(stats, tiny).find("only"), std::string::npos);
-  EXPECT_TRUE(size_warning(TrainingStats{}, mm).empty());  // a model that knows no sizes says nothing
+  EXPECT_TRUE(size_warning(TrainingSummary{}, mm).empty());  // a model that knows no sizes says nothing
 }
 
 TEST(Classify, RefusesAModelOfAnotherFeaturePipelineVersion) {
@@ -253,7 +253,7 @@ TEST(Serialize, RoundTripGivesIdenticalScores) {
   EXPECT_EQ(calibration(*back).settle_margin, calibration(t.model).settle_margin);
   EXPECT_EQ(calibration(*back).held_out, calibration(t.model).held_out);
   EXPECT_EQ(serialize(*back), bytes);
-  for (Method m : t.model.methods) {
+  for (MethodId m : t.model.methods) {
     for (size_t i = 0; i < 4; ++i) {
       auto a = classify(t.model, t.test[i * 5].cloud, m);
       auto b = classify(*back, t.test[i * 5].cloud, m);
@@ -332,11 +332,11 @@ TEST(KeypointGlobalHistogram, SymmetricPairsByDistance) {
   EXPECT_EQ(h[(1 * 2 + 1) * 4 + 3], 2);  // (1,1) at 0.8
 }
 
-TEST(Decision, NearestCentreAndNeighboursAgreeOnClearData) {
+TEST(StreamDecision, NearestCentreAndNeighboursAgreeOnClearData) {
   Eigen::MatrixXd h(6, 3);
   h << 1, 0, 0, 0.9, 0.1, 0, 0, 1, 0, 0.1, 0.9, 0, 0, 0, 1, 0, 0.1, 0.9;
   const std::vector<int> labels = {0, 0, 1, 1, 2, 2};
-  for (DecisionKind kind : {DecisionKind::kNearestCentre, DecisionKind::kCentres, DecisionKind::kNearestNeighbours}) {
+  for (DecisionRule kind : {DecisionRule::kNearestCentre, DecisionRule::kCentres, DecisionRule::kNearestNeighbours}) {
     DecisionParams p;
     p.kind = kind;
     p.neighbours = 1;

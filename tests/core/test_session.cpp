@@ -96,12 +96,12 @@ void expect_same_state(const FeatureState& a, const FeatureState& b) {
 // without a sensor, automatic or fixed radius — a scan ends on the state extract() gives the
 // accumulated cloud, bit for bit (both visit neighbourhoods in index order).
 TEST(ScanFeatures, EndOnTheStateExtractGivesTheAccumulatedCloud) {
-  const std::vector<LabelledCloud> views = test::synthetic_views(1, 1, 71);
+  const std::vector<TrainingCloud> views = test::synthetic_views(1, 1, 71);
   for (float radius : {0.f, 0.025f}) {
     FeatureParams params;
     params.surface.support_radius_m = radius;
     params.surface.threads = 1;
-    for (const LabelledCloud& view : views)
+    for (const TrainingCloud& view : views)
       for (bool sensor : {true, false})
         for (Order order : {Order::kTopDown, Order::kRandom, Order::kSweep})
           for (size_t n : {1u, 3u, 17u}) {
@@ -119,13 +119,13 @@ TEST(ScanFeatures, EndOnTheStateExtractGivesTheAccumulatedCloud) {
   }
 }
 
-Decision stream(const std::shared_ptr<const Model>& model, const std::vector<Cloud>& chunks, Method method,
+StreamDecision stream(const std::shared_ptr<const Model>& model, const std::vector<Cloud>& chunks, MethodId method,
                 bool finish = false) {
   SessionParams sp;
   sp.method = method;
   auto session = ScanSession::create(model, sp);
   EXPECT_TRUE(session.ok());
-  Decision d;
+  StreamDecision d;
   for (const Cloud& c : chunks) {
     auto r = (*session)->add(c);
     EXPECT_TRUE(r.ok()) << r.error().message;
@@ -143,14 +143,14 @@ Decision stream(const std::shared_ptr<const Model>& model, const std::vector<Clo
 TEST(ScanSession, FinishedStreamScoresAreClassifysOfTheWholeCloud) {
   for (const auto* model : {&fixed_radius_model(), &automatic_radius_model()}) {
     ASSERT_TRUE(*model);
-    for (const LabelledCloud& view : test::synthetic_views(1, 1, 81))
+    for (const TrainingCloud& view : test::synthetic_views(1, 1, 81))
       for (bool sensor : {true, false})
-        for (Method m : {Method::kBoK, Method::kUSH, Method::kVFH, Method::kESF, Method::kSize, Method::kFusion}) {
+        for (MethodId m : {MethodId::kBoK, MethodId::kUSH, MethodId::kVFH, MethodId::kESF, MethodId::kSize, MethodId::kFusion}) {
           SCOPED_TRACE(view.category + " " + method_name(m) + (sensor ? " with" : " without") + " a sensor");
           const std::vector<Cloud> chunks = chunks_of(view.cloud, 9, Order::kTopDown, 3, sensor);
           auto whole = classify(**model, concatenated(chunks), m);
           ASSERT_TRUE(whole.ok()) << whole.error().message;
-          const Decision d = stream(*model, chunks, m, true);
+          const StreamDecision d = stream(*model, chunks, m, true);
           EXPECT_TRUE(d.final);
           EXPECT_EQ(d.points, whole->points);
           EXPECT_EQ(d.keypoints, whole->keypoints);
@@ -163,12 +163,12 @@ TEST(ScanSession, FinishedStreamScoresAreClassifysOfTheWholeCloud) {
 TEST(ScanSession, DuplicateOverlappingAndEmptyChunksChangeNothing) {
   const auto& model = fixed_radius_model();
   ASSERT_TRUE(model);
-  const LabelledCloud view = test::synthetic_views(1, 1, 41)[1];
+  const TrainingCloud view = test::synthetic_views(1, 1, 41)[1];
   const auto chunks = chunks_of(view.cloud, 6, Order::kTopDown, 0);
   SessionParams sp;
-  sp.method = Method::kBoK;
+  sp.method = MethodId::kBoK;
   auto session = *ScanSession::create(model, sp);
-  Decision d;
+  StreamDecision d;
   for (const Cloud& c : chunks) d = *session->add(c);
   const size_t points = d.points, keypoints = d.keypoints;
   ASSERT_GT(points, 0u);
@@ -192,7 +192,7 @@ TEST(ScanSession, NothingToDecideBeforeEnoughPoints) {
   auto model = fixed_radius_model();
   ASSERT_TRUE(model);
   auto session = *ScanSession::create(model, {});
-  const LabelledCloud view = test::synthetic_views(1, 1, 51)[0];
+  const TrainingCloud view = test::synthetic_views(1, 1, 51)[0];
   auto first = session->add(Cloud{{view.cloud.points.begin(), view.cloud.points.begin() + 15}, view.cloud.sensor});
   ASSERT_TRUE(first.ok());
   EXPECT_EQ(first->winner, -1);  // fewer than FeatureParams::min_points (20)
@@ -242,7 +242,7 @@ TEST(ScanSession, LimitsAndBadInput) {
   ASSERT_TRUE(dropped.ok()) << dropped.error().message;
   EXPECT_EQ(dropped->points, 1u);
 
-  const LabelledCloud view = test::synthetic_views(1, 1, 61)[0];
+  const TrainingCloud view = test::synthetic_views(1, 1, 61)[0];
   Cloud big{{view.cloud.points.begin(), view.cloud.points.begin() + 101}, std::nullopt};
   EXPECT_EQ(session->add(big).error().code, ErrorCode::kResourceExhausted);
   Cloud ok{{view.cloud.points.begin(), view.cloud.points.begin() + 100}, view.cloud.sensor};
@@ -279,7 +279,7 @@ TEST(DecisionTrack, CountsChangesAndSettlesOnAStableMargin) {
     track_decision(t, s, kp, true, p);
     return t.decision;
   };
-  Decision d = step({0.5, 0.3, 0.2});
+  StreamDecision d = step({0.5, 0.3, 0.2});
   EXPECT_EQ(d.winner, 0);
   EXPECT_EQ(d.category_changes, 0);
   EXPECT_EQ(d.winner_held_chunks, 1);
@@ -318,7 +318,7 @@ TEST(DecisionTrack, ASettledWinnerStaysSettledThroughASmallDip) {
   EXPECT_FALSE(step({0.4, 0.6}).settled);                         // 0.5 x held 1 of 2
   EXPECT_FALSE(step({0.9, 0.1}).settled);                         // a change: 1.0 x held 1 of 2
   EXPECT_TRUE(step({0.9, 0.1}).settled);                          // 1.0
-  Decision d = step({0.7, 0.3});                                  // 0.4 / 0.4 = 1.0
+  StreamDecision d = step({0.7, 0.3});                                  // 0.4 / 0.4 = 1.0
   EXPECT_TRUE(d.settled);
   d = step({0.6, 0.4});                                           // 0.5: below 0.6, above 0.6 - 0.2
   EXPECT_NEAR(d.confidence, 0.5, 1e-12);

@@ -17,7 +17,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "usage: fuzz_make_model_seeds OUT_DIR\n");
     return 2;
   }
-  std::vector<LabelledCloud> data;
+  std::vector<TrainingCloud> data;
   ZooOptions zoo;
   zoo.target_vertices = 1500;
   for (const LabelledMesh& m : make_zoo(1, 3, zoo)) {
@@ -28,19 +28,19 @@ int main(int argc, char** argv) {
   }
   struct Mix {
     const char* name;
-    std::vector<Method> methods;
-    Method default_method;
+    std::vector<MethodId> methods;
+    MethodId default_method;
   };
-  const Mix mixes[] = {{"bok", {Method::kBoK}, Method::kBoK},
-                       {"esf", {Method::kESF}, Method::kESF},
-                       {"vfh-kgh", {Method::kVFH, Method::kKGH}, Method::kKGH},
-                       {"fusion", {Method::kBoK, Method::kESF, Method::kFusion}, Method::kFusion}};
+  const Mix mixes[] = {{"bok", {MethodId::kBoK}, MethodId::kBoK},
+                       {"esf", {MethodId::kESF}, MethodId::kESF},
+                       {"vfh-kgh", {MethodId::kVFH, MethodId::kKGH}, MethodId::kKGH},
+                       {"fusion", {MethodId::kBoK, MethodId::kESF, MethodId::kFusion}, MethodId::kFusion}};
   std::filesystem::create_directories(argv[1]);
   for (const Mix& mix : mixes) {
     TrainParams p;
     p.methods = mix.methods;
     p.default_method = mix.default_method;
-    p.fusion_of = {Method::kBoK, Method::kESF};
+    p.fusion_of = {MethodId::kBoK, MethodId::kESF};
     p.bok_clusters = 2;
     p.bog_keypoint_clusters = 2;
     p.bog_volume_clusters = 1;

@@ -190,9 +190,9 @@ int Run(const Options& o) {
   }
   // Unseen shapes for Classify and streams; views core rejects (too few keypoints for BoK, ...) are
   // left out, so that every error of the load is the server's, not the input's.
-  std::vector<LabelledCloud> probe_views;
+  std::vector<TrainingCloud> probe_views;
   size_t rejected = 0;
-  for (LabelledCloud& v : ZooViews(2, 1000, 3)) {
+  for (TrainingCloud& v : ZooViews(2, 1000, 3)) {
     v1::ClassifyRequest req;
     req.mutable_model()->set_name("zoo");
     *req.mutable_cloud() = server::CloudToProto(v.cloud);

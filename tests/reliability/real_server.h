@@ -86,8 +86,8 @@ struct RealServer {
 };
 
 // Single views of zoo shapes: `views` of the paper's six viewpoints (0, 3, 1, 4, ...) per shape.
-inline std::vector<LabelledCloud> ZooViews(size_t per_category, uint64_t seed, int views, size_t vertices = 3000) {
-  std::vector<LabelledCloud> out;
+inline std::vector<TrainingCloud> ZooViews(size_t per_category, uint64_t seed, int views, size_t vertices = 3000) {
+  std::vector<TrainingCloud> out;
   ZooOptions options;
   options.target_vertices = vertices;
   for (const LabelledMesh& m : make_zoo(per_category, seed, options)) {
@@ -114,7 +114,7 @@ inline v1::TrainHeader SmallHeader(const std::string& name) {
   return h;
 }
 
-inline v1::TrainRequest CloudMessage(const LabelledCloud& lc) {
+inline v1::TrainRequest CloudMessage(const TrainingCloud& lc) {
   v1::TrainRequest req;
   req.mutable_cloud()->set_category(lc.category);
   req.mutable_cloud()->set_object_id(lc.object_id);
@@ -137,10 +137,10 @@ inline grpc::Status TrainStream(v1::Glimpse::Stub& stub, const std::vector<v1::T
   return stream->Finish();
 }
 
-inline std::vector<v1::TrainRequest> TrainMessages(const v1::TrainHeader& header, const std::vector<LabelledCloud>& data) {
+inline std::vector<v1::TrainRequest> TrainMessages(const v1::TrainHeader& header, const std::vector<TrainingCloud>& data) {
   std::vector<v1::TrainRequest> msgs(1);
   *msgs[0].mutable_header() = header;
-  for (const LabelledCloud& lc : data) msgs.push_back(CloudMessage(lc));
+  for (const TrainingCloud& lc : data) msgs.push_back(CloudMessage(lc));
   return msgs;
 }
 

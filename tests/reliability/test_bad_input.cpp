@@ -67,7 +67,7 @@ class BadInput : public ::testing::Test {
   static void SetUpTestSuite() {
     dir_ = new TempDir("bad-input");
     server_ = new RealServer(dir_->file("models.db"), TableLimits());
-    train_ = new std::vector<LabelledCloud>(ZooViews(2, 7, 2));
+    train_ = new std::vector<TrainingCloud>(ZooViews(2, 7, 2));
     grpc::Status s = TrainStream(*server_->stub, TrainMessages(SmallHeader("zoo"), *train_));
     ASSERT_TRUE(s.ok()) << s.error_message();
     v1::TrainHeader esf = SmallHeader("zoo-esf");
@@ -144,27 +144,27 @@ class BadInput : public ::testing::Test {
   // The good training set with the clouds of `category` replaced by `clouds`.
   static std::vector<v1::TrainRequest> TrainWith(const std::string& category, const std::vector<Cloud>& clouds) {
     std::vector<v1::TrainRequest> msgs{HeaderMsg()};
-    for (const LabelledCloud& lc : *train_)
+    for (const TrainingCloud& lc : *train_)
       if (lc.category != category) msgs.push_back(CloudMessage(lc));
     for (size_t i = 0; i < clouds.size(); ++i) msgs.push_back(CloudMessage({category, category + std::to_string(i), clouds[i]}));
     return msgs;
   }
   static std::vector<v1::TrainRequest> GoodTrain(const std::function<void(v1::TrainHeader&)>& tweak = {}) {
     std::vector<v1::TrainRequest> msgs{HeaderMsg(tweak)};
-    for (const LabelledCloud& lc : *train_) msgs.push_back(CloudMessage(lc));
+    for (const TrainingCloud& lc : *train_) msgs.push_back(CloudMessage(lc));
     return msgs;
   }
 
   static TempDir* dir_;
   static RealServer* server_;
-  static std::vector<LabelledCloud>* train_;
+  static std::vector<TrainingCloud>* train_;
   static Cloud* good_;
   static v1::ClassifyResponse* reference_;
 };
 
 TempDir* BadInput::dir_ = nullptr;
 RealServer* BadInput::server_ = nullptr;
-std::vector<LabelledCloud>* BadInput::train_ = nullptr;
+std::vector<TrainingCloud>* BadInput::train_ = nullptr;
 Cloud* BadInput::good_ = nullptr;
 v1::ClassifyResponse* BadInput::reference_ = nullptr;
 
@@ -282,7 +282,7 @@ TEST_F(BadInput, EveryCaseGetsItsStatusAndTheServerKeepsServing) {
       {"train one category",
        [&] {
          std::vector<v1::TrainRequest> msgs{B::HeaderMsg()};
-         for (const LabelledCloud& lc : *train_)
+         for (const TrainingCloud& lc : *train_)
            if (lc.category == "chair") msgs.push_back(CloudMessage(lc));
          return TrainStream(*server_->stub, msgs);
        },

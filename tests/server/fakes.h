@@ -55,14 +55,14 @@ inline Expected<Model> FakeDeserialize(std::span<const uint8_t> bytes) {
   if (parts.size() != 4 || parts[0] != "fake-model") return data_loss("not a fake model");
   Model m;
   m.categories = Split(parts[1].substr(5), ',');
-  for (const auto& t : Split(parts[2].substr(8), ',')) m.methods.push_back(static_cast<Method>(std::stoi(t)));
-  m.default_method = static_cast<Method>(std::stoi(parts[3].substr(8)));
+  for (const auto& t : Split(parts[2].substr(8), ',')) m.methods.push_back(static_cast<MethodId>(std::stoi(t)));
+  m.default_method = static_cast<MethodId>(std::stoi(parts[3].substr(8)));
   m.stats.categories = m.categories;
   return m;
 }
 
 // Winner = point count modulo the number of categories; scores favour it. Deterministic.
-inline Classification FakeScores(const Model& model, size_t points, Method method) {
+inline Classification FakeScores(const Model& model, size_t points, MethodId method) {
   Classification c;
   c.method = method;
   c.categories = model.categories;
@@ -79,16 +79,16 @@ inline Classification FakeScores(const Model& model, size_t points, Method metho
 
 class FakeSession final : public ScanSession {
  public:
-  FakeSession(std::shared_ptr<const Model> model, Method method, FakeBehaviour* b)
+  FakeSession(std::shared_ptr<const Model> model, MethodId method, FakeBehaviour* b)
       : model_(std::move(model)), method_(method), b_(b) {
     last_.categories = model_->categories;
     last_.scores.assign(model_->categories.size(), 0.0);
   }
-  Expected<Decision> add(const Cloud& chunk) override {
+  Expected<StreamDecision> add(const Cloud& chunk) override {
     if (b_->session_error) return *b_->session_error;
     points_ += chunk.points.size();
     Classification c = FakeScores(*model_, points_, method_);
-    Decision d;
+    StreamDecision d;
     d.chunk_index = chunks_++;
     d.points = points_;
     d.keypoints = c.keypoints;
@@ -103,24 +103,24 @@ class FakeSession final : public ScanSession {
     last_ = d;
     return d;
   }
-  Expected<Decision> finish() override {
+  Expected<StreamDecision> finish() override {
     last_.final = true;
     return last_;
   }
-  const Decision& last() const override { return last_; }
+  const StreamDecision& last() const override { return last_; }
 
  private:
   std::shared_ptr<const Model> model_;
-  Method method_;
+  MethodId method_;
   FakeBehaviour* b_;
-  Decision last_;
+  StreamDecision last_;
   size_t points_ = 0;
   size_t chunks_ = 0;
 };
 
 inline Engine FakeEngine(FakeBehaviour* b) {
   Engine e;
-  e.train = [b](const std::vector<LabelledCloud>& data, const TrainSpec& spec, const ProgressFn& progress,
+  e.train = [b](const std::vector<TrainingCloud>& data, const TrainSpec& spec, const ProgressFn& progress,
                 const CancelFn& cancel) -> Expected<Model> {
     ++b->train_calls;
     if (b->train_error) return *b->train_error;
@@ -141,7 +141,7 @@ inline Engine FakeEngine(FakeBehaviour* b) {
     if (progress) progress({"codebooks", 1, 1});
     Model m;
     m.categories.assign(cats.begin(), cats.end());
-    m.methods = spec.methods.empty() ? std::vector<Method>{Method::kBoK, Method::kFusion} : spec.methods;
+    m.methods = spec.methods.empty() ? std::vector<MethodId>{MethodId::kBoK, MethodId::kFusion} : spec.methods;
     m.default_method = spec.default_method.value_or(m.methods.back());
     m.stats.clouds = data.size();
     m.stats.objects = objects.size();
@@ -149,16 +149,16 @@ inline Engine FakeEngine(FakeBehaviour* b) {
     m.stats.categories = m.categories;
     for (const auto& c : m.categories)
       m.stats.clouds_per_category.push_back(
-          size_t(std::count_if(data.begin(), data.end(), [&](const LabelledCloud& d) { return d.category == c; })));
+          size_t(std::count_if(data.begin(), data.end(), [&](const TrainingCloud& d) { return d.category == c; })));
     m.stats.seconds = 0.25;
     return m;
   };
-  e.classify = [b](const Model& model, const Cloud& cloud, std::optional<Method> method,
+  e.classify = [b](const Model& model, const Cloud& cloud, std::optional<MethodId> method,
                    const CancelFn& cancel) -> Expected<Classification> {
     if (b->classify_throws) throw std::runtime_error("boom");
     if (b->classify_error) return *b->classify_error;
     if (cancel && cancel()) return cancelled("classification cancelled");
-    Method m = method.value_or(model.default_method);
+    MethodId m = method.value_or(model.default_method);
     if (std::find(model.methods.begin(), model.methods.end(), m) == model.methods.end())
       return invalid_argument("the model was not trained for this method");
     if (cloud.points.size() < 3) return invalid_argument("too few points");
@@ -171,7 +171,7 @@ inline Engine FakeEngine(FakeBehaviour* b) {
   };
   e.create_session = [b](std::shared_ptr<const Model> model,
                          const SessionParams& p) -> Expected<std::unique_ptr<ScanSession>> {
-    Method m = p.method.value_or(model->default_method);
+    MethodId m = p.method.value_or(model->default_method);
     return std::unique_ptr<ScanSession>(new FakeSession(std::move(model), m, b));
   };
   return e;

@@ -116,13 +116,13 @@ TEST(CloudFromProto, NonFiniteSensorIsInvalid) {
 
 TEST(MethodFromProto, MapsEveryMethodAndRejectsUnknownValues) {
   EXPECT_FALSE(MethodFromProto(v1::METHOD_UNSPECIFIED)->has_value());
-  for (Method m : kAllMethods) {
+  for (MethodId m : kAllMethods) {
     auto back = MethodFromProto(MethodToProto(m));
     ASSERT_TRUE(back.ok());
     EXPECT_EQ(**back, m);
   }
-  EXPECT_EQ(MethodToProto(Method::kBoK), v1::METHOD_BOK);
-  EXPECT_EQ(MethodToProto(Method::kFusion), v1::METHOD_FUSION);
+  EXPECT_EQ(MethodToProto(MethodId::kBoK), v1::METHOD_BOK);
+  EXPECT_EQ(MethodToProto(MethodId::kFusion), v1::METHOD_FUSION);
   EXPECT_EQ(MethodFromProto(42).error().code, ErrorCode::kInvalidArgument);
   EXPECT_EQ(MethodFromProto(-1).error().code, ErrorCode::kInvalidArgument);
 }
@@ -148,8 +148,8 @@ TEST(TrainSpecFromProto, ChecksMethodsAndParameterRanges) {
   h.mutable_parameters()->set_decision(v1::DECISION_KIND_NEAREST_CENTRE);
   auto spec = TrainSpecFromProto(h);
   ASSERT_TRUE(spec.ok()) << spec.error().message;
-  EXPECT_EQ(spec->methods, (std::vector<Method>{Method::kBoK, Method::kVFH}));
-  EXPECT_EQ(spec->default_method, Method::kVFH);
+  EXPECT_EQ(spec->methods, (std::vector<MethodId>{MethodId::kBoK, MethodId::kVFH}));
+  EXPECT_EQ(spec->default_method, MethodId::kVFH);
   EXPECT_EQ(spec->parameters.bok_codebook_size(), 30u);
 
   auto bad = [&](auto&& edit) {

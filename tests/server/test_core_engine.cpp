@@ -77,7 +77,7 @@ Cloud View(const std::vector<Surfel>& surfels, std::mt19937& rng) {
   return c;
 }
 
-LabelledCloud Sample(const std::string& category, int object, int view) {
+TrainingCloud Sample(const std::string& category, int object, int view) {
   std::mt19937 rng(static_cast<unsigned>(1000 * object + 17 * view + category.size()));
   const float scale = 0.8f + 0.1f * float(object);
   std::vector<Surfel> surfels;
@@ -87,8 +87,8 @@ LabelledCloud Sample(const std::string& category, int object, int view) {
   return {category, category + std::to_string(object), View(surfels, rng)};
 }
 
-std::vector<LabelledCloud> Dataset() {
-  std::vector<LabelledCloud> data;
+std::vector<TrainingCloud> Dataset() {
+  std::vector<TrainingCloud> data;
   for (const char* category : {"box", "cylinder", "sphere"})
     for (int object = 0; object < 3; ++object)
       for (int view = 0; view < 2; ++view) data.push_back(Sample(category, object, view));
@@ -110,7 +110,7 @@ v1::TrainHeader Header() {
 class CoreEngineTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    data_ = new std::vector<LabelledCloud>(Dataset());
+    data_ = new std::vector<TrainingCloud>(Dataset());
     auto spec = TrainSpecFromProto(Header());
     ASSERT_TRUE(spec.ok()) << spec.error().message;
     auto params = ToTrainParams(*spec);
@@ -132,7 +132,7 @@ class CoreEngineTest : public ::testing::Test {
     v1::TrainRequest header;
     *header.mutable_header() = Header();
     ASSERT_TRUE(stream->Write(header));
-    for (const LabelledCloud& lc : *data_) {
+    for (const TrainingCloud& lc : *data_) {
       v1::TrainRequest req;
       req.mutable_cloud()->set_category(lc.category);
       req.mutable_cloud()->set_object_id(lc.object_id);
@@ -145,13 +145,13 @@ class CoreEngineTest : public ::testing::Test {
     ASSERT_TRUE(s.ok()) << s.error_message();
   }
 
-  static std::vector<LabelledCloud>* data_;
+  static std::vector<TrainingCloud>* data_;
   static std::shared_ptr<const Model>* direct_;
   std::unique_ptr<testing::Harness> harness_;
   v1::TrainProgress trained_;
 };
 
-std::vector<LabelledCloud>* CoreEngineTest::data_ = nullptr;
+std::vector<TrainingCloud>* CoreEngineTest::data_ = nullptr;
 std::shared_ptr<const Model>* CoreEngineTest::direct_ = nullptr;
 
 TEST_F(CoreEngineTest, TrainOverGrpcStoresWhatCoreTrains) {
@@ -181,8 +181,8 @@ TEST_F(CoreEngineTest, TrainOverGrpcStoresWhatCoreTrains) {
 
 TEST_F(CoreEngineTest, ClassifyOverGrpcGivesExactlyCoresScores) {
   for (const char* category : {"box", "cylinder", "sphere"}) {
-    const LabelledCloud test = Sample(category, 7, 3);  // an unseen object and view
-    for (Method method : (*direct_)->methods) {
+    const TrainingCloud test = Sample(category, 7, 3);  // an unseen object and view
+    for (MethodId method : (*direct_)->methods) {
       auto direct = glimpse::classify(**direct_, test.cloud, method);
       ASSERT_TRUE(direct.ok()) << direct.error().message;
       grpc::ClientContext ctx;
@@ -207,7 +207,7 @@ TEST_F(CoreEngineTest, ClassifyOverGrpcGivesExactlyCoresScores) {
 }
 
 TEST_F(CoreEngineTest, StreamClassifyOverGrpcGivesExactlyTheSessionsDecisions) {
-  const LabelledCloud scan = Sample("cylinder", 8, 5);
+  const TrainingCloud scan = Sample("cylinder", 8, 5);
   auto session = ScanSession::create(*direct_, SessionParams{});
   ASSERT_TRUE(session.ok()) << session.error().message;
   grpc::ClientContext ctx;
@@ -244,8 +244,8 @@ TEST_F(CoreEngineTest, StreamClassifyOverGrpcGivesExactlyTheSessionsDecisions) {
   EXPECT_GT(last.points(), 0u);
   // Keypoints are detected only when the session's method uses them (the default, fusion of global
   // descriptors, does not).
-  const Method m = (*direct_)->default_method;
-  if (m == Method::kBoK || m == Method::kBoG || m == Method::kKGH) EXPECT_GT(last.keypoints(), 0u);
+  const MethodId m = (*direct_)->default_method;
+  if (m == MethodId::kBoK || m == MethodId::kBoG || m == MethodId::kKGH) EXPECT_GT(last.keypoints(), 0u);
   else EXPECT_EQ(last.keypoints(), 0u);
 }
 
@@ -268,7 +268,7 @@ TEST(CoreEngine, SingleCategoryTrainingIsRejected) {
   *header.mutable_header() = Header();
   stream->Write(header);
   for (int i = 0; i < 2; ++i) {
-    LabelledCloud lc = Sample("box", i, 0);
+    TrainingCloud lc = Sample("box", i, 0);
     v1::TrainRequest req;
     req.mutable_cloud()->set_category(lc.category);
     *req.mutable_cloud()->mutable_cloud() = CloudToProto(lc.cloud);
@@ -297,8 +297,8 @@ TEST(CoreEngine, ParametersReachCoresTrainParams) {
   ASSERT_TRUE(spec.ok());
   auto p = ToTrainParams(*spec);
   ASSERT_TRUE(p.ok());
-  EXPECT_EQ(p->methods, (std::vector<Method>{Method::kBoK, Method::kVFH}));
-  EXPECT_EQ(p->default_method, Method::kBoK);  // fusion was not asked for
+  EXPECT_EQ(p->methods, (std::vector<MethodId>{MethodId::kBoK, MethodId::kVFH}));
+  EXPECT_EQ(p->default_method, MethodId::kBoK);  // fusion was not asked for
   EXPECT_FLOAT_EQ(p->features.surface.support_radius_m, 0.04f);
   EXPECT_EQ(p->bok_clusters, 6);
   EXPECT_EQ(p->bog_keypoint_clusters, 3);
@@ -306,7 +306,7 @@ TEST(CoreEngine, ParametersReachCoresTrainParams) {
   EXPECT_EQ(p->bog_pca_dims, 8);
   EXPECT_EQ(p->kgh_clusters, 3);
   EXPECT_EQ(p->kgh_distance_bins, 9);
-  EXPECT_EQ(p->decision.kind, DecisionKind::kCentres);
+  EXPECT_EQ(p->decision.kind, DecisionRule::kCentres);
   EXPECT_EQ(p->decision.centres_per_category, 2);
   EXPECT_EQ(p->decision.neighbours, 3);
   EXPECT_FALSE(p->normalise_histograms);

@@ -328,7 +328,7 @@ TEST(Classify, CorruptStoredModelIsDataLoss) {
   Harness h;
   NewModel garbage;
   garbage.name = "broken";
-  garbage.methods = {Method::kBoK};
+  garbage.methods = {MethodId::kBoK};
   garbage.blob = {1, 2, 3};
   ASSERT_TRUE(h.store->Put(garbage).ok());
   EXPECT_EQ(Classify(h, ClassifyReq("broken", 10)).error_code(), grpc::StatusCode::DATA_LOSS);

@@ -21,8 +21,8 @@ NewModel Sample(const std::string& name, const std::string& tag = "a") {
   NewModel m;
   m.name = name;
   m.description = "model " + tag;
-  m.methods = {Method::kBoK, Method::kFusion};
-  m.default_method = Method::kFusion;
+  m.methods = {MethodId::kBoK, MethodId::kFusion};
+  m.default_method = MethodId::kFusion;
   m.params = R"({"seed":"7"})";
   m.stats.clouds = 4;
   m.stats.objects = 2;
@@ -120,8 +120,8 @@ TEST(Store, PutGetAndVersionsCountUpPerName) {
   auto got = store->Get("chairs", 1);
   ASSERT_TRUE(got.ok());
   EXPECT_EQ(got->description, "model a");
-  EXPECT_EQ(got->methods, (std::vector<Method>{Method::kBoK, Method::kFusion}));
-  EXPECT_EQ(got->default_method, Method::kFusion);
+  EXPECT_EQ(got->methods, (std::vector<MethodId>{MethodId::kBoK, MethodId::kFusion}));
+  EXPECT_EQ(got->default_method, MethodId::kFusion);
   EXPECT_EQ(got->params, R"({"seed":"7"})");
   EXPECT_EQ(got->stats.categories, (std::vector<std::string>{"box", "sphere"}));
   EXPECT_EQ(got->stats.clouds_per_category, (std::vector<size_t>{3, 1}));
@@ -377,7 +377,7 @@ NewModel Deserializable(const std::string& name, std::vector<std::string> catego
   NewModel m = Sample(name);
   Model model;
   model.categories = std::move(categories);
-  model.methods = {Method::kBoK, Method::kFusion};
+  model.methods = {MethodId::kBoK, MethodId::kFusion};
   m.blob = testing::FakeSerialize(model);
   return m;
 }

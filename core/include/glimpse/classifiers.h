@@ -78,7 +78,7 @@ Eigen::VectorXd keypoint_global_histogram(const std::vector<Vec3>& positions, co
 // ---- Bag of Features decision (sec. 3.3.2-3.3.3, 4) -----------------------------------------------
 
 struct DecisionStage {
-  DecisionKind kind = DecisionKind::kNearestNeighbours;
+  DecisionRule kind = DecisionRule::kNearestNeighbours;
   int categories = 0;
   int neighbours = 5;
   Pca pca;                     // of the training histograms

@@ -101,7 +101,7 @@ struct StageDecision {
   int object = 0;  // index into the evaluated objects
   int view = 0;
   std::string stage;
-  Method method = Method::kFusion;
+  MethodId method = MethodId::kFusion;
   double visible_fraction = 0;  // prefix points / full 3D cloud points
   size_t points = 0;            // prefix points
   size_t keypoints = 0;         // keypoints found on the prefix
@@ -117,15 +117,15 @@ struct Tally {
 };
 
 // Decisions of one stage and method, pooled over folds. A missing decision counts as wrong.
-Tally accuracy(std::span<const StageDecision> decisions, std::string_view stage, Method method);
+Tally accuracy(std::span<const StageDecision> decisions, std::string_view stage, MethodId method);
 // Mean over the categories of the per-category recall (each category weighs the same, whatever its
 // number of views); categories without a decision of this stage and method are left out.
-double balanced_accuracy(std::span<const StageDecision> decisions, std::string_view stage, Method method,
+double balanced_accuracy(std::span<const StageDecision> decisions, std::string_view stage, MethodId method,
                          size_t categories);
 // Rows: truth (query), columns: winner (result), percent of the row's decisions (missing ones are in
 // the row's total but in no column, so such a row sums to less than 100).
 std::vector<std::vector<double>> confusion_percent(std::span<const StageDecision> decisions, std::string_view stage,
-                                                   Method method, size_t categories);
+                                                   MethodId method, size_t categories);
 
 // Number of times the decision changes along a sequence (a missing decision, -1, is a category too).
 size_t category_changes(std::span<const int> winners);
@@ -143,7 +143,7 @@ struct ExplorationTrace {
 };
 // Traces of `method` from decisions whose stage is stage_name({kKeypoints, g}) for g in grid (plus
 // "full" for the final decision); views without a full-view decision are skipped.
-std::vector<ExplorationTrace> exploration_traces(std::span<const StageDecision> decisions, Method method,
+std::vector<ExplorationTrace> exploration_traces(std::span<const StageDecision> decisions, MethodId method,
                                                  const std::vector<size_t>& grid);
 
 struct ChangeRow {
@@ -192,7 +192,7 @@ struct EvalParams {
   std::vector<Stage> stages = paper_stages();
   float cut_margin_supports = 1.5f;  // keypoint cut margin in support radii (see keypoint_prefix)
   int folds = 5;  // cross-validation; a cross-source evaluation (kTrainOnly/kTestOnly objects) trains one model
-  std::vector<Method> methods = {std::begin(kAllMethods), std::end(kAllMethods)};
+  std::vector<MethodId> methods = {std::begin(kAllMethods), std::end(kAllMethods)};
   size_t explore_max_keypoints = 55;
   size_t explore_step = 5;
   std::vector<size_t> change_up_to = {10, 25, 55};
@@ -232,7 +232,7 @@ struct StageStats {
 // Another evaluation's accuracy shown beside this one's (the size-blind ablation).
 struct AblationRow {
   std::string label;             // what was changed
-  Method method = Method::kFusion;
+  MethodId method = MethodId::kFusion;
   std::vector<double> accuracy;  // per main stage, %
   std::vector<double> balanced;  // per main stage, %
 };
@@ -253,7 +253,7 @@ struct EvalResult {
   std::vector<StageDecision> decisions;
   std::vector<StageStats> stage_stats;      // main stages then the exploration grid
   std::vector<size_t> grid;
-  Method change_method = Method::kFusion;   // the default method (train.default_method when evaluated)
+  MethodId change_method = MethodId::kFusion;   // the default method (train.default_method when evaluated)
   std::vector<ChangeRow> changes;
   std::vector<ExplorationTrace> traces;     // of change_method
   std::vector<StreamTrace> streams;         // of change_method, every tested view
@@ -282,7 +282,7 @@ Expected<EvalResult> run_evaluation(const std::vector<EvalObject>& objects, cons
 
 // The paper's figures: accuracy (%) by method and stage ("full", "10%", "20%"; the paper equates
 // 10 kp with ~10 % and 25 kp with ~20 %), NaN where the paper gives none.
-double paper_accuracy(Method method, std::string_view stage);
+double paper_accuracy(MethodId method, std::string_view stage);
 
 std::string markdown_report(const EvalResult& result);
 std::string decisions_csv(const EvalResult& result);

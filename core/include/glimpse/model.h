@@ -20,27 +20,27 @@ namespace glimpse {
 // upright_histogram.h), a size-only baseline (the visible height and horizontal extents: how much a
 // ruler alone gets right) and a score-level fusion. The numbers are stored in model bytes: never
 // reuse one.
-enum class Method : uint8_t { kBoK = 0, kBoG = 1, kKGH = 2, kVFH = 3, kESF = 4, kFusion = 5, kUSH = 6, kSize = 7 };
+enum class MethodId : uint8_t { kBoK = 0, kBoG = 1, kKGH = 2, kVFH = 3, kESF = 4, kFusion = 5, kUSH = 6, kSize = 7 };
 inline constexpr int kMethodCount = 8;
-inline constexpr Method kAllMethods[] = {Method::kBoK, Method::kBoG, Method::kKGH,  Method::kVFH,
-                                         Method::kESF, Method::kUSH, Method::kSize, Method::kFusion};
-const char* method_name(Method m);  // "bok", "bog", "kgh", "vfh", "esf", "ush", "size", "fusion"
-Expected<Method> parse_method(std::string_view name);   // case-insensitive; error lists valid names
+inline constexpr MethodId kAllMethods[] = {MethodId::kBoK, MethodId::kBoG, MethodId::kKGH,  MethodId::kVFH,
+                                         MethodId::kESF, MethodId::kUSH, MethodId::kSize, MethodId::kFusion};
+const char* method_name(MethodId m);  // "bok", "bog", "kgh", "vfh", "esf", "ush", "size", "fusion"
+Expected<MethodId> parse_method(std::string_view name);   // case-insensitive; error lists valid names
 
-struct LabelledCloud {
+struct TrainingCloud {
   std::string category;
   std::string object_id;  // views of one object share it (cross-validation splits by object)
   Cloud cloud;
 };
 
-struct TrainProgress {
+struct TrainingProgress {
   std::string stage;  // "features", "codebooks", "centres", "calibration", "done"
   size_t done = 0;
   size_t total = 0;
 };
-using ProgressFn = std::function<void(const TrainProgress&)>;
+using ProgressFn = std::function<void(const TrainingProgress&)>;
 
-struct TrainingStats {
+struct TrainingSummary {
   size_t clouds = 0;
   size_t objects = 0;
   size_t keypoints = 0;
@@ -62,7 +62,7 @@ inline constexpr uint32_t kFeaturePipelineVersion = 3;
 // cross-validation by object, TrainParams::calibration_folds), so no threshold is set on the clouds it
 // is judged on.
 struct Calibration {
-  Method method = Method::kFusion;  // the method measured: the model's default
+  MethodId method = MethodId::kFusion;  // the method measured: the model's default
   // The smallest margin between the best two scores at which held-out decisions were at least
   // TrainParams::settle_precision right; a streamed decision of `method` settles there. 0: not
   // calibrated (too few objects), sessions use SessionParams::full_margin.
@@ -77,15 +77,15 @@ struct TrainParams;  // defined in train_params.h: features, codebooks, decision
 
 struct Model {
   std::vector<std::string> categories;
-  std::vector<Method> methods;  // methods this model can classify with
-  Method default_method = Method::kFusion;
+  std::vector<MethodId> methods;  // methods this model can classify with
+  MethodId default_method = MethodId::kFusion;
   uint32_t feature_version = kFeaturePipelineVersion;  // models of format 1-2 read as version 1
-  TrainingStats stats;
+  TrainingSummary stats;
   std::shared_ptr<const ModelImpl> impl;  // immutable after training; shared by sessions/threads
 };
 
 struct Classification {
-  Method method = Method::kFusion;
+  MethodId method = MethodId::kFusion;
   std::vector<std::string> categories;
   std::vector<double> scores;  // one per category, in [0, 1], summing to 1; higher is more likely
   int winner = -1;             // index into categories
@@ -98,7 +98,7 @@ struct Classification {
 
 // A warning when the cloud's largest extent is more than 4x outside the extents the model learnt
 // ("the cloud spans 1700 m, the model knows 0.03-2.1 m objects: millimetres?"); empty otherwise.
-std::string size_warning(const TrainingStats& stats, const Cloud& cloud);
+std::string size_warning(const TrainingSummary& stats, const Cloud& cloud);
 
 // Fold (0..folds-1) of every object: per category, the objects are shuffled (seeded) and dealt round
 // robin, so each fold holds floor or ceil(n / folds) objects of every category. Used by training's own
@@ -112,11 +112,11 @@ double settle_margin(std::vector<std::pair<double, bool>> decisions, double prec
 // The model's calibration (all zero for an untrained model).
 const Calibration& calibration(const Model& model);
 
-Expected<Model> train(const std::vector<LabelledCloud>& data, const TrainParams& params,
+Expected<Model> train(const std::vector<TrainingCloud>& data, const TrainParams& params,
                       const ProgressFn& progress = {}, const CancelFn& cancel = {});
 
 Expected<Classification> classify(const Model& model, const Cloud& cloud,
-                                  std::optional<Method> method = std::nullopt,
+                                  std::optional<MethodId> method = std::nullopt,
                                   const CancelFn& cancel = {});
 
 // Versioned, little-endian byte format with a checksum; deserialize rejects truncated or corrupt input.

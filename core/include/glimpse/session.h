@@ -1,5 +1,5 @@
 // ScanSession: a remote scanner streams an object piece by piece; the session fuses the chunks,
-// updates features incrementally and answers each chunk with an evolving Decision (sec. 4).
+// updates features incrementally and answers each chunk with an evolving StreamDecision (sec. 4).
 #pragma once
 
 #include <cstddef>
@@ -15,7 +15,7 @@
 namespace glimpse {
 
 struct SessionParams {
-  std::optional<Method> method;      // default: the model's default method
+  std::optional<MethodId> method;      // default: the model's default method
   // Limits: a session never grows without bound (errors: resource exhausted).
   size_t max_points = 1'000'000;     // accumulated (after duplicate removal)
   size_t max_chunks = 10'000;
@@ -42,7 +42,7 @@ struct SessionParams {
   size_t min_keypoints = 10;         // keypoint methods never settle on fewer keypoints
 };
 
-struct Decision {
+struct StreamDecision {
   size_t chunk_index = 0;           // 0-based index of the chunk this answers (finish: the last one's)
   size_t points = 0;                // accumulated, after duplicate removal
   size_t keypoints = 0;
@@ -64,7 +64,7 @@ struct Decision {
 struct DecisionTrack {
   std::vector<double> smoothed;
   std::vector<int> winners;  // every decision's winner so far
-  Decision decision;
+  StreamDecision decision;
 };
 void track_decision(DecisionTrack& track, const std::vector<double>& scores, size_t keypoints,
                     bool keypoints_matter, const SessionParams& params);
@@ -75,11 +75,11 @@ class ScanSession {
                                                        const SessionParams& params = {});
   virtual ~ScanSession() = default;
   // Adds a chunk (points in the session's common frame) and returns the updated decision.
-  virtual Expected<Decision> add(const Cloud& chunk) = 0;
+  virtual Expected<StreamDecision> add(const Cloud& chunk) = 0;
   // The scanner is done: every feature brought up to date on the whole scan (VFH and ESF too), so the
   // raw scores are Classify's of the accumulated cloud; the smoothed track takes them in as a last step.
-  virtual Expected<Decision> finish() = 0;
-  virtual const Decision& last() const = 0;
+  virtual Expected<StreamDecision> finish() = 0;
+  virtual const StreamDecision& last() const = 0;
 };
 
 }  // namespace glimpse

@@ -13,7 +13,7 @@
 
 namespace glimpse {
 
-enum class DecisionKind : uint8_t {
+enum class DecisionRule : uint8_t {
   kNearestCentre = 0,      // the paper's setting: one K-means centre per category, L1 distance (sec. 4)
   kCentres = 1,            // several K-means centres per category
   kNearestNeighbours = 2,  // k-NN over every training vector, L1 distance
@@ -24,7 +24,7 @@ enum class DecisionKind : uint8_t {
 };
 
 struct DecisionParams {
-  DecisionKind kind = DecisionKind::kNearestReference;
+  DecisionRule kind = DecisionRule::kNearestReference;
   int centres_per_category = 3;     // for kCentres
   int neighbours = 5;               // for kNearestNeighbours
   double pca_explained_variance = 0.98;  // PCA of the training histograms (sec. 3.3.2)
@@ -35,8 +35,8 @@ struct TrainParams {
   FeatureParams features;
   GlobalDescriptorParams global;
   UprightHistogramParams ush;
-  std::vector<Method> methods = {std::begin(kAllMethods), std::end(kAllMethods)};
-  Method default_method = Method::kFusion;
+  std::vector<MethodId> methods = {std::begin(kAllMethods), std::end(kAllMethods)};
+  MethodId default_method = MethodId::kFusion;
 
   double codebook_explained_variance = 0.95;  // PCA of standardised descriptors (sec. 3.2.5)
   int bok_clusters = 60;
@@ -50,7 +50,7 @@ struct TrainParams {
   // ESF adds a little within one collection and costs 1-6 points across collections (its shape
   // functions follow how a collection is modelled); the keypoint methods, far weaker on partial
   // views, pull the mean down.
-  std::vector<Method> fusion_of = {Method::kUSH, Method::kVFH};
+  std::vector<MethodId> fusion_of = {MethodId::kUSH, MethodId::kVFH};
 
   // Train on what will be seen: besides each training cloud, its top-down prefixes holding these
   // fractions of its points (sec. 4's exploration order), as samples of the same object. A scan is
