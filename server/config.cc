@@ -2,7 +2,7 @@
 
 #include <charconv>
 #include <cstdlib>
-#include <thread>
+#include <algorithm>
 
 namespace glimpse::server {
 namespace {
@@ -77,14 +77,17 @@ const std::vector<Option>& Options() {
        }},
       {"metrics-port", "GLIMPSE_METRICS_PORT", "N", "Prometheus /metrics HTTP port, 0 disables [9464]",
        Number(&ServerConfig::metrics_port, 0)},
-      {"threads", "GLIMPSE_THREADS", "N", "gRPC worker threads, 0 = max streams + 2 per core [0]",
+      {"threads", "GLIMPSE_THREADS", "N", "gRPC worker threads, 0 = max streams + 2 per usable CPU [0]",
        Number(&ServerConfig::threads, 0)},
+      {"request-threads", "GLIMPSE_REQUEST_THREADS", "N",
+       "threads one request computes with, 0 = the CPUs the process may use (affinity, cgroup quota) [0]",
+       Number(&ServerConfig::request_threads, 0)},
       {"shutdown-grace-seconds", "GLIMPSE_SHUTDOWN_GRACE_SECONDS", "N",
        "how long in-flight calls may finish after SIGTERM/SIGINT [10]",
        Seconds([](ServerConfig& c) { return &c.shutdown_grace; })},
       {"max-message-bytes", "GLIMPSE_MAX_MESSAGE_BYTES", "N", "largest gRPC message [67108864]",
        Limit(&Limits::max_message_bytes, size_t{1024})},
-      {"max-points", "GLIMPSE_MAX_POINTS", "N", "points per cloud or chunk [1000000]",
+      {"max-points", "GLIMPSE_MAX_POINTS", "N", "points per cloud or chunk, and per ClassifyBatch call [1000000]",
        Limit(&Limits::max_points_per_cloud, size_t{1})},
       {"max-streams", "GLIMPSE_MAX_STREAMS", "N", "concurrent Train/StreamClassify calls [64]",
        Limit(&Limits::max_concurrent_streams, size_t{1})},
@@ -97,6 +100,8 @@ const std::vector<Option>& Options() {
        Limit(&Limits::max_train_points, size_t{1})},
       {"max-session-points", "GLIMPSE_MAX_SESSION_POINTS", "N", "points accumulated by one scan session [1000000]",
        Limit(&Limits::max_session_points, size_t{1})},
+      {"max-batch-clouds", "GLIMPSE_MAX_BATCH_CLOUDS", "N", "clouds per ClassifyBatch call [256]",
+       Limit(&Limits::max_batch_clouds, size_t{1})},
       {"max-cached-models", "GLIMPSE_MAX_CACHED_MODELS", "N", "deserialized models kept in memory [16]",
        Limit(&Limits::max_cached_models, size_t{1})},
       {"tls-cert", "GLIMPSE_TLS_CERT", "FILE", "PEM server certificate (chain); with --tls-key serves TLS only",
@@ -189,10 +194,15 @@ std::string Usage() {
   return out;
 }
 
-int EffectiveThreads(const ServerConfig& config) {
+int EffectiveThreads(const ServerConfig& config, int cpus) {
   if (config.threads > 0) return config.threads;
-  const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  return static_cast<int>(config.limits.max_concurrent_streams) + std::max(4, 2 * cores);
+  return static_cast<int>(config.limits.max_concurrent_streams) + std::max(4, 2 * std::max(1, cpus));
 }
+
+int RequestThreads(const ServerConfig& config, int cpus) {
+  return config.request_threads > 0 ? config.request_threads : std::max(1, cpus);
+}
+
+int CompletionQueues(int cpus) { return std::clamp(cpus, 1, 4); }
 
 }  // namespace glimpse::server

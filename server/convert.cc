@@ -181,6 +181,9 @@ void ToProto(const ModelRecord& r, v1::ModelInfo* out) {
   }
   out->set_size_bytes(r.size_bytes);
   out->set_sha256(r.sha256);
+  out->set_feature_version(r.feature_version);
+  out->set_min_extent_m(r.stats.min_extent_m);
+  out->set_max_extent_m(r.stats.max_extent_m);
 }
 
 namespace {
@@ -204,6 +207,7 @@ void ToProto(const Classification& c, v1::ClassifyResponse* out) {
   out->set_keypoints(c.keypoints);
   out->mutable_timings()->set_feature_ms(c.feature_ms);
   out->mutable_timings()->set_decision_ms(c.decision_ms);
+  out->set_warning(c.warning);
 }
 
 void ToProto(const StreamDecision& d, v1::Decision* out) {

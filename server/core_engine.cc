@@ -1,5 +1,7 @@
 // The real Engine: glimpse::train/classify/serialize/deserialize and ScanSession::create, with the
 // Train header's parameters mapped onto core's TrainParams (unset fields keep core's defaults).
+#include <omp.h>
+
 #include <algorithm>
 #include <limits>
 
@@ -61,16 +63,67 @@ Expected<TrainParams> ToTrainParams(const TrainSpec& spec) {
   return params;
 }
 
-Engine CoreEngine() {
+v1::TrainParameters FromTrainParams(const TrainParams& params) {
+  v1::TrainParameters p;
+  p.set_support_radius_m(params.features.surface.support_radius_m);
+  p.set_bok_codebook_size(static_cast<uint32_t>(params.bok_clusters));
+  p.set_bog_keypoint_clusters(static_cast<uint32_t>(params.bog_keypoint_clusters));
+  p.set_bog_volume_clusters(static_cast<uint32_t>(params.bog_volume_clusters));
+  p.set_bog_pca_dims(static_cast<uint32_t>(params.bog_pca_dims));
+  p.set_kgh_keypoint_clusters(static_cast<uint32_t>(params.kgh_clusters));
+  p.set_kgh_distance_bins(static_cast<uint32_t>(params.kgh_distance_bins));
+  switch (params.decision.kind) {
+    case DecisionRule::kNearestCentre: p.set_decision(v1::DECISION_KIND_NEAREST_CENTRE); break;
+    case DecisionRule::kCentres: p.set_decision(v1::DECISION_KIND_CENTRES); break;
+    case DecisionRule::kNearestNeighbours: p.set_decision(v1::DECISION_KIND_NEAREST_NEIGHBOURS); break;
+    case DecisionRule::kNearestReference: p.set_decision(v1::DECISION_KIND_NEAREST_REFERENCE); break;
+  }
+  p.set_seed(params.seed);
+  p.set_centres_per_category(static_cast<uint32_t>(params.decision.centres_per_category));
+  p.set_neighbours(static_cast<uint32_t>(params.decision.neighbours));
+  p.set_normalise_histograms(params.normalise_histograms);
+  return p;
+}
+
+Engine CoreEngine(int request_threads) {
+  // OpenMP's thread count is a per-thread setting: set on the gRPC thread that runs the call, it
+  // bounds core's parallel loops for this call only.
+  auto budget = [request_threads] {
+    if (request_threads > 0) omp_set_num_threads(request_threads);
+  };
   Engine e;
-  e.train = [](const std::vector<TrainingCloud>& data, const TrainSpec& spec, const ProgressFn& progress,
-               const CancelFn& cancel) -> Expected<Model> {
+  e.train = [budget](const std::vector<TrainingCloud>& data, const TrainSpec& spec, const ProgressFn& progress,
+                     const CancelFn& cancel) -> Expected<Model> {
     auto params = ToTrainParams(spec);
     if (!params) return params.error();
+    budget();
     return glimpse::train(data, *params, progress, cancel);
   };
-  e.classify = [](const Model& model, const Cloud& cloud, std::optional<MethodId> method, const CancelFn& cancel) {
+  e.classify = [budget](const Model& model, const Cloud& cloud, std::optional<MethodId> method,
+                        const CancelFn& cancel) {
+    budget();
     return glimpse::classify(model, cloud, method, cancel);
+  };
+  e.classify_batch = [budget](const Model& model, std::span<const Cloud> clouds, std::optional<MethodId> method,
+                              const CancelFn& cancel) {
+    budget();
+    // One thread per cloud: whole clouds in parallel waste less than threads sharing one cloud's
+    // serial parts. Results go to their own slots, so they do not depend on the thread count.
+    std::vector<Expected<Classification>> out(clouds.size(), cancelled("the call was cancelled before this cloud"));
+    const int threads = std::max(1, std::min(omp_get_max_threads(), static_cast<int>(clouds.size())));
+    const int inner = std::max(1, omp_get_max_threads() / threads);
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
+    for (int64_t i = 0; i < static_cast<int64_t>(clouds.size()); ++i) {
+      omp_set_num_threads(inner);
+      if (cancel && cancel()) continue;
+      out[static_cast<size_t>(i)] = glimpse::classify(model, clouds[static_cast<size_t>(i)], method, cancel);
+    }
+    return out;
+  };
+  e.effective_parameters = [](const TrainSpec& spec) -> Expected<v1::TrainParameters> {
+    auto params = ToTrainParams(spec);
+    if (!params) return params.error();
+    return FromTrainParams(*params);
   };
   e.serialize = [](const Model& model) { return glimpse::serialize(model); };
   e.deserialize = [](std::span<const uint8_t> bytes) { return glimpse::deserialize(bytes); };

@@ -29,14 +29,26 @@ struct Engine {
   std::function<Expected<Classification>(const Model&, const Cloud&, std::optional<MethodId>,
                                          const CancelFn&)>
       classify;
+  // Several clouds with one model: one result per cloud, in order, each what classify gives for it
+  // alone (whatever the thread count). Clouds left when the CancelFn fires are kCancelled.
+  std::function<std::vector<Expected<Classification>>(const Model&, std::span<const Cloud>, std::optional<MethodId>,
+                                                      const CancelFn&)>
+      classify_batch;
   std::function<std::vector<uint8_t>(const Model&)> serialize;
   std::function<Expected<Model>(std::span<const uint8_t>)> deserialize;
   std::function<Expected<std::unique_ptr<ScanSession>>(std::shared_ptr<const Model>, const SessionParams&)>
       create_session;
+  // The parameters a spec trains with, every field set: the request's where it gave them, the
+  // recogniser's defaults elsewhere (ModelInfo.parameters). Empty: the request's are stored as given.
+  std::function<Expected<v1::TrainParameters>(const TrainSpec&)> effective_parameters;
 };
 
-// The real recogniser (core_engine.cc, target glimpse_server_engine).
-Engine CoreEngine();
+// The real recogniser (core_engine.cc, target glimpse_server_engine). Each call computes with
+// `request_threads` threads (0: OpenMP's default for the calling thread); a batch spreads its clouds
+// over them, one thread per cloud.
+Engine CoreEngine(int request_threads = 0);
+// Every field of TrainParameters from core's TrainParams (the inverse of ToTrainParams).
+v1::TrainParameters FromTrainParams(const TrainParams& params);
 // Maps a Train header onto core's TrainParams (train_params.h); unset fields keep core's defaults.
 Expected<TrainParams> ToTrainParams(const TrainSpec& spec);
 

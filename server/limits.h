@@ -14,7 +14,8 @@ namespace glimpse::server {
 
 struct Limits {
   size_t max_message_bytes = 64u << 20;       // gRPC receive/send limit per message
-  size_t max_points_per_cloud = 1'000'000;    // per cloud, chunk or training cloud
+  size_t max_points_per_cloud = 1'000'000;    // per cloud, chunk or training cloud; summed over a batch
+  size_t max_batch_clouds = 256;              // clouds per ClassifyBatch call
   size_t max_concurrent_streams = 64;         // Train + StreamClassify calls at once
   std::chrono::seconds max_stream_duration{600};  // StreamClassify, and Train while receiving
   size_t max_train_clouds = 100'000;          // per Train call

@@ -9,6 +9,7 @@
 #include <pthread.h>
 
 #include "config.h"
+#include "cpus.h"
 #include "engine.h"
 #include "log.h"
 #include "metrics.h"
@@ -56,7 +57,9 @@ int Run(const ServerConfig& config, const sigset_t& signals) {
 
   ServiceOptions options;
   options.store = store->get();
-  options.engine = CoreEngine();
+  const int cpus = ProcessCpus();
+  const int request_threads = RequestThreads(config, cpus);
+  options.engine = CoreEngine(request_threads);
   options.limits = config.limits;
   options.metrics = &metrics;
   options.auth_token = token;
@@ -64,7 +67,8 @@ int Run(const ServerConfig& config, const sigset_t& signals) {
 
   GrpcServerOptions grpc_options;
   grpc_options.address = config.address;
-  grpc_options.threads = EffectiveThreads(config);
+  grpc_options.threads = EffectiveThreads(config, cpus);
+  grpc_options.completion_queues = CompletionQueues(cpus);
   grpc_options.max_message_bytes = config.limits.max_message_bytes;
   grpc_options.credentials = *credentials;
   auto running = StartGrpcServer(grpc_options, &service);
@@ -74,7 +78,8 @@ int Run(const ServerConfig& config, const sigset_t& signals) {
   }
   LogEvent("info", "serving glimpse.v1.Glimpse on " + config.address + " (port " + std::to_string(running->port) +
                        "), store " + config.db_path + ", metrics port " + std::to_string(config.metrics_port) +
-                       ", " + std::to_string(grpc_options.threads) + " threads, " +
+                       ", " + std::to_string(cpus) + " usable CPUs, " + std::to_string(grpc_options.threads) +
+                       " gRPC threads, " + std::to_string(request_threads) + " threads per request, " +
                        (config.tls.enabled() ? (config.tls.client_ca.empty() ? "TLS" : "mutual TLS") : "plaintext") +
                        (token.empty() ? ", model changes open to every caller" : ", model changes need the bearer token"));
 

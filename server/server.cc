@@ -26,6 +26,11 @@ Expected<RunningServer> StartGrpcServer(const GrpcServerOptions& options, grpc::
   grpc::ResourceQuota quota("glimpse-server");
   quota.SetMaxThreads(std::max(2, options.threads));
   builder.SetResourceQuota(quota);
+  if (options.completion_queues > 0) {
+    builder.SetSyncServerOption(grpc::ServerBuilder::SyncServerOption::NUM_CQS, options.completion_queues);
+    builder.SetSyncServerOption(grpc::ServerBuilder::SyncServerOption::MIN_POLLERS, 1);
+    builder.SetSyncServerOption(grpc::ServerBuilder::SyncServerOption::MAX_POLLERS, 2);
+  }
 
   running.server = builder.BuildAndStart();
   if (!running.server || running.port == 0)

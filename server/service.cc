@@ -3,9 +3,11 @@
 #include <grpcpp/server_context.h>
 
 #include <condition_variable>
+#include <algorithm>
 #include <exception>
 #include <mutex>
 
+#include "batch.h"
 #include "convert.h"
 #include "train.h"
 
@@ -139,6 +141,41 @@ grpc::Status GlimpseService::Classify(grpc::ServerContext* ctx, const v1::Classi
   });
 }
 
+grpc::Status GlimpseService::ClassifyBatch(grpc::ServerContext* ctx, const v1::ClassifyBatchRequest* request,
+                                           v1::ClassifyBatchResponse* response) {
+  RequestLog log;
+  return Handle(ctx, "ClassifyBatch", Access::kOpen, log, [&]() -> Status {
+    const auto start = options_.clock();
+    log.model = RefText(request->model().name(), request->model().version());
+    log.messages = static_cast<uint64_t>(request->clouds_size());
+    if (Status s = ValidateModelName(request->model().name()); !s.ok()) return s;
+    auto method = MethodFromProto(request->method());
+    if (!method) return method.error();
+    log.method = MethodText(*method);
+    auto batch = UnpackBatch(*request, options_.limits);
+    if (!batch) return batch.error();
+    log.points = batch->points;
+    auto loaded = cache_.Load(request->model().name(), request->model().version());
+    if (!loaded) return loaded.error();
+    log.model = RefText(loaded->record.name, loaded->record.version);
+    // What concerns every cloud fails the call, not each result.
+    const MethodId used = method->value_or(loaded->model->default_method);
+    if (std::find(loaded->model->methods.begin(), loaded->model->methods.end(), used) == loaded->model->methods.end())
+      return failed_precondition(std::string("the model was not trained for method '") + method_name(used) + "'");
+    if (CancelFor(ctx)()) return cancelled("the caller cancelled or the deadline passed before classification");
+    auto results = options_.engine.classify_batch(*loaded->model, batch->clouds, *method, CancelFor(ctx));
+    for (const Expected<Classification>& r : results)
+      if (!r && (r.error().code == ErrorCode::kCancelled || r.error().code == ErrorCode::kFailedPrecondition))
+        return r.error();  // the call was stopped, or the model cannot classify at all (its feature version)
+    FillBatchResponse(*batch, results, loaded->record, loaded->load_ms, response);
+    FillRef(loaded->record, response->mutable_model());
+    response->set_method(MethodToProto(used));
+    response->set_total_ms(MsSince(start, options_.clock()));
+    log.method = MethodText(used);
+    return {};
+  });
+}
+
 grpc::Status GlimpseService::StreamClassify(grpc::ServerContext* ctx,
                                             grpc::ServerReaderWriter<v1::Decision, v1::ScanChunk>* stream) {
   RequestLog log;
@@ -201,6 +238,7 @@ grpc::Status GlimpseService::StreamClassify(grpc::ServerContext* ctx,
       }
       v1::Decision reply;
       ToProto(decision, &reply);
+      reply.set_chunk_index(log.messages - 1);  // the message answered (the session counts only non-empty ones)
       FillRef(model.record, reply.mutable_model());
       reply.set_method(MethodToProto(method));
       reply.set_latency_ms(MsSince(start, options_.clock()));

@@ -43,6 +43,8 @@ class GlimpseService final : public v1::Glimpse::Service {
                      grpc::ServerReaderWriter<v1::TrainProgress, v1::TrainRequest>* stream) override;
   grpc::Status Classify(grpc::ServerContext* ctx, const v1::ClassifyRequest* request,
                         v1::ClassifyResponse* response) override;
+  grpc::Status ClassifyBatch(grpc::ServerContext* ctx, const v1::ClassifyBatchRequest* request,
+                             v1::ClassifyBatchResponse* response) override;
   grpc::Status StreamClassify(grpc::ServerContext* ctx,
                               grpc::ServerReaderWriter<v1::Decision, v1::ScanChunk>* stream) override;
   grpc::Status ListModels(grpc::ServerContext* ctx, const v1::ListModelsRequest* request,

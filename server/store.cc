@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <sstream>
@@ -62,6 +63,13 @@ constexpr const char* kMigrations[] = {
     R"sql(
     CREATE TRIGGER versions_immutable BEFORE UPDATE ON versions
       BEGIN SELECT RAISE(ABORT, 'model versions are immutable'); END;
+    )sql",
+    // 3: the feature pipeline version a model was trained with (0: stored before it was recorded), and
+    // the extents of the clouds it learnt (0: unknown).
+    R"sql(
+    ALTER TABLE versions ADD COLUMN feature_version INTEGER NOT NULL DEFAULT 0;
+    ALTER TABLE training_stats ADD COLUMN min_extent_m REAL NOT NULL DEFAULT 0;
+    ALTER TABLE training_stats ADD COLUMN max_extent_m REAL NOT NULL DEFAULT 0;
     )sql",
 };
 constexpr int kSchemaVersion = static_cast<int>(std::size(kMigrations));
@@ -236,8 +244,10 @@ constexpr const char* kSelectRecord = R"sql(
   SELECT v.id, v.name, v.version,
          EXISTS(SELECT 1 FROM served s WHERE s.name = v.name AND s.version = v.version),
          v.created_unix_ms, v.description, v.methods, v.default_method, v.params, v.size_bytes, v.sha256,
-         t.clouds, t.objects, t.keypoints, t.seconds
+         t.clouds, t.objects, t.keypoints, t.seconds, v.feature_version, t.min_extent_m, t.max_extent_m
     FROM versions v LEFT JOIN training_stats t ON t.version_id = v.id )sql";
+
+float finite_or_zero(float v) { return std::isfinite(v) ? v : 0.f; }
 
 int64_t NowUnixMs() {
   using namespace std::chrono;
@@ -340,6 +350,9 @@ Expected<std::vector<ModelRecord>> ModelStore::Query(std::string_view where,
     r.stats.objects = static_cast<size_t>(s.i64(12));
     r.stats.keypoints = static_cast<size_t>(s.i64(13));
     r.stats.seconds = s.f64(14);
+    r.feature_version = static_cast<uint32_t>(s.i64(15));
+    r.stats.min_extent_m = static_cast<float>(s.f64(16));
+    r.stats.max_extent_m = static_cast<float>(s.f64(17));
     out.push_back(std::move(r));
   }
   for (ModelRecord& r : out) {
@@ -380,10 +393,11 @@ Expected<ModelRecord> ModelStore::Put(const NewModel& model) {
 
     Stmt ins(db_,
              "INSERT INTO versions (name, version, created_unix_ms, description, methods, default_method,"
-             " params, blob, size_bytes, sha256) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+             " params, blob, size_bytes, sha256, feature_version) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
     ins.bind(1, model.name).bind(2, version).bind(3, NowUnixMs()).bind(4, model.description);
     ins.bind(5, JoinMethods(model.methods)).bind(6, MethodToken(model.default_method)).bind(7, model.params);
     ins.bind_blob(8, model.blob).bind(9, static_cast<int64_t>(model.blob.size())).bind(10, Sha256Hex(model.blob));
+    ins.bind(11, static_cast<int64_t>(model.feature_version));
     if (Status s = ins.run(); !s.ok()) return s.error();
     id = sqlite3_last_insert_rowid(db_);
 
@@ -394,10 +408,14 @@ Expected<ModelRecord> ModelStore::Put(const NewModel& model) {
       cat.bind(1, id).bind(2, static_cast<int64_t>(i)).bind(3, model.stats.categories[i]).bind(4, clouds);
       if (Status s = cat.run(); !s.ok()) return s.error();
     }
-    Stmt st(db_, "INSERT INTO training_stats (version_id, clouds, objects, keypoints, seconds) VALUES (?, ?, ?, ?, ?)");
+    Stmt st(db_,
+            "INSERT INTO training_stats (version_id, clouds, objects, keypoints, seconds, min_extent_m, max_extent_m)"
+            " VALUES (?, ?, ?, ?, ?, ?, ?)");
     st.bind(1, id).bind(2, static_cast<int64_t>(model.stats.clouds));
     st.bind(3, static_cast<int64_t>(model.stats.objects)).bind(4, static_cast<int64_t>(model.stats.keypoints));
     st.bind(5, model.stats.seconds);
+    st.bind(6, static_cast<double>(finite_or_zero(model.stats.min_extent_m)));
+    st.bind(7, static_cast<double>(finite_or_zero(model.stats.max_extent_m)));
     if (Status s = st.run(); !s.ok()) return s.error();
 
     if (options_.before_commit) {

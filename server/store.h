@@ -32,8 +32,9 @@ struct ModelRecord {
   std::string description;
   std::vector<MethodId> methods;
   MethodId default_method = MethodId::kFusion;
-  std::string params;  // the request's TrainParameters (JSON), as given
-  TrainingSummary stats;  // categories and clouds_per_category in the model's order
+  std::string params;  // the TrainParameters training used (JSON); older versions: the request's
+  TrainingSummary stats;  // categories and clouds_per_category in the model's order, extents
+  uint32_t feature_version = 0;  // the model's feature pipeline version; 0: stored before it was recorded
   uint64_t size_bytes = 0;
   std::string sha256;  // hex digest of the blob
 };
@@ -47,6 +48,7 @@ struct NewModel {
   std::string params;
   TrainingSummary stats;
   std::vector<uint8_t> blob;
+  uint32_t feature_version = 0;  // Model::feature_version
 };
 
 struct StoreOptions {

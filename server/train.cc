@@ -69,7 +69,15 @@ Expected<ModelRecord> TrainAndStore(const TrainInput& input, const Engine& engin
   row.default_method = model->default_method;
   row.stats = model->stats;
   if (row.stats.categories.empty()) row.stats.categories = model->categories;
-  (void)google::protobuf::util::MessageToJsonString(input.spec.parameters, &row.params);
+  row.feature_version = model->feature_version;
+  // What training used (every field), so ModelInfo shows it rather than an echo of the request.
+  v1::TrainParameters used = input.spec.parameters;
+  if (engine.effective_parameters) {
+    auto effective = engine.effective_parameters(input.spec);
+    if (!effective) return effective.error();
+    used = std::move(*effective);
+  }
+  (void)google::protobuf::util::MessageToJsonString(used, &row.params);
   row.blob = engine.serialize(*model);
   if (row.blob.empty()) return internal_error("serialized model is empty");
   return store.Put(row);

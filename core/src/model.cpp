@@ -163,7 +163,7 @@ Status validate(const std::vector<Sample>& data, const TrainParams& params) {
   std::set<std::string> categories;
   for (const auto& d : data) categories.insert(d.category);
   if (categories.size() < 2)
-    return invalid_argument("training needs at least 2 categories; got only '" + *categories.begin() + "'");
+    return failed_precondition("training needs at least 2 categories; got only '" + *categories.begin() + "'");
   if (params.bok_clusters < 2 || params.bog_keypoint_clusters < 2 || params.kgh_clusters < 2 ||
       params.bog_volume_clusters < 1 || params.kgh_distance_bins < 1)
     return invalid_argument("codebook sizes must be at least 2 clusters (and 1 volume cluster / distance bin)");
@@ -429,7 +429,7 @@ Expected<Classification> classify(const Model& model, const Cloud& cloud, std::o
   if (Status s = check_feature_version(model); !s.ok()) return s.error();
   const MethodId m = method.value_or(model.default_method);
   if (!needs(model.methods, m))
-    return invalid_argument(std::string("the model was not trained for method '") + method_name(m) + "'");
+    return failed_precondition(std::string("the model was not trained for method '") + method_name(m) + "'");
   const ModelImpl& impl = *model.impl;
   const auto t0 = std::chrono::steady_clock::now();
   auto f = cloud_features(cloud, impl.params, component_methods(impl, m), impl.params.threads, cancel);

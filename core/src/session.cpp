@@ -183,7 +183,7 @@ Expected<std::unique_ptr<ScanSession>> ScanSession::create(std::shared_ptr<const
   if (Status s = check_feature_version(*model); !s.ok()) return s.error();
   const MethodId method = params.method.value_or(model->default_method);
   if (std::find(model->methods.begin(), model->methods.end(), method) == model->methods.end())
-    return invalid_argument(std::string("the model was not trained for method '") + method_name(method) + "'");
+    return failed_precondition(std::string("the model was not trained for method '") + method_name(method) + "'");
   if (params.max_points == 0 || params.max_chunks == 0 || params.max_chunk_points == 0)
     return invalid_argument("session limits must be positive");
   return std::unique_ptr<ScanSession>(std::make_unique<Session>(std::move(model), params, method));

@@ -199,6 +199,46 @@ class PythonClientTest(unittest.TestCase):
         self.assertGreaterEqual(last.confidence, 0.0)
         self.assertLessEqual(last.confidence, 1.0)
 
+    def test_an_empty_first_chunk_is_chunk_0_and_the_next_is_chunk_1(self):
+        pb = STUBS["pb"]
+        points = sorted(blob(1200, 5), key=lambda p: -p[2])
+
+        def requests():
+            yield pb.ScanChunk(model=pb.ModelRef(name="py"))  # names the model only
+            for i in range(0, len(points), 400):
+                yield pb.ScanChunk(cloud=pb.PointCloud(xyz=packed(points[i:i + 400])))
+
+        decisions = list(self.stub.StreamClassify(requests(), timeout=120))
+        self.assertEqual([d.chunk_index for d in decisions], [0, 1, 2, 3])
+        self.assertEqual(decisions[0].winner_index, -1)
+
+    def test_classify_batch_answers_each_cloud_with_its_own_status(self):
+        import grpc
+
+        pb = STUBS["pb"]
+        good = pb.PointCloud(xyz=packed(blob(1500, 6)))
+        bad = pb.PointCloud(xyz=b"\0" * 13)
+        reply = self.stub.ClassifyBatch(pb.ClassifyBatchRequest(model=pb.ModelRef(name="py"), clouds=[good, bad, good]),
+                                        timeout=120)
+        self.assertEqual([r.code for r in reply.results], [0, grpc.StatusCode.INVALID_ARGUMENT.value[0], 0])
+        self.assertIn("cloud 1", reply.results[1].message)
+        alone = self.stub.Classify(pb.ClassifyRequest(model=pb.ModelRef(name="py"), cloud=good), timeout=60)
+        self.assertEqual(reply.results[0].response.winner, alone.winner)
+        self.assertEqual([s.score for s in reply.results[2].response.scores], [s.score for s in alone.scores])
+        self.assertEqual((reply.model.name, reply.model.version), ("py", 1))
+        with self.assertRaises(grpc.RpcError) as e:
+            self.stub.ClassifyBatch(pb.ClassifyBatchRequest(model=pb.ModelRef(name="absent"), clouds=[good]), timeout=10)
+        self.assertEqual(e.exception.code(), grpc.StatusCode.NOT_FOUND)
+
+    def test_model_info_has_the_parameters_used_and_the_feature_version(self):
+        pb = STUBS["pb"]
+        info = self.stub.GetModel(pb.GetModelRequest(model=pb.ModelRef(name="py")), timeout=10)
+        self.assertGreater(info.feature_version, 0)
+        self.assertTrue(info.parameters.HasField("bok_codebook_size"))  # a default, not asked for
+        self.assertEqual(info.parameters.bok_codebook_size, 60)
+        self.assertEqual(info.parameters.decision, pb.DECISION_KIND_NEAREST_REFERENCE)
+        self.assertGreater(info.max_extent_m, info.min_extent_m)
+
 
 def main():
     global ARGS

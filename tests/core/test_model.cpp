@@ -107,6 +107,7 @@ TEST(Classify, Errors) {
   auto wrong = classify(*m, t.test.front().cloud, MethodId::kBoK);
   ASSERT_FALSE(wrong.ok());
   EXPECT_NE(wrong.error().message.find("bok"), std::string::npos);
+  EXPECT_EQ(wrong.error().code, ErrorCode::kFailedPrecondition);  // the model's state, not the cloud
   Cloud line;  // no surface to judge: an error naming why, not a confident winner
   for (int i = 0; i < 3000; ++i) line.points.emplace_back(0.001f * i, 0.002f * i, 0.003f * i);
   auto collinear = classify(t.model, line);
@@ -128,6 +129,7 @@ TEST(Train, Errors) {
   auto one = train(data, small_params());
   ASSERT_FALSE(one.ok());
   EXPECT_NE(one.error().message.find("at least 2 categories"), std::string::npos);
+  EXPECT_EQ(one.error().code, ErrorCode::kFailedPrecondition);  // valid data, not enough of it (the proto's code)
   data = test::synthetic_views(2, 1, 3);
   data[1].category.clear();
   auto unnamed = train(data, small_params());

@@ -263,7 +263,7 @@ TEST_F(BadInput, EveryCaseGetsItsStatusAndTheServerKeepsServing) {
        },
        StatusCode::INVALID_ARGUMENT, "unknown method 99"},
       {"classify with a method the model lacks", [&] { return B::Classify(bok(B::Request(good, "zoo-esf"))); },
-       StatusCode::INVALID_ARGUMENT, "not trained for method 'bok'"},
+       StatusCode::FAILED_PRECONDITION, "not trained for method 'bok'"},
       {"classify with a deadline already passed",
        [&] { return B::Classify(B::Request(good), nullptr, std::chrono::milliseconds(-1)); },
        StatusCode::DEADLINE_EXCEEDED, ""},
@@ -286,7 +286,7 @@ TEST_F(BadInput, EveryCaseGetsItsStatusAndTheServerKeepsServing) {
            if (lc.category == "chair") msgs.push_back(CloudMessage(lc));
          return TrainStream(*server_->stub, msgs);
        },
-       StatusCode::INVALID_ARGUMENT, "2 categories"},
+       StatusCode::FAILED_PRECONDITION, "2 categories"},
       {"train empty category name", [&] { return TrainStream(*server_->stub, B::TrainWith("", {Noise(500, 0.3f)})); },
        StatusCode::INVALID_ARGUMENT, "empty category"},
       {"train a category of empty clouds",

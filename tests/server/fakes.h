@@ -135,7 +135,7 @@ inline Engine FakeEngine(FakeBehaviour* b) {
       objects.insert(d.object_id);
       points += d.cloud.points.size();
     }
-    if (cats.size() < 2) return invalid_argument("training needs at least 2 categories");
+    if (cats.size() < 2) return failed_precondition("training needs at least 2 categories");  // as core
     for (size_t i = 0; i < data.size(); ++i)
       if (progress) progress({"features", i + 1, data.size()});
     if (progress) progress({"codebooks", 1, 1});
@@ -160,9 +160,17 @@ inline Engine FakeEngine(FakeBehaviour* b) {
     if (cancel && cancel()) return cancelled("classification cancelled");
     MethodId m = method.value_or(model.default_method);
     if (std::find(model.methods.begin(), model.methods.end(), m) == model.methods.end())
-      return invalid_argument("the model was not trained for this method");
+      return failed_precondition("the model was not trained for this method");  // as core
     if (cloud.points.size() < 3) return invalid_argument("too few points");
-    return FakeScores(model, cloud.points.size(), m);
+    Classification c = FakeScores(model, cloud.points.size(), m);
+    if (cloud.points.size() >= 5000) c.warning = "the cloud is large";
+    return c;
+  };
+  e.classify_batch = [classify = e.classify](const Model& model, std::span<const Cloud> clouds,
+                                             std::optional<MethodId> method, const CancelFn& cancel) {
+    std::vector<Expected<Classification>> out;
+    for (const Cloud& c : clouds) out.push_back(classify(model, c, method, cancel));
+    return out;
   };
   e.serialize = [](const Model& m) { return FakeSerialize(m); };
   e.deserialize = [b](std::span<const uint8_t> bytes) {

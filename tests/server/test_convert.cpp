@@ -251,7 +251,27 @@ TEST(Config, DefaultsMatchTheDocumentation) {
   EXPECT_EQ(c->metrics_port, 9464);
   EXPECT_EQ(c->limits.max_points_per_cloud, 1'000'000u);
   EXPECT_FALSE(c->help);
-  EXPECT_GT(EffectiveThreads(*c), int(c->limits.max_concurrent_streams));
+  EXPECT_EQ(c->limits.max_batch_clouds, 256u);
+  EXPECT_EQ(c->request_threads, 0);
+  // Threads follow the CPUs the process may use, not the node's cores.
+  EXPECT_EQ(EffectiveThreads(*c, 2), int(c->limits.max_concurrent_streams) + 4);
+  EXPECT_EQ(EffectiveThreads(*c, 8), int(c->limits.max_concurrent_streams) + 16);
+  EXPECT_EQ(RequestThreads(*c, 2), 2);
+  EXPECT_EQ(CompletionQueues(64), 4);
+  EXPECT_EQ(CompletionQueues(1), 1);
+}
+
+TEST(Config, RequestThreadsFlagWinsOverTheUsableCpus) {
+  auto c = ParseConfig({"--request-threads=3", "--threads", "20", "--max-batch-clouds=8"}, Env({}));
+  ASSERT_TRUE(c.ok()) << c.error().message;
+  EXPECT_EQ(RequestThreads(*c, 64), 3);
+  EXPECT_EQ(EffectiveThreads(*c, 64), 20);
+  EXPECT_EQ(c->limits.max_batch_clouds, 8u);
+  EXPECT_FALSE(ParseConfig({"--request-threads=-1"}, Env({})).ok());
+  EXPECT_FALSE(ParseConfig({"--max-batch-clouds=0"}, Env({})).ok());
+  auto env = ParseConfig({}, Env({{"GLIMPSE_REQUEST_THREADS", "5"}}));
+  ASSERT_TRUE(env.ok());
+  EXPECT_EQ(env->request_threads, 5);
 }
 
 TEST(Config, EnvironmentThenFlagsWin) {

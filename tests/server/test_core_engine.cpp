@@ -249,6 +249,131 @@ TEST_F(CoreEngineTest, StreamClassifyOverGrpcGivesExactlyTheSessionsDecisions) {
   else EXPECT_EQ(last.keypoints(), 0u);
 }
 
+TEST_F(CoreEngineTest, ModelInfoCarriesTheParametersUsedAndTheFeatureVersion) {
+  const v1::ModelInfo& m = trained_.model();
+  EXPECT_EQ(m.feature_version(), kFeaturePipelineVersion);
+  const TrainParams defaults;
+  const v1::TrainParameters& p = m.parameters();
+  EXPECT_EQ(p.bok_codebook_size(), 6u);  // asked for
+  EXPECT_EQ(p.seed(), 11u);
+  ASSERT_TRUE(p.has_kgh_distance_bins());  // not asked for: the default that was used
+  EXPECT_EQ(p.kgh_distance_bins(), uint32_t(defaults.kgh_distance_bins));
+  EXPECT_EQ(p.neighbours(), uint32_t(defaults.decision.neighbours));
+  EXPECT_EQ(p.decision(), v1::DECISION_KIND_NEAREST_REFERENCE);
+  EXPECT_TRUE(p.has_support_radius_m());
+  EXPECT_EQ(p.support_radius_m(), 0.0);  // automatic, from each cloud's density
+  EXPECT_EQ(p.normalise_histograms(), defaults.normalise_histograms);
+  EXPECT_GT(m.min_extent_m(), 0.f);
+  EXPECT_GE(m.max_extent_m(), m.min_extent_m());
+  EXPECT_FLOAT_EQ(m.max_extent_m(), (*direct_)->stats.max_extent_m);
+  // What is stored is what GetModel and ListModels show.
+  grpc::ClientContext ctx;
+  v1::GetModelRequest get;
+  get.mutable_model()->set_name("shapes");
+  v1::ModelInfo info;
+  ASSERT_TRUE(harness_->stub->GetModel(&ctx, get, &info).ok());
+  EXPECT_EQ(info.parameters().kgh_distance_bins(), p.kgh_distance_bins());
+  EXPECT_EQ(info.feature_version(), kFeaturePipelineVersion);
+}
+
+TEST_F(CoreEngineTest, ClassifyBatchGivesExactlyClassifysAnswers) {
+  v1::ClassifyBatchRequest batch;
+  batch.mutable_model()->set_name("shapes");
+  std::vector<Cloud> clouds;
+  for (const char* category : {"box", "cylinder", "sphere", "box"}) clouds.push_back(Sample(category, 9, 4).cloud);
+  clouds.push_back(Cloud{{Vec3(0, 0, 0), Vec3(1, 0, 0)}, std::nullopt});  // too few points: fails alone
+  for (const Cloud& c : clouds) *batch.add_clouds() = CloudToProto(c);
+  grpc::ClientContext ctx;
+  v1::ClassifyBatchResponse resp;
+  ASSERT_TRUE(harness_->stub->ClassifyBatch(&ctx, batch, &resp).ok());
+  ASSERT_EQ(resp.results_size(), 5);
+  for (size_t i = 0; i + 1 < clouds.size(); ++i) {
+    auto direct = glimpse::classify(**direct_, clouds[i]);
+    ASSERT_TRUE(direct.ok());
+    const v1::ClassifyResult& r = resp.results(int(i));
+    ASSERT_EQ(r.code(), 0) << r.message();
+    ASSERT_EQ(r.response().scores_size(), int(direct->scores.size()));
+    for (size_t c = 0; c < direct->scores.size(); ++c) EXPECT_EQ(r.response().scores(int(c)).score(), direct->scores[c]);
+    EXPECT_EQ(r.response().winner_index(), direct->winner);
+  }
+  EXPECT_EQ(resp.results(4).code(), int(grpc::StatusCode::INVALID_ARGUMENT));
+  EXPECT_THAT(resp.results(4).message(), ::testing::HasSubstr("cloud 4"));
+}
+
+TEST_F(CoreEngineTest, ThreadsPerRequestDoNotChangeTheAnswer) {
+  const Cloud cloud = Sample("cylinder", 6, 2).cloud;
+  auto reference = glimpse::classify(**direct_, cloud);
+  ASSERT_TRUE(reference.ok());
+  for (int threads : {1, 2, 3}) {
+    const Engine e = CoreEngine(threads);
+    auto one = e.classify(**direct_, cloud, std::nullopt, {});
+    ASSERT_TRUE(one.ok());
+    EXPECT_EQ(one->scores, reference->scores) << threads;
+    const std::vector<Cloud> clouds(3, cloud);
+    auto many = e.classify_batch(**direct_, clouds, std::nullopt, {});
+    ASSERT_EQ(many.size(), 3u);
+    for (const auto& r : many) {
+      ASSERT_TRUE(r.ok());
+      EXPECT_EQ(r->scores, reference->scores) << threads;
+    }
+  }
+}
+
+TEST(CoreEngine, AModelOfAnotherFeatureVersionIsRefusedWithFailedPrecondition) {
+  testing::Harness h(Limits{}, [](ServiceOptions& o) { o.engine = CoreEngine(); });
+  TrainParams params;
+  params.methods = {MethodId::kUSH};
+  params.default_method = MethodId::kUSH;
+  params.partial_prefixes.clear();
+  auto model = glimpse::train(Dataset(), params);
+  ASSERT_TRUE(model.ok()) << model.error().message;
+  model->feature_version = kFeaturePipelineVersion - 1;  // stored before a numerics change
+  NewModel old{"old", "", model->methods, model->default_method, "{}", model->stats, glimpse::serialize(*model)};
+  old.feature_version = model->feature_version;
+  ASSERT_TRUE(h.store->Put(old).ok());
+  const Cloud cloud = Sample("box", 5, 1).cloud;
+  const std::string version_text = "feature pipeline version " + std::to_string(kFeaturePipelineVersion - 1);
+
+  grpc::ClientContext c1;
+  v1::ClassifyRequest req;
+  req.mutable_model()->set_name("old");
+  *req.mutable_cloud() = CloudToProto(cloud);
+  v1::ClassifyResponse resp;
+  grpc::Status s = h.stub->Classify(&c1, req, &resp);
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::FAILED_PRECONDITION);
+  EXPECT_THAT(s.error_message(), ::testing::HasSubstr(version_text));
+  EXPECT_THAT(s.error_message(), ::testing::HasSubstr("retrain"));
+
+  grpc::ClientContext c2;
+  v1::ClassifyBatchRequest batch;
+  batch.mutable_model()->set_name("old");
+  *batch.add_clouds() = CloudToProto(cloud);
+  *batch.add_clouds() = CloudToProto(cloud);
+  v1::ClassifyBatchResponse batch_resp;
+  s = h.stub->ClassifyBatch(&c2, batch, &batch_resp);
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::FAILED_PRECONDITION);
+  EXPECT_THAT(s.error_message(), ::testing::HasSubstr(version_text));
+
+  grpc::ClientContext c3;
+  auto stream = h.stub->StreamClassify(&c3);
+  v1::ScanChunk chunk;
+  chunk.mutable_model()->set_name("old");
+  *chunk.mutable_cloud() = CloudToProto(cloud);
+  stream->Write(chunk);
+  v1::Decision d;
+  EXPECT_FALSE(stream->Read(&d));
+  s = stream->Finish();
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::FAILED_PRECONDITION);
+  EXPECT_THAT(s.error_message(), ::testing::HasSubstr(version_text));
+
+  grpc::ClientContext c4;
+  v1::GetModelRequest get;
+  get.mutable_model()->set_name("old");
+  v1::ModelInfo info;
+  ASSERT_TRUE(h.stub->GetModel(&c4, get, &info).ok());
+  EXPECT_EQ(info.feature_version(), kFeaturePipelineVersion - 1);  // ModelInfo says which version it is
+}
+
 TEST_F(CoreEngineTest, CoreRejectionsComeBackAsInvalidArgument) {
   grpc::ClientContext ctx;
   v1::ClassifyRequest req;
@@ -278,7 +403,7 @@ TEST(CoreEngine, SingleCategoryTrainingIsRejected) {
   for (v1::TrainProgress p; stream->Read(&p);) {
   }
   grpc::Status s = stream->Finish();
-  EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::FAILED_PRECONDITION);  // as the proto documents
   EXPECT_THAT(s.error_message(), ::testing::HasSubstr("2 categories"));
   EXPECT_TRUE(h.store->List()->empty());
 }

@@ -130,7 +130,15 @@ TEST(Train, RejectsBadStreamsWithInvalidArgumentAndStoresNothing) {
   grpc::Status s = run({header, cloud, nan});
   EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
   EXPECT_THAT(s.error_message(), HasSubstr("cloud 1: xyz: point 4 is not finite"));
-  EXPECT_EQ(run({header, cloud, cloud}).error_code(), grpc::StatusCode::INVALID_ARGUMENT);  // one category (core)
+  EXPECT_TRUE(h.store->List()->empty());
+}
+
+TEST(Train, SingleCategoryIsFailedPreconditionAsTheProtoSays) {
+  Harness h;
+  v1::TrainProgress last;
+  grpc::Status s = h.Train("m", {"only"}, &last, 3);
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::FAILED_PRECONDITION);
+  EXPECT_THAT(s.error_message(), HasSubstr("2 categories"));
   EXPECT_TRUE(h.store->List()->empty());
 }
 
@@ -284,10 +292,30 @@ TEST(Classify, InvalidArgument) {
   req.set_method(static_cast<v1::Method>(99));
   EXPECT_EQ(code(req), grpc::StatusCode::INVALID_ARGUMENT);
   req = ClassifyReq("m", 10);
-  req.set_method(v1::METHOD_VFH);  // not trained: core says invalid argument
-  EXPECT_EQ(code(req), grpc::StatusCode::INVALID_ARGUMENT);
   EXPECT_EQ(code(ClassifyReq("", 10)), grpc::StatusCode::INVALID_ARGUMENT);
   EXPECT_EQ(code(ClassifyReq("m", 2)), grpc::StatusCode::INVALID_ARGUMENT);  // core: too few points
+}
+
+TEST(Classify, AMethodTheModelLacksIsFailedPrecondition) {
+  Harness h;
+  v1::TrainProgress t;
+  ASSERT_TRUE(h.Train("m", {"a", "b"}, &t).ok());  // the fake trains bok and fusion
+  auto req = ClassifyReq("m", 10);
+  req.set_method(v1::METHOD_VFH);
+  grpc::Status s = Classify(h, req);
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::FAILED_PRECONDITION);
+  EXPECT_THAT(s.error_message(), HasSubstr("not trained"));
+}
+
+TEST(Classify, TheCoreWarningReachesTheResponse) {
+  Harness h;
+  v1::TrainProgress t;
+  ASSERT_TRUE(h.Train("m", {"a", "b"}, &t).ok());
+  v1::ClassifyResponse r;
+  ASSERT_TRUE(Classify(h, ClassifyReq("m", 10), &r).ok());
+  EXPECT_EQ(r.warning(), "");
+  ASSERT_TRUE(Classify(h, ClassifyReq("m", 5000), &r).ok());  // the fake warns from 5000 points on
+  EXPECT_EQ(r.warning(), "the cloud is large");
 }
 
 TEST(Classify, NotFound) {
@@ -381,8 +409,8 @@ TEST(StreamClassify, AnswersEveryChunkWithTheEvolvingDecision) {
   EXPECT_EQ(decisions[0].winner(), "");
   EXPECT_EQ(decisions[0].model().version(), 1u);
   EXPECT_EQ(decisions[0].method(), v1::METHOD_FUSION);
+  for (size_t i = 0; i < decisions.size(); ++i) EXPECT_EQ(decisions[i].chunk_index(), i);  // the message answered
   for (size_t i = 1; i < decisions.size(); ++i) {
-    EXPECT_EQ(decisions[i].chunk_index(), i - 1);
     EXPECT_EQ(decisions[i].scores_size(), 2);
     EXPECT_EQ(decisions[i].model().name(), "m");
   }

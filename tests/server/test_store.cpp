@@ -316,11 +316,27 @@ TEST(Store, MigratesAnOlderSchema) {
     auto store = OpenOk(path);
     ASSERT_TRUE(store->Put(Sample("m")).ok());
   }
-  RawExec(path, "DROP TRIGGER versions_immutable; PRAGMA user_version = 1;");  // as a schema-1 server left it
+  // As a schema-1 server left it: no trigger (2), no feature version or extents (3).
+  RawExec(path,
+          "DROP TRIGGER versions_immutable; ALTER TABLE versions DROP COLUMN feature_version;"
+          " ALTER TABLE training_stats DROP COLUMN min_extent_m; ALTER TABLE training_stats DROP COLUMN max_extent_m;"
+          " PRAGMA user_version = 1;");
   auto store = OpenOk(path);
   ASSERT_TRUE(store);
   EXPECT_EQ(store->SchemaVersion(), ModelStore::LatestSchemaVersion());
   EXPECT_EQ(store->Get("m", 1)->description, "model a");  // data kept
+  EXPECT_EQ(store->Get("m", 1)->feature_version, 0u);     // unknown for a version stored before it was recorded
+  EXPECT_EQ(store->Get("m", 1)->stats.max_extent_m, 0.f);
+  NewModel next = Sample("m");
+  next.feature_version = 3;
+  next.stats.min_extent_m = 0.25f;
+  next.stats.max_extent_m = 1.75f;
+  ASSERT_TRUE(store->Put(next).ok());
+  auto got = store->Get("m", 2);
+  ASSERT_TRUE(got.ok());
+  EXPECT_EQ(got->feature_version, 3u);
+  EXPECT_EQ(got->stats.min_extent_m, 0.25f);
+  EXPECT_EQ(got->stats.max_extent_m, 1.75f);
   sqlite3* db = nullptr;
   ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
   EXPECT_NE(sqlite3_exec(db, "UPDATE versions SET description = 'x'", nullptr, nullptr, nullptr), SQLITE_OK);
