@@ -1,4 +1,11 @@
-// glimpse classify: one Classify call per file; a score table (or JSON lines) on stdout.
+// glimpse classify: every file read (a cloud as it is, a mesh as one single view, as train makes
+// them), sent in ClassifyBatch calls (one Classify for a single file, or for a server without
+// ClassifyBatch), and one answer printed per file: a score table (errors and warnings on stderr) or a
+// JSON object per file, errors included, in the same shape whether the file was missing or the server
+// refused it.
+#include <algorithm>
+
+#include "client/batch_client.h"
 #include "client/cloud_convert.h"
 #include "client/commands.h"
 #include "client/parse.h"
@@ -7,43 +14,74 @@
 namespace glimpse::client {
 namespace {
 
-constexpr double kTimeoutS = 60;
+constexpr double kTimeoutS = 60;  // per file
 
-// Errors about one cloud; any other (unknown model, server down, ...) would repeat for every file.
-bool PerFile(grpc::StatusCode code) {
-  return code == grpc::StatusCode::INVALID_ARGUMENT || code == grpc::StatusCode::RESOURCE_EXHAUSTED;
+struct FileResult {
+  std::string file;
+  std::optional<Cloud> cloud;        // what is sent, once read
+  std::optional<v1::ClassifyResponse> response;
+  grpc::StatusCode code = grpc::StatusCode::OK;
+  std::string message;
+
+  void Fail(grpc::StatusCode c, std::string m) {
+    code = c;
+    // Core's messages start with the path; the file is named once.
+    if (m.rfind(file + ": ", 0) == 0) m = m.substr(file.size() + 2);
+    message = std::move(m);
+  }
+};
+
+Expected<Cloud> ReadInput(const std::string& file, const ClassifyOptions& o) {
+  auto loaded = LoadFile(file);
+  if (!loaded) return loaded.error();
+  if (loaded->is_mesh)
+    return MeshFileView(file, o.placement, o.protocol, o.whole ? std::nullopt : std::optional<int>(o.view));
+  RemoveNonFinite(loaded->cloud);
+  return std::move(loaded->cloud);
 }
 
 }  // namespace
 
 int RunClassify(const ConnectionOptions& conn, const ClassifyOptions& o) {
-  v1::ClassifyRequest request;
-  if (!o.model.empty()) *request.mutable_model() = *ParseModelRef(o.model);
-  if (!o.method.empty()) request.set_method(*ParseMethod(o.method));
-  auto stub = ConnectGlimpse(conn, "classify");
-  if (!stub) return kExitError;
+  std::vector<FileResult> results(o.files.size());
+  for (size_t i = 0; i < o.files.size(); ++i) {
+    results[i].file = o.files[i];
+    auto cloud = ReadInput(o.files[i], o);
+    if (cloud) results[i].cloud = std::move(*cloud);
+    else results[i].Fail(StatusCodeOf(cloud.error().code), cloud.error().message);
+  }
+  std::vector<Cloud> clouds;
+  std::vector<FileResult*> sent;
+  for (FileResult& r : results)
+    if (r.cloud) {
+      clouds.push_back(std::move(*r.cloud));
+      sent.push_back(&r);
+    }
+  if (!clouds.empty()) {
+    auto stub = ConnectGlimpse(conn, "classify");
+    if (!stub) return kExitError;
+    BatchClassifier classifier(conn, *stub, *ParseModelRef(o.model),
+                               o.method.empty() ? v1::METHOD_UNSPECIFIED : *ParseMethod(o.method), kTimeoutS);
+    BatchAnswers answers = classifier.Classify(clouds);
+    for (size_t i = 0; i < sent.size(); ++i) {
+      if (answers.answers[i].response) sent[i]->response = std::move(answers.answers[i].response);
+      else sent[i]->Fail(answers.answers[i].code, answers.answers[i].message);
+    }
+  }
 
-  std::vector<ClassifyRow> rows;
   int exit_code = kExitOk;
-  for (const std::string& file : o.files) {
-    const std::string what = "classify " + file;
-    auto cloud = CloudToClassify(file, o.views);
-    if (!cloud) {
-      PrintError("classify", cloud.error().message);  // core messages start with the path
+  std::vector<ClassifyRow> rows;
+  for (FileResult& r : results) {
+    if (!r.response) {
       exit_code = kExitError;
+      const char* code = StatusCodeName(r.code);
+      if (o.json) PrintOut(ClassifyErrorJson(r.file, code, r.message) + "\n");
+      else PrintError("classify " + r.file, std::string(code) + ": " + r.message);
       continue;
     }
-    ToProto(*cloud, request.mutable_cloud());
-    grpc::ClientContext context;
-    PrepareContext(context, conn, kTimeoutS);
-    ClassifyRow row{file, {}};
-    if (grpc::Status s = stub->Classify(&context, request, &row.response); !s.ok()) {
-      PrintError(what, FormatStatus(s));
-      exit_code = kExitError;
-      if (PerFile(s.error_code())) continue;
-      break;
-    }
+    ClassifyRow row{r.file, std::move(*r.response)};
     if (o.json) PrintOut(ClassifyJson(row) + "\n");
+    else if (!row.response.warning().empty()) PrintError("classify " + r.file, "warning: " + row.response.warning());
     rows.push_back(std::move(row));
   }
   if (!o.json && !rows.empty()) {

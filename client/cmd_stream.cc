@@ -1,5 +1,6 @@
-// glimpse stream: a simulated scanner. One single view of an object is revealed chunk by chunk over
-// StreamClassify at a fixed rate, and the server's evolving decision is shown live.
+// glimpse stream: a simulated scanner. One single view of an object (a cloud file as it is, or a
+// view of a mesh or zoo shape) is revealed chunk by chunk over StreamClassify at a fixed rate, and the
+// server's evolving decision is shown live.
 #include <chrono>
 #include <condition_variable>
 #include <mutex>
@@ -16,33 +17,6 @@
 
 namespace glimpse::client {
 namespace {
-
-// The single view to reveal: a zoo shape or a mesh seen from one paper viewpoint (hidden point
-// removal); a cloud file that already carries its sensor is a view as it is.
-Expected<Cloud> TakeView(const StreamOptions& o) {
-  Cloud full;
-  if (!o.zoo_category.empty()) {
-    auto mesh = make_zoo_shape(o.zoo_category, o.seed);
-    if (!mesh) return mesh.error();
-    full = mesh_vertices(*mesh);
-  } else {
-    auto file = LoadFile(o.file);
-    if (!file) return file.error();
-    if (!file->is_mesh && file->cloud.sensor) {
-      RemoveNonFinite(file->cloud);
-      return std::move(file->cloud);
-    }
-    if (file->is_mesh) {
-      auto sampled = SampleMesh(file->mesh, o.views.mesh_points, o.views.seed);
-      if (!sampled) return Error{sampled.error().code, o.file + ": " + sampled.error().message};
-      full = std::move(*sampled);
-    } else {
-      full = std::move(file->cloud);
-    }
-  }
-  RemoveNonFinite(full);
-  return SingleView(full, o.viewpoint, o.views.hpr_radius_factor);
-}
 
 // Prints decisions: a panel redrawn in place on a terminal, else one line (or JSON object) each.
 class DecisionView {
@@ -71,6 +45,28 @@ class DecisionView {
 
 }  // namespace
 
+Expected<Cloud> StreamView(const StreamOptions& o) {
+  if (!o.zoo_category.empty()) {
+    auto mesh = make_zoo_shape(o.zoo_category, o.seed);
+    if (!mesh) return mesh.error();
+    Cloud full = mesh_vertices(*mesh);
+    RemoveNonFinite(full);
+    return SingleView(full, o.viewpoint.value_or(0), o.protocol.hpr_radius_factor);
+  }
+  auto file = LoadFile(o.file);
+  if (!file) return file.error();
+  if (file->is_mesh) {
+    ProtocolOptions protocol = o.protocol;
+    protocol.seed = o.seed;
+    return MeshFileView(o.file, o.placement, protocol, o.viewpoint.value_or(0));
+  }
+  RemoveNonFinite(file->cloud);
+  // A cloud file is the scan: it streams as it is, with its sensor if it has one (wherever that is),
+  // and is cut into a new view only when asked.
+  if (!o.viewpoint) return std::move(file->cloud);
+  return SingleView(file->cloud, *o.viewpoint, o.protocol.hpr_radius_factor);
+}
+
 int RunStream(const ConnectionOptions& conn, const StreamOptions& o) {
   const std::string what = "stream " + (o.zoo_category.empty() ? o.file : "--zoo " + o.zoo_category);
   auto order = ParseRevealOrder(o.order);
@@ -78,7 +74,7 @@ int RunStream(const ConnectionOptions& conn, const StreamOptions& o) {
     PrintError(what, order.error().message);
     return kExitUsage;
   }
-  auto view = TakeView(o);
+  auto view = StreamView(o);
   if (!view) {
     PrintError(what, view.error().message);
     return kExitError;

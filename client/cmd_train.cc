@@ -7,10 +7,10 @@
 
 #include "client/cloud_convert.h"
 #include "client/commands.h"
+#include "client/objects.h"
 #include "client/parse.h"
 #include "client/render.h"
-#include "glimpse/views.h"
-#include "glimpse/zoo.h"
+#include "glimpse/evaluation.h"
 
 namespace glimpse::client {
 namespace {
@@ -21,11 +21,22 @@ constexpr double kTimeoutS = 3600;  // training a large set takes a while
 // when emit returns false.
 using Emit = std::function<bool(const std::string&, const std::string&, const Cloud&)>;
 
-Status EmitDir(const TrainOptions& o, const Emit& emit) {
-  auto files = ListTrainDir(o.dir);
-  if (!files) return files.error();
-  for (const TrainFile& f : *files) {
-    auto clouds = TrainingClouds(f.path, o.views);
+// Emits the non-empty views (a view of nothing teaches nothing, and core refuses it).
+bool EmitViews(const std::string& category, const std::string& object_id, const ObjectViews& views, const Emit& emit) {
+  for (const Cloud& c : views.views)
+    if (!c.points.empty() && !emit(category, object_id, c)) return false;
+  return true;
+}
+
+// Every mesh of the folder as glimpse-lab loads and views it, then the cloud files as they are.
+Status EmitDir(const TrainOptions& o, const Folder& folder, const Emit& emit) {
+  for (const DatasetObject& object : folder.dataset.objects) {
+    auto views = ProtocolViews(object, folder.sizing, o.protocol);
+    if (!views) return views.error();
+    if (!EmitViews(object.category, ObjectKey(object), *views, emit)) return {};
+  }
+  for (const TrainFile& f : folder.clouds) {
+    auto clouds = TrainingClouds(f.path, ViewOptions{});
     if (!clouds) return clouds.error();
     for (const Cloud& c : *clouds)
       if (!emit(f.category, f.object_id, c)) return {};
@@ -33,13 +44,11 @@ Status EmitDir(const TrainOptions& o, const Emit& emit) {
   return {};
 }
 
+// The procedural zoo's objects (upright, real-life size), viewed as glimpse-lab views them.
 Status EmitZoo(const TrainOptions& o, const Emit& emit) {
-  for (const LabelledMesh& m : make_zoo(o.per_category, o.seed)) {
-    Cloud full = mesh_vertices(m.mesh);  // evenly tessellated: vertices are a usable cloud
-    RemoveNonFinite(full);
-    const std::string object_id = m.category + "/zoo-" + std::to_string(m.seed);
-    for (const Cloud& c : SingleViews(full, o.views.views, o.views.hpr_radius_factor))
-      if (!emit(m.category, object_id, c)) return {};
+  for (const EvalObject& object : zoo_objects(o.per_category, o.protocol.seed)) {
+    const std::string key = object.category + "/" + object.id;
+    if (!EmitViews(object.category, key, ViewsOfMesh(object.mesh, key, object.any_pose, o.protocol), emit)) return {};
   }
   return {};
 }
@@ -81,6 +90,26 @@ int RunTrain(const ConnectionOptions& conn, const TrainOptions& o) {
     PrintError(what, methods.error().message);
     return kExitUsage;
   }
+  // The folder's listing and manifest first: a bad manifest row fails before anything is sent.
+  Folder folder;
+  if (!o.zoo) {
+    auto scanned = ScanFolder(o.dir, o.placement);
+    if (!scanned) {
+      PrintError(what, scanned.error().message);
+      return kExitError;
+    }
+    folder = std::move(*scanned);
+  } else {
+    folder.applied = {"the procedural zoo: " + std::to_string(o.per_category) + " objects per category, upright, real-life size"};
+  }
+  if (!o.quiet) {
+    folder.applied.push_back(o.protocol.views ? std::to_string(o.protocol.views) +
+                                                    " views per mesh (hidden point removal from the paper's viewpoints), " +
+                                                    std::to_string(o.protocol.points) + " surface samples, seed " +
+                                                    std::to_string(o.protocol.seed)
+                                              : "whole sampled clouds, no views");
+    for (const std::string& line : folder.applied) std::fprintf(stderr, "train: %s\n", line.c_str());
+  }
   auto stub = ConnectGlimpse(conn, what);
   if (!stub) return kExitError;
 
@@ -117,7 +146,7 @@ int RunTrain(const ConnectionOptions& conn, const TrainOptions& o) {
     open = stream->Write(request);
     return open;
   };
-  const Status loaded = open ? (o.zoo ? EmitZoo(o, emit) : EmitDir(o, emit)) : Status{};
+  const Status loaded = open ? (o.zoo ? EmitZoo(o, emit) : EmitDir(o, folder, emit)) : Status{};
   if (!loaded.ok()) context.TryCancel();  // a failed call stores nothing
   if (open && loaded.ok()) stream->WritesDone();
   reader.join();

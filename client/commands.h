@@ -10,6 +10,7 @@
 
 #include "client/connection.h"
 #include "client/inputs.h"
+#include "client/objects.h"
 
 namespace glimpse::client {
 
@@ -26,11 +27,11 @@ struct TrainOptions {
   std::string dir;             // DIR/<category>/<files>; empty with zoo
   bool zoo = false;            // the core's procedural shape zoo instead of files
   size_t per_category = 4;     // zoo objects per category
-  uint64_t seed = 1;           // zoo shapes, surface sampling
   std::string name;
   std::string methods;         // "bok,bog"; empty: the server's default set
   std::string description;
-  ViewOptions views;
+  Placement placement;         // --up, --unit, --height (override the folder's manifest)
+  ProtocolOptions protocol;    // views, samples, seed (glimpse-lab's defaults)
   std::optional<uint64_t> train_seed;  // TrainParameters.seed
   bool json = false;           // print the stored ModelInfo as JSON instead of a summary
   bool quiet = false;          // no progress
@@ -41,25 +42,48 @@ struct ClassifyOptions {
   std::vector<std::string> files;
   std::string model;   // "NAME[:VERSION]"
   std::string method;  // empty: the model's default
-  ViewOptions views;   // mesh sampling
-  bool json = false;
+  Placement placement;       // meshes: --up, --unit, --height
+  ProtocolOptions protocol;  // meshes: samples, seed
+  int view = 0;              // meshes: the paper's viewpoint (0-5) of the single view sent
+  bool whole = false;        // meshes: the whole sampled cloud instead of a view
+  bool json = false;         // one JSON object per file, errors included
 };
 int RunClassify(const ConnectionOptions& conn, const ClassifyOptions& options);
 
 struct StreamOptions {
   std::string file;           // or zoo_category
   std::string zoo_category;
-  uint64_t seed = 1;
+  uint64_t seed = 42;         // zoo shape, random order, mesh samples
   std::string model;
   std::string method;
   size_t chunks = 20;         // used when chunk_points == 0
   size_t chunk_points = 0;
   std::string order = "top-down";
   double rate_hz = 5.0;       // chunks per second; 0: as fast as the server answers
-  int viewpoint = 0;          // which of the paper's six viewpoints takes the single view
-  ViewOptions views;          // mesh sampling, HPR radius
+  // Which of the paper's six viewpoints takes the single view: meshes and zoo shapes always need one
+  // (default 0); a cloud file streams as it is unless a view is asked for.
+  std::optional<int> viewpoint;
+  Placement placement;        // meshes: --up, --unit, --height
+  ProtocolOptions protocol;   // meshes: samples
   bool json = false;
 };
 int RunStream(const ConnectionOptions& conn, const StreamOptions& options);
+
+// The single view a stream reveals (see StreamOptions::viewpoint); errors name the file.
+Expected<Cloud> StreamView(const StreamOptions& options);
+
+struct EvaluateOptions {
+  std::string dir;             // DIR/<category>/<meshes>, labelled by folder
+  std::string model;           // "NAME[:VERSION]"
+  std::string method;          // empty: the model's default
+  std::string stages = "full,10,20";  // full and N (% of the object's full cloud, top-down)
+  Placement placement;
+  ProtocolOptions protocol;
+  size_t max_per_category = 0;  // 0: every object
+  size_t batch_clouds = 48;    // clouds per ClassifyBatch call
+  bool json = false;
+  bool quiet = false;
+};
+int RunEvaluate(const ConnectionOptions& conn, const EvaluateOptions& options);
 
 }  // namespace glimpse::client

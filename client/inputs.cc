@@ -26,13 +26,13 @@ bool Hidden(const fs::path& p) { return !p.filename().empty() && p.filename().st
 bool IsInputFile(const std::string& path) {
   const std::string ext = Extension(path);
   return ext == ".pcd" || ext == ".ply" || ext == ".xyz" || ext == ".txt" || ext == ".csv" || ext == ".off" ||
-         ext == ".obj";
+         ext == ".obj" || ext == ".stl";
 }
 
 Expected<LoadedFile> LoadFile(const std::string& path) {
   const std::string ext = Extension(path);
   LoadedFile out;
-  if (ext == ".off" || ext == ".obj" || ext == ".ply") {
+  if (ext == ".off" || ext == ".obj" || ext == ".ply" || ext == ".stl") {
     Expected<Mesh> mesh = read_mesh(path);
     if (!mesh && ext != ".ply") return mesh.error();
     if (mesh && !mesh->faces.empty()) {
@@ -122,7 +122,7 @@ Expected<std::vector<TrainFile>> ListTrainDir(const std::string& dir) {
     for (const fs::path& p : paths) files.push_back({name, name + "/" + p.stem().string(), p.string()});
   }
   if (files.empty())
-    return invalid_argument(dir + ": no category folders with .pcd .ply .xyz .off .obj files");
+    return invalid_argument(dir + ": no category folders with .pcd .ply .xyz .off .obj .stl files");
   return files;
 }
 

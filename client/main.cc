@@ -7,8 +7,10 @@
 #include <functional>
 
 #include "client/commands.h"
+#include "client/evaluate.h"
 #include "client/parse.h"
 #include "client/scan.h"
+#include "glimpse/views.h"
 #include "glimpse/zoo.h"
 
 using namespace glimpse::client;
@@ -52,9 +54,30 @@ void AddConnectionOptions(CLI::App& app, ConnectionOptions& conn) {
       ->envname("GLIMPSE_TOKEN")->group("Connection");
 }
 
-void AddMeshOptions(CLI::App& cmd, ViewOptions& views) {
-  cmd.add_option("--mesh-points", views.mesh_points, "points sampled on a mesh's surface")
-      ->capture_default_str()->check(CLI::Range(size_t{100}, size_t{5'000'000}));
+// How a mesh without a manifest (or against it) is stood up and sized.
+void AddPlacementOptions(CLI::App& cmd, Placement& placement) {
+  cmd.add_option_function<std::string>("--up", [&placement](const std::string& t) { placement.up = *glimpse::parse_up(t); },
+                                       "the mesh axis that points up: +z, -y, x, ... or \"x y z\" (overrides up_axis.csv)")
+      ->check(Checked(glimpse::parse_up, "AXIS"))->group("Meshes");
+  auto* unit = cmd.add_option_function<std::string>(
+                      "--unit", [&placement](const std::string& t) { placement.sizing = *ParseUnit(t); },
+                      "the meshes' unit: m, cm, mm, in (overrides sizes.csv)")
+                   ->check(Checked(ParseUnit, "m|cm|mm|in"))->group("Meshes");
+  cmd.add_option_function<float>("--height",
+                                 [&placement](const float& m) { placement.sizing = glimpse::Sizing{glimpse::Sizing::kHeight, m}; },
+                                 "scale every mesh to this height in metres (overrides sizes.csv)")
+      ->check(CLI::PositiveNumber)->excludes(unit)->group("Meshes");
+}
+
+// Surface samples and their seed; train and evaluate also choose the number of views.
+void AddProtocolOptions(CLI::App& cmd, ProtocolOptions& p, bool views) {
+  cmd.add_option("--mesh-points", p.points, "points sampled on a mesh's surface (0: its vertices), as glimpse-lab's --points")
+      ->capture_default_str()->check(CLI::Range(size_t{0}, size_t{5'000'000}))->group("Meshes");
+  cmd.add_option("--seed", p.seed, "seed of sizes, samples and poses (glimpse-lab's --seed), and of zoo shapes")
+      ->capture_default_str()->group("Meshes");
+  if (views)
+    cmd.add_option("--views", p.views, "single views (hidden point removal) per mesh or zoo shape, 0 = the whole cloud")
+        ->capture_default_str()->check(CLI::Range(size_t{0}, size_t{6}))->group("Meshes");
 }
 
 int Main(int argc, char** argv) {
@@ -100,24 +123,25 @@ int Main(int argc, char** argv) {
   set_default->callback([&] { run = [&] { return RunModelsSetDefault(conn, default_ref); }; });
 
   // train
-  auto* train = app.add_subcommand("train", "train a new model version from DIR/<category>/<files> or the shape zoo");
+  auto* train = app.add_subcommand("train", "train a new model version from DIR/<category>/<files> or the shape zoo.\n"
+                                            "Meshes are read as glimpse-lab reads them: up axes and real-life sizes from\n"
+                                            "DIR/up_axis.csv and DIR/sizes.csv; without them +z up and metres (--up, --unit,\n"
+                                            "--height); each cut into the protocol's single views. Cloud files go as they are.");
   TrainOptions t;
-  auto* dir = train->add_option("DIR", t.dir, "folder of category folders of .pcd .ply .xyz .off .obj files")
+  auto* dir = train->add_option("DIR", t.dir, "folder of category folders of .off .obj .ply .stl meshes or .pcd .xyz clouds")
                   ->check(CLI::ExistingDirectory);
   auto* zoo = train->add_flag("--zoo", t.zoo, "train on the core's procedural shape zoo (" +
                                                    std::to_string(glimpse::zoo_categories().size()) + " categories)");
   dir->excludes(zoo);
   train->add_option("--per-category", t.per_category, "zoo objects per category")->capture_default_str()
       ->check(CLI::Range(size_t{1}, size_t{10000}));
-  train->add_option("--seed", t.seed, "zoo shapes and surface sampling seed")->capture_default_str();
   train->add_option("--name", t.name, "model name ([A-Za-z0-9._-], 1-128)")->required()
       ->check(Checked([](const std::string& s) { return ParseModelRef(s + ":latest"); }, "NAME"));
   train->add_option("--methods", t.methods, "comma-separated: bok,bog,kgh,vfh,esf,ush,size,fusion (default: the server's)")
       ->check(kMethodList);
   train->add_option("--description", t.description, "free text stored with the model");
-  train->add_option("--views", t.views.views, "single views (HPR) per mesh or zoo shape, 0 = the whole cloud")
-      ->capture_default_str()->check(CLI::Range(0, 6));
-  AddMeshOptions(*train, t.views);
+  AddProtocolOptions(*train, t.protocol, true);
+  AddPlacementOptions(*train, t.placement);
   train->add_option_function<uint64_t>("--train-seed", [&t](const uint64_t& s) { t.train_seed = s; },
                                        "k-means and sampling seed of training (default: the server's)");
   train->add_flag("--json", t.json, "print the stored model as JSON");
@@ -127,11 +151,15 @@ int Main(int argc, char** argv) {
   // classify
   auto* classify = app.add_subcommand("classify", "classify point-cloud or mesh files");
   ClassifyOptions c;
-  classify->add_option("FILE", c.files, "clouds (.pcd .ply .xyz) or meshes (.off .obj .ply)")->required();
+  classify->add_option("FILE", c.files, "clouds (.pcd .ply .xyz, as they are) or meshes (.off .obj .ply .stl, one view each)")->required();
   classify->add_option("--model", c.model, "NAME[:VERSION]")->envname("GLIMPSE_MODEL")->required()->check(kModelRef);
   classify->add_option("--method", c.method, "bok|bog|kgh|vfh|esf|ush|fusion (default: the model's)")->check(kMethod);
-  classify->add_flag("--json", c.json, "one JSON object per file instead of a table");
-  AddMeshOptions(*classify, c.views);
+  classify->add_flag("--json", c.json, "one JSON object per file instead of a table, errors included");
+  auto* view = classify->add_option("--view", c.view, "meshes: which of the paper's 6 viewpoints (azimuth 60*N deg) sees the object")
+                   ->capture_default_str()->check(CLI::Range(0, 5))->group("Meshes");
+  classify->add_flag("--whole", c.whole, "meshes: the whole sampled cloud instead of a single view")->excludes(view)->group("Meshes");
+  AddProtocolOptions(*classify, c.protocol, false);
+  AddPlacementOptions(*classify, c.placement);
   classify->callback([&] { run = [&] { return RunClassify(conn, c); }; });
 
   // stream
@@ -141,7 +169,7 @@ int Main(int argc, char** argv) {
   auto* zoo_shape = stream->add_option("--zoo", s.zoo_category, "a zoo shape of this category instead of a file")
                         ->check(CLI::IsMember(glimpse::zoo_categories()));
   file->excludes(zoo_shape);
-  stream->add_option("--seed", s.seed, "zoo shape and random order seed")->capture_default_str();
+  stream->add_option("--seed", s.seed, "zoo shape, random order and mesh sampling seed")->capture_default_str();
   stream->add_option("--model", s.model, "NAME[:VERSION]")->envname("GLIMPSE_MODEL")->required()->check(kModelRef);
   stream->add_option("--method", s.method, "bok|bog|kgh|vfh|esf|ush|fusion (default: the model's)")->check(kMethod);
   auto* chunks = stream->add_option("--chunks", s.chunks, "number of chunks")->capture_default_str()
@@ -152,11 +180,36 @@ int Main(int argc, char** argv) {
       ->capture_default_str()->check(kOrder);
   stream->add_option("--rate", s.rate_hz, "chunks per second, 0 = as fast as possible")->capture_default_str()
       ->check(CLI::NonNegativeNumber);
-  stream->add_option("--view", s.viewpoint, "which of the paper's 6 viewpoints (azimuth 60*N deg) sees the object")
-      ->capture_default_str()->check(CLI::Range(0, 5));
+  stream->add_option_function<int>("--view", [&s](const int& v) { s.viewpoint = v; },
+                                   "which of the paper's 6 viewpoints (azimuth 60*N deg) sees the object: meshes and zoo "
+                                   "shapes [0]; a cloud file streams as it is unless given")
+      ->check(CLI::Range(0, 5));
   stream->add_flag("--json", s.json, "one JSON object per decision");
-  AddMeshOptions(*stream, s.views);
+  stream->add_option("--mesh-points", s.protocol.points, "points sampled on a mesh's surface")
+      ->capture_default_str()->check(CLI::Range(size_t{0}, size_t{5'000'000}))->group("Meshes");
+  AddPlacementOptions(*stream, s.placement);
   stream->callback([&] { run = [&] { return RunStream(conn, s); }; });
+
+  // evaluate
+  auto* evaluate = app.add_subcommand("evaluate", "classify the protocol's views of every mesh of a labelled folder\n"
+                                                  "DIR/<category>/<meshes> (made exactly as glimpse-lab makes them) and report\n"
+                                                  "accuracy, balanced accuracy, the confusion table and the misclassified objects");
+  EvaluateOptions e;
+  evaluate->add_option("DIR", e.dir, "folder of category folders of meshes (its manifest applies as in train)")
+      ->required()->check(CLI::ExistingDirectory);
+  evaluate->add_option("--model", e.model, "NAME[:VERSION]")->envname("GLIMPSE_MODEL")->required()->check(kModelRef);
+  evaluate->add_option("--method", e.method, "bok|bog|kgh|vfh|esf|ush|size|fusion (default: the model's)")->check(kMethod);
+  evaluate->add_option("--stages", e.stages, "comma-separated: full, N (the top N % of the object's cloud)")
+      ->capture_default_str()->check(Checked(ParseStages, "full,10,20"));
+  evaluate->add_option("--max-per-category", e.max_per_category, "at most N objects per category (0: all)")
+      ->capture_default_str();
+  evaluate->add_option("--batch", e.batch_clouds, "clouds per ClassifyBatch call")->capture_default_str()
+      ->check(CLI::Range(size_t{1}, size_t{256}));
+  evaluate->add_flag("--json", e.json, "the report as one JSON object");
+  evaluate->add_flag("-q,--quiet", e.quiet, "no progress on stderr");
+  AddProtocolOptions(*evaluate, e.protocol, true);
+  AddPlacementOptions(*evaluate, e.placement);
+  evaluate->callback([&] { run = [&] { return RunEvaluate(conn, e); }; });
 
   try {
     app.parse(argc, argv);

@@ -29,5 +29,8 @@ std::vector<std::string> MethodNames();  // the names ParseMethod accepts, in en
 
 // "NOT_FOUND", "DEADLINE_EXCEEDED", ... as in grpc/status.h and every other gRPC client.
 const char* StatusCodeName(grpc::StatusCode code);
+// The gRPC code a core error would have over the wire (a missing file is NOT_FOUND, ...), so a local
+// failure reads like a server's.
+grpc::StatusCode StatusCodeOf(ErrorCode code);
 
 }  // namespace glimpse::client

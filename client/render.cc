@@ -179,7 +179,12 @@ std::string ClassifyJson(const ClassifyRow& row) {
          ",\"version\":" + std::to_string(r.model().version()) + ",\"method\":" + JsonString(MethodName(r.method())) +
          ",\"winner\":" + JsonString(r.winner()) + ",\"scores\":" + JsonScores(r.scores()) +
          ",\"points\":" + std::to_string(r.points()) + ",\"keypoints\":" + std::to_string(r.keypoints()) +
-         ",\"total_ms\":" + JsonNumber(r.timings().total_ms()) + "}";
+         ",\"total_ms\":" + JsonNumber(r.timings().total_ms()) + ",\"warning\":" + JsonString(r.warning()) + "}";
+}
+
+std::string ClassifyErrorJson(std::string_view file, std::string_view code, std::string_view message) {
+  return "{\"file\":" + JsonString(file) + ",\"error\":{\"code\":" + JsonString(code) +
+         ",\"message\":" + JsonString(message) + "}}";
 }
 
 // ---- stream ----

@@ -35,8 +35,11 @@ struct ClassifyRow {
 // One row per file: FILE WINNER <category...> POINTS KEYPOINTS MS, categories in the model's order.
 std::string ClassifyTable(const std::vector<ClassifyRow>& rows);
 // {"file":..,"model":..,"version":..,"method":..,"winner":..,"scores":{cat:score,..},"points":..,
-//  "keypoints":..,"total_ms":..}
+//  "keypoints":..,"total_ms":..,"warning":..} (warning "" when all is well)
 std::string ClassifyJson(const ClassifyRow& row);
+// A file that got no answer, in the same shape a script can tell apart by "error":
+// {"file":..,"error":{"code":"NOT_FOUND","message":..}}
+std::string ClassifyErrorJson(std::string_view file, std::string_view code, std::string_view message);
 
 // ---- stream ----
 

@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # End to end: the real glimpse CLI against the real glimpse-server on a loopback port.
 #   e2e_cli_test.sh GLIMPSE_BINARY SERVER_BINARY
-# Trains on a tiny zoo and on a folder of meshes and clouds, classifies, streams, manages models, and
-# checks exit codes and error messages. About 30 s.
+# Trains on a tiny zoo, on a folder of meshes and clouds, on a mesh folder with a manifest (up axes and
+# sizes) and on one without (--up/--unit); evaluates a model on another folder; classifies several
+# files in one batch (JSON errors included, unit warnings); streams a sensorless cloud as it is;
+# manages models; checks exit codes and error messages. About a minute.
 set -uo pipefail
 GLIMPSE=$1
 SERVER=$2
@@ -48,6 +50,18 @@ blob() {  # N random points on a sphere of radius 0.3 m resting on the ground
       print r * cos(u), r * sin(u), 0.3 + 0.3 * v } }'
 }
 box 0.5 0.5 0.5 >"$DATA/box/b1.off"
+# Mesh folders of tall and flat boxes: one with a manifest (y up, arbitrary units), one without (y up,
+# millimetres: --up y --unit mm), one to evaluate on (metres, z up, other sizes).
+MANIFEST="$GLIMPSE_TEST_TMP/manifest" PLAIN="$GLIMPSE_TEST_TMP/plain" EVAL="$GLIMPSE_TEST_TMP/eval"
+mkdir -p "$MANIFEST/tall" "$MANIFEST/flat" "$PLAIN/tall" "$PLAIN/flat" "$EVAL/tall" "$EVAL/flat"
+box 3 12 3 >"$MANIFEST/tall/t1.off"; box 2 10 3 >"$MANIFEST/tall/t2.off"; box 4 13 4 >"$MANIFEST/tall/t3.off"
+box 10 3 8 >"$MANIFEST/flat/f1.off"; box 12 2 9 >"$MANIFEST/flat/f2.off"; box 9 3 10 >"$MANIFEST/flat/f3.off"
+printf '# every mesh of this folder stands along +y\nt1,+y\nt2,+y\nt3,+y\nflat/f1,+y\nf2,+y\nflat/f3.off,+y\n' >"$MANIFEST/up_axis.csv"
+printf 'tall,height,1.1,1.3\nflat,height,0.25,0.35\n' >"$MANIFEST/sizes.csv"
+box 300 1200 300 >"$PLAIN/tall/t1.off"; box 250 1100 300 >"$PLAIN/tall/t2.off"
+box 1000 300 800 >"$PLAIN/flat/f1.off"; box 1100 250 900 >"$PLAIN/flat/f2.off"
+box 0.35 0.3 1.25 >"$EVAL/tall/e1.off"; box 0.28 0.32 1.15 >"$EVAL/tall/e2.off"
+box 0.9 1.0 0.3 >"$EVAL/flat/e3.off"; box 1.05 0.85 0.28 >"$EVAL/flat/e4.off"
 box 0.4 0.6 0.8 >"$DATA/box/b2.off"
 box 0.3 0.3 0.9 >"$DATA/box/b3.off"
 blob 1 2000 >"$DATA/blob/s1.xyz"
@@ -73,7 +87,7 @@ run 2 health --ca "$GLIMPSE_TEST_TMP/no-such-ca.pem" --tls
 run 2 health --ca "$BOX"          # --ca needs --tls
 run 2 health --tls --cert "$BOX"  # --cert needs --key
 run 0 --help && out_has "stream" && out_has "--server"
-for sub in health models train classify stream "models list" "models show" "models delete" "models set-default"; do
+for sub in health models train classify stream evaluate "models list" "models show" "models delete" "models set-default"; do
   # shellcheck disable=SC2086
   run 0 $sub --help && out_has "Usage"
 done
@@ -99,6 +113,33 @@ run 0 train "$DATA" --name folder --views 2 --methods esf,vfh && out_has "^train
 run 1 train "$DATA" --name folder --methods kgh,bok --views 0 --mesh-points 100 -q  # too few keypoints for codebooks
 grep -qE "^glimpse: train $DATA: [A-Z_]+: " "$ERR" || fail "train error lacks the status code"
 
+# ---- train on mesh folders: the manifest as glimpse-lab reads it, or --up/--unit ----
+run 0 train "$MANIFEST" --name boxes --methods ush,vfh,fusion --views 3 --mesh-points 1500 &&
+  out_has "^trained boxes:1 \(default\): 2 categories, 18 clouds"
+err_has "^train: 6 meshes in 2 categories$" && err_has "^train: up: from up_axis.csv"
+err_has "^train: size: real-life ranges per category from sizes.csv.*tall height 1.1-1.3 m"
+run 0 train "$PLAIN" --name plain --methods ush,vfh,fusion --views 3 --mesh-points 1500 --up y --unit mm &&
+  out_has "^trained plain:1 \(default\): 2 categories, 12 clouds"
+err_has "^train: up: \+y for every mesh \(--up\)$" && err_has "^train: size: mesh units x 0.001 m \(--unit\)$"
+run 0 models show plain --json && out_has '"feature_version":[1-9]' && out_has '"max_extent_m":1\.[0-9]'
+out_has '"bok_codebook_size":60'  # the parameters used (a default nobody asked for), not an echo of the request
+run 2 train "$PLAIN" --name bad --up sideways
+run 2 train "$PLAIN" --name bad --unit furlong
+run 2 train "$PLAIN" --name bad --unit mm --height 2
+
+# ---- evaluate another folder through the service ----
+run 0 evaluate "$EVAL" --model boxes --stages full,20 --views 3 --mesh-points 1500 &&
+  out_has "^model boxes:1, method fusion: 4 objects of $EVAL, 3 views each \(12 views\)"
+out_has "^stage +accuracy +balanced +right/views$" && out_has "^full +[0-9.]+ % +[0-9.]+ % +[0-9]+/12$" &&
+  out_has "^20% +[0-9.]+ % +[0-9.]+ % +[0-9]+/12$" && out_has "^confusion at full" && out_has "^misclassified at full: "
+err_has "^evaluate: 100% \(4/4 objects\)$"  # progress on stderr, plain lines off a terminal
+run 0 evaluate "$EVAL" --model boxes --stages full --views 2 --mesh-points 1500 --json -q
+/usr/bin/python3 -c 'import json, sys; r = json.load(sys.stdin); s = r["stages"][0]
+assert (r["objects"], r["views"], s["stage"], s["total"]) == (4, 8, "full", 8), r
+assert 0 <= s["correct"] <= 8 and set(s["confusion"]) == {"flat", "tall"}, r' <"$OUT" || fail "evaluate --json"
+run 1 evaluate "$EVAL" --model nope -q && err_has "^glimpse: evaluate $EVAL: NOT_FOUND"
+run 2 evaluate "$EVAL" --model boxes --stages 10kp
+
 # ---- classify ----
 run 0 classify "$BOX" "$BLOB" --model folder && out_has "^model folder:1  method esf$" && out_has "^FILE +WINNER +blob +box"
 out_has "^$BOX +box " && out_has "^$BLOB +blob "
@@ -106,10 +147,29 @@ run 0 classify "$BOX" "$BLOB" --model tiny:1 --method bok --json && out_lines 2
 out_has '"version":1,"method":"bok"' && out_has '"scores":\{"chair":'
 run 1 classify "$BOX" --model nope && err_has "^glimpse: classify $BOX: NOT_FOUND: .*nope"
 run 1 classify "$BOX" --model tiny:9 && err_has "NOT_FOUND"
-# The proto says FAILED_PRECONDITION for a method the model lacks; the client prints whichever it gets.
-run 1 classify "$BOX" --model tiny:2 --method kgh && err_has "^glimpse: classify $BOX: (FAILED_PRECONDITION|INVALID_ARGUMENT): .*kgh"
-run 1 classify "$GLIMPSE_TEST_TMP/missing.ply" --model tiny && err_has "missing\.ply"
+# The proto says FAILED_PRECONDITION for a method the model lacks.
+run 1 classify "$BOX" --model tiny:2 --method kgh && err_has "^glimpse: classify $BOX: FAILED_PRECONDITION: .*kgh"
+run 1 classify "$GLIMPSE_TEST_TMP/missing.ply" --model tiny && err_has "^glimpse: classify $GLIMPSE_TEST_TMP/missing\.ply: NOT_FOUND: "
 run 1 classify "$GLIMPSE_TEST_TMP/missing.ply" "$BLOB" --model folder && err_has "missing\.ply" && out_has "^$BLOB +blob"
+# Several files go in one ClassifyBatch call; --json prints one object per file, errors included, in
+# the same shape for a missing file and a server error.
+run 1 classify "$BOX" "$GLIMPSE_TEST_TMP/missing.ply" "$BLOB" "$DATA/blob/s1.xyz" --model folder --json && out_lines 4
+grep -q "rpc=ClassifyBatch .*model=folder@1 .*messages=3 .*code=OK" "$GLIMPSE_TEST_TMP/server.log" || fail "no ClassifyBatch call in the server log"
+/usr/bin/python3 -c 'import json, sys; rows = [json.loads(l) for l in sys.stdin]
+assert [r["file"].rsplit("/", 1)[-1] for r in rows] == ["b1.off", "missing.ply", "s2.xyz", "s1.xyz"], rows
+assert rows[1]["error"]["code"] == "NOT_FOUND" and "error" not in rows[0] and rows[2]["winner"] == "blob", rows' <"$OUT" ||
+  fail "classify --json rows"
+run 1 classify "$BOX" "$BLOB" --model nope --json && out_lines 2
+/usr/bin/python3 -c 'import json, sys; rows = [json.loads(l) for l in sys.stdin]
+assert all(r["error"]["code"] == "NOT_FOUND" and "nope" in r["error"]["message"] for r in rows), rows' <"$OUT" ||
+  fail "classify --json server errors"
+# A mesh in millimetres against a model of metre-sized boxes: a warning a person reads.
+run 0 classify "$PLAIN/tall/t1.off" --model boxes && err_has "^glimpse: classify $PLAIN/tall/t1.off: warning: the cloud spans 1\.[0-9]+e\+03 m.*millimetres"
+run 0 classify "$PLAIN/tall/t1.off" --model boxes --json && out_has '"warning":"the cloud spans'
+run 0 classify "$PLAIN/tall/t1.off" --model boxes --up y --unit mm --view 2 && out_has "^$PLAIN/tall/t1.off +tall "
+[[ -s "$ERR" ]] && fail "classify in the right unit warned"
+run 0 classify "$PLAIN/tall/t1.off" --model boxes --unit mm --whole --json && out_has '"warning":""'
+run 2 classify "$BOX" --model boxes --view 2 --whole
 GLIMPSE_MODEL=folder run 0 classify "$BLOB" && out_has "folder:1"
 
 # ---- stream ----
@@ -117,11 +177,15 @@ run 0 stream --zoo chair --model tiny:1 --chunks 5 --rate 50 && out_lines 5
 out_has "^chunk 1/5 points [0-9]+ (keypoints [0-9]+ )?winner " && out_has "^chunk 5/5 .* settled (yes|no) confidence [0-9.]+$"
 run 0 stream "$BOX" --model tiny --chunk-points 1000 --order random --rate 0 --json && out_has '"chunk":1,' && out_has '"model":"tiny","version":2,"method":"(bok|esf)"'
 run 0 stream "$DATA/blob/s1.xyz" --model folder --chunks 3 --order sweep --rate 0 && out_lines 3
+# A cloud without a sensor streams as it is: all of its 1800 points (a view is cut only when asked).
+run 0 stream "$DATA/blob/s3.xyz" --model folder --chunks 3 --rate 0 && out_has "^chunk 3/3 points 1800 "
+run 0 stream "$DATA/blob/s3.xyz" --model folder --chunks 3 --rate 0 --view 1 && out_lines 3
+grep -q "^chunk 3/3 points 1800 " "$OUT" && fail "stream --view 1 did not cut a view"
 run 1 stream --zoo human --model nope --rate 0 && err_has "^glimpse: stream --zoo human: NOT_FOUND"
 run 1 stream "$GLIMPSE_TEST_TMP/nothing.off" --model tiny && err_has "nothing\.off"
 
 # ---- models ----
-run 0 models list && out_lines 4 && out_has "^tiny +2 +\* " && out_has "^folder +1 +\* "
+run 0 models list && out_lines 6 && out_has "^tiny +2 +\* " && out_has "^folder +1 +\* "
 run 0 models show tiny && out_has "^version: +2 \(default\)" && out_has "^description: +second one"
 run 0 models set-default tiny:1 && out_has "version 1"
 run 0 models show tiny --json && out_has '"version":1' && out_has '"is_default":true'

@@ -47,8 +47,8 @@ class InputsTest : public ::testing::Test {
 };
 
 TEST_F(InputsTest, IsInputFileByExtension) {
-  for (const char* ok : {"a.pcd", "a.PLY", "b.xyz", "c.off", "d.obj", "e.txt", "f.csv"}) EXPECT_TRUE(IsInputFile(ok));
-  for (const char* no : {"a.stl", "README", "up_axis", ".ply.bak"}) EXPECT_FALSE(IsInputFile(no)) << no;
+  for (const char* ok : {"a.pcd", "a.PLY", "b.xyz", "c.off", "d.obj", "e.txt", "f.csv", "g.stl"}) EXPECT_TRUE(IsInputFile(ok));
+  for (const char* no : {"README", "up_axis", ".ply.bak", "a.stl.gz"}) EXPECT_FALSE(IsInputFile(no)) << no;
 }
 
 TEST_F(InputsTest, ListTrainDirSortsCategoriesAndSkipsTheRest) {

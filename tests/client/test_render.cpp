@@ -99,7 +99,16 @@ TEST(Render, ClassifyTableHasAColumnPerCategory) {
 TEST(Render, ClassifyJsonIsOneObjectWithScoresByCategory) {
   EXPECT_EQ(ClassifyJson(MakeRow("dir/\"x\".ply")),
             "{\"file\":\"dir/\\\"x\\\".ply\",\"model\":\"zoo\",\"version\":1,\"method\":\"bok\",\"winner\":\"chair\","
-            "\"scores\":{\"human\":0.125,\"chair\":0.875},\"points\":900,\"keypoints\":12,\"total_ms\":4.25}");
+            "\"scores\":{\"human\":0.125,\"chair\":0.875},\"points\":900,\"keypoints\":12,\"total_ms\":4.25,"
+            "\"warning\":\"\"}");
+  ClassifyRow warned = MakeRow("mm.ply");
+  warned.response.set_warning("the cloud spans 1.7e+03 m: millimetres?");
+  EXPECT_NE(ClassifyJson(warned).find(",\"warning\":\"the cloud spans 1.7e+03 m: millimetres?\"}"), std::string::npos);
+}
+
+TEST(Render, ClassifyErrorJsonHasTheFileAndTheStatus) {
+  EXPECT_EQ(ClassifyErrorJson("a/\"b\".ply", "NOT_FOUND", "cannot open: No such file"),
+            "{\"file\":\"a/\\\"b\\\".ply\",\"error\":{\"code\":\"NOT_FOUND\",\"message\":\"cannot open: No such file\"}}");
 }
 
 TEST(Render, DecisionLineIsTheDocumentedPlainFormat) {

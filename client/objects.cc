@@ -1,0 +1,137 @@
+#include "client/objects.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <set>
+
+#include "client/cloud_convert.h"
+#include "glimpse/views.h"
+
+namespace glimpse::client {
+namespace {
+
+std::string Metres(float v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", v);
+  return buf;
+}
+
+std::string SizeText(const CategorySize& s) {
+  return s.category + " " + (s.measure == CategorySize::kHeight ? "height " : "largest extent ") + Metres(s.min_m) +
+         "-" + Metres(s.max_m) + " m" + (s.any_pose ? " (any pose)" : "");
+}
+
+std::string SizingText(const Sizing& sizing) {
+  if (sizing.kind == Sizing::kHeight) return "every mesh scaled to " + Metres(sizing.value) + " m tall";
+  if (sizing.value == 1.f) return "mesh units are metres";
+  return "mesh units x " + Metres(sizing.value) + " m";
+}
+
+// What ScanFolder applied, for a person.
+std::vector<std::string> Applied(const Folder& f, const Placement& p, bool manifest) {
+  std::vector<std::string> out;
+  const Dataset& d = f.dataset;
+  if (!d.objects.empty())
+    out.push_back(std::to_string(d.objects.size()) + " meshes in " + std::to_string(d.categories.size()) +
+                  " categories");
+  if (!f.clouds.empty()) out.push_back(std::to_string(f.clouds.size()) + " cloud files, sent as they are (metres, +z up)");
+  if (d.objects.empty()) return out;
+  if (p.up) out.push_back("up: " + up_to_string(*p.up) + " for every mesh (--up)");
+  else if (d.has_up_axes)
+    out.push_back("up: from up_axis.csv (meshes it does not list: +y)" +
+                  (d.unmatched_up_rows ? ", " + std::to_string(d.unmatched_up_rows) + " rows match no mesh" : std::string()));
+  else out.push_back("up: +z (no manifest; --up AXIS to change)");
+  if (p.sizing) {
+    out.push_back("size: " + SizingText(*p.sizing) + (p.sizing->kind == Sizing::kHeight ? " (--height)" : " (--unit)"));
+  } else if (manifest) {
+    std::string ranges;
+    std::set<std::string> seen;
+    for (const DatasetObject& o : d.objects)
+      if (seen.insert(o.category).second) ranges += (ranges.empty() ? "" : ", ") + SizeText(o.size);
+    out.push_back(std::string("size: real-life ranges per category from ") +
+                  (d.has_sizes ? "sizes.csv" : "the defaults") + ", each object drawn in its range: " + ranges);
+  } else {
+    out.push_back("size: mesh units are metres (no manifest; --unit or --height to change)");
+  }
+  return out;
+}
+
+}  // namespace
+
+Expected<Sizing> ParseUnit(std::string_view text) {
+  if (text == "m") return Sizing{Sizing::kUnit, 1.f};
+  if (text == "cm") return Sizing{Sizing::kUnit, 0.01f};
+  if (text == "mm") return Sizing{Sizing::kUnit, 0.001f};
+  if (text == "in") return Sizing{Sizing::kUnit, 0.0254f};
+  return invalid_argument("unknown unit '" + std::string(text) + "' (valid: m, cm, mm, in)");
+}
+
+std::string ObjectKey(const DatasetObject& object) { return object.category + "/" + object.id; }
+
+Expected<Folder> ScanFolder(const std::string& dir, const Placement& placement) {
+  auto listed = ListTrainDir(dir);  // every usable file: meshes and clouds
+  if (!listed) return listed.error();
+  Folder f;
+  auto dataset = scan_dataset(dir);
+  if (dataset) {
+    f.dataset = std::move(*dataset);
+  } else if (dataset.error().code != ErrorCode::kNotFound) {
+    return dataset.error();  // a bad manifest row
+  }
+  std::set<std::string> meshes;
+  for (const DatasetObject& o : f.dataset.objects) meshes.insert(o.path);
+  for (TrainFile& t : *listed)
+    if (!meshes.count(t.path)) f.clouds.push_back(std::move(t));
+
+  const bool manifest = f.dataset.has_up_axes || f.dataset.has_sizes;
+  for (DatasetObject& o : f.dataset.objects) {
+    if (placement.up) o.up = *placement.up;
+    else if (!manifest) o.up = Vec3::UnitZ();  // the contract's frame
+  }
+  if (placement.sizing) f.sizing = *placement.sizing;
+  else if (!manifest) f.sizing = Sizing{Sizing::kUnit, 1.f};
+  else f.sizing = Sizing{};  // category ranges, as glimpse-lab
+  f.applied = Applied(f, placement, manifest);
+  return f;
+}
+
+ObjectViews ViewsOfMesh(const Mesh& mesh, const std::string& key, bool any_pose, const ProtocolOptions& options) {
+  const uint64_t seed = object_seed(options.seed, key);
+  ObjectViews out;
+  Points full = object_cloud(mesh, options.points, seed);
+  std::erase_if(full, [](const Vec3& p) { return !p.allFinite(); });
+  out.full_points = full.size();
+  if (options.views == 0) {
+    out.views.push_back(Cloud{std::move(full), std::nullopt});
+    return out;
+  }
+  for (size_t v = 0; v < options.views; ++v)
+    out.views.push_back(object_view(full, v, options.views, any_pose, seed, options.hpr_radius_factor));
+  return out;
+}
+
+Expected<ObjectViews> ProtocolViews(const DatasetObject& object, const Sizing& sizing, const ProtocolOptions& options) {
+  auto mesh = load_object(object, options.seed, sizing);
+  if (!mesh) return mesh.error();
+  return ViewsOfMesh(*mesh, ObjectKey(object), object.size.any_pose, options);
+}
+
+Expected<Cloud> MeshFileView(const std::string& path, const Placement& placement, const ProtocolOptions& options,
+                             std::optional<int> view) {
+  DatasetObject object;
+  object.path = path;
+  object.id = std::filesystem::path(path).stem().string();
+  object.up = placement.up.value_or(Vec3::UnitZ());
+  auto mesh = load_object(object, options.seed, placement.sizing.value_or(Sizing{Sizing::kUnit, 1.f}));
+  if (!mesh) return mesh.error();
+  const uint64_t seed = object_seed(options.seed, object.id);
+  Points full = object_cloud(*mesh, options.points, seed);
+  std::erase_if(full, [](const Vec3& p) { return !p.allFinite(); });
+  if (full.empty()) return invalid_argument(path + ": the mesh gives no points");
+  if (!view) return Cloud{std::move(full), std::nullopt};
+  return object_view(full, static_cast<size_t>(std::clamp(*view, 0, 5)), 6, false, seed, options.hpr_radius_factor);
+}
+
+}  // namespace glimpse::client

@@ -1,0 +1,209 @@
+// Mesh folders through core's dataset loader: what applies with and without a manifest, what --up /
+// --unit / --height override, the protocol's views identical to the lab's, single mesh files, and the
+// view `glimpse stream` reveals (a cloud file as it is, sensor or not).
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <cmath>
+#include <fstream>
+
+#include "client/commands.h"
+#include "client/objects.h"
+#include "glimpse/evaluation.h"
+#include "glimpse/io.h"
+#include "glimpse/views.h"
+
+namespace glimpse::client {
+namespace {
+
+namespace fs = std::filesystem;
+
+class ObjectsTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("glimpse_client_objects_" + std::to_string(::getpid()) + "_" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  // An OFF box sx x sy x sz (mesh units) with one corner at the origin.
+  std::string WriteBox(const fs::path& path, float sx, float sy, float sz) {
+    fs::create_directories(path.parent_path());
+    std::ofstream out(path);
+    out << "OFF\n8 12 0\n";
+    for (int i = 0; i < 8; ++i) out << sx * (i & 1) << " " << sy * ((i >> 1) & 1) << " " << sz * ((i >> 2) & 1) << "\n";
+    const int f[12][3] = {{0, 1, 3}, {0, 3, 2}, {4, 6, 7}, {4, 7, 5}, {0, 4, 5}, {0, 5, 1},
+                          {2, 3, 7}, {2, 7, 6}, {0, 2, 6}, {0, 6, 4}, {1, 5, 7}, {1, 7, 3}};
+    for (const auto& t : f) out << "3 " << t[0] << " " << t[1] << " " << t[2] << "\n";
+    return path.string();
+  }
+  void WriteText(const fs::path& path, const std::string& text) { std::ofstream(path) << text; }
+
+  fs::path dir_;
+};
+
+Bounds MeshBounds(const DatasetObject& o, const Sizing& s) {
+  auto mesh = load_object(o, 42, s);
+  EXPECT_TRUE(mesh.ok());
+  return mesh.ok() ? bounds(mesh->vertices) : Bounds{};
+}
+
+bool Has(const std::vector<std::string>& lines, const std::string& part) {
+  for (const std::string& l : lines)
+    if (l.find(part) != std::string::npos) return true;
+  return false;
+}
+
+TEST(Objects, ParseUnit) {
+  EXPECT_FLOAT_EQ(ParseUnit("mm")->value, 0.001f);
+  EXPECT_FLOAT_EQ(ParseUnit("cm")->value, 0.01f);
+  EXPECT_FLOAT_EQ(ParseUnit("in")->value, 0.0254f);
+  EXPECT_EQ(ParseUnit("m")->kind, Sizing::kUnit);
+  ASSERT_FALSE(ParseUnit("furlong").ok());
+  EXPECT_NE(ParseUnit("furlong").error().message.find("m, cm, mm, in"), std::string::npos);
+}
+
+TEST_F(ObjectsTest, WithoutAManifestMeshesAreZUpInMetresAndCloudsGoAsTheyAre) {
+  WriteBox(dir_ / "tall" / "a.off", 0.2f, 0.3f, 1.5f);
+  WriteBox(dir_ / "flat" / "b.off", 1.0f, 0.8f, 0.1f);
+  Cloud c{{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)}, std::nullopt};
+  ASSERT_TRUE(write_cloud((dir_ / "flat" / "scan.xyz").string(), c).ok());
+  auto f = ScanFolder(dir_.string(), {});
+  ASSERT_TRUE(f.ok()) << f.error().message;
+  ASSERT_EQ(f->dataset.objects.size(), 2u);
+  ASSERT_EQ(f->clouds.size(), 1u);
+  EXPECT_EQ(f->clouds[0].category, "flat");
+  EXPECT_EQ(f->sizing.kind, Sizing::kUnit);
+  EXPECT_FLOAT_EQ(f->sizing.value, 1.f);
+  for (const DatasetObject& o : f->dataset.objects) EXPECT_EQ(o.up, Vec3::UnitZ());
+  EXPECT_TRUE(Has(f->applied, "up: +z (no manifest")) << f->applied[2];
+  EXPECT_TRUE(Has(f->applied, "mesh units are metres (no manifest"));
+  EXPECT_TRUE(Has(f->applied, "1 cloud files, sent as they are"));
+  const DatasetObject& tall = f->dataset.objects[1];
+  ASSERT_EQ(tall.category, "tall");
+  EXPECT_NEAR(MeshBounds(tall, f->sizing).extent().z(), 1.5f, 1e-5f);  // as the file has it
+}
+
+TEST_F(ObjectsTest, TheManifestAppliesAsInTheLabAndFlagsOverrideIt) {
+  WriteBox(dir_ / "human" / "1.off", 20, 170, 40);  // y up, arbitrary units, as SHREC
+  WriteBox(dir_ / "chair" / "2.off", 50, 90, 50);
+  WriteText(dir_ / "up_axis.csv", "# file stem, up\n1,+y\n2,+y\n");
+  auto f = ScanFolder(dir_.string(), {});
+  ASSERT_TRUE(f.ok()) << f.error().message;
+  EXPECT_EQ(f->sizing.kind, Sizing::kCategoryRange);
+  EXPECT_TRUE(Has(f->applied, "up: from up_axis.csv"));
+  EXPECT_TRUE(Has(f->applied, "human height 1.55-1.95 m"));
+  const DatasetObject& human = f->dataset.objects[1];
+  ASSERT_EQ(human.category, "human");
+  const float height = MeshBounds(human, f->sizing).extent().z();
+  EXPECT_GE(height, 1.55f);  // stood up (y -> z) and sized in the human range
+  EXPECT_LE(height, 1.95f);
+
+  Placement p;
+  p.up = Vec3::UnitX();
+  p.sizing = *ParseUnit("cm");
+  auto g = ScanFolder(dir_.string(), p);
+  ASSERT_TRUE(g.ok());
+  EXPECT_TRUE(Has(g->applied, "up: +x for every mesh (--up)"));
+  EXPECT_TRUE(Has(g->applied, "(--unit)"));
+  EXPECT_NEAR(MeshBounds(g->dataset.objects[1], g->sizing).extent().z(), 0.20f, 1e-5f);  // x up, centimetres
+  p.sizing = Sizing{Sizing::kHeight, 2.0f};
+  auto h = ScanFolder(dir_.string(), p);
+  ASSERT_TRUE(h.ok());
+  EXPECT_NEAR(MeshBounds(h->dataset.objects[0], h->sizing).extent().z(), 2.0f, 1e-5f);
+}
+
+TEST_F(ObjectsTest, ABadManifestRowIsAnErrorNamingTheFile) {
+  WriteBox(dir_ / "a" / "1.off", 1, 1, 1);
+  WriteText(dir_ / "up_axis.csv", "1,sideways\n");
+  auto f = ScanFolder(dir_.string(), {});
+  ASSERT_FALSE(f.ok());
+  EXPECT_NE(f.error().message.find("up_axis.csv"), std::string::npos) << f.error().message;
+  EXPECT_FALSE(ScanFolder((dir_ / "missing").string(), {}).ok());
+}
+
+TEST_F(ObjectsTest, ProtocolViewsAreTheLabsViews) {
+  WriteBox(dir_ / "human" / "1.off", 20, 170, 40);
+  WriteBox(dir_ / "mechanic" / "7.off", 3, 1, 2);  // no natural up: random poses
+  WriteText(dir_ / "up_axis.csv", "1,+y\n");
+  auto f = ScanFolder(dir_.string(), {});
+  ASSERT_TRUE(f.ok());
+  auto lab = load_dataset_objects(dir_.string(), 42);  // what glimpse-lab loads
+  ASSERT_TRUE(lab.ok());
+  ASSERT_EQ(lab->size(), f->dataset.objects.size());
+  ProtocolOptions options;
+  options.points = 1500;
+  for (size_t i = 0; i < lab->size(); ++i) {
+    const EvalObject& o = (*lab)[i];
+    auto views = ProtocolViews(f->dataset.objects[i], f->sizing, options);
+    ASSERT_TRUE(views.ok()) << views.error().message;
+    const uint64_t seed = object_seed(42, o.category + "/" + o.id);
+    const Points full = object_cloud(o.mesh, options.points, seed);
+    EXPECT_EQ(views->full_points, full.size());
+    ASSERT_EQ(views->views.size(), 6u);
+    for (size_t v = 0; v < 6; ++v) {
+      const Cloud expected = object_view(full, v, 6, o.any_pose, seed, 100.0);
+      EXPECT_EQ(views->views[v].points, expected.points) << o.id << " view " << v;
+      EXPECT_EQ(views->views[v].sensor, expected.sensor);
+    }
+  }
+  EXPECT_TRUE(f->dataset.objects[1].size.any_pose);
+}
+
+TEST_F(ObjectsTest, AMeshFileIsOneViewOrWholeAndItsUnitApplies) {
+  const std::string box = WriteBox(dir_ / "box.off", 500, 400, 300);  // millimetres
+  ProtocolOptions options;
+  options.points = 2000;
+  auto whole = MeshFileView(box, {}, options, std::nullopt);
+  ASSERT_TRUE(whole.ok());
+  EXPECT_NEAR(double(whole->points.size()), 2000.0, 2.0);
+  EXPECT_FALSE(whole->sensor);
+  EXPECT_NEAR(bounds(whole->points).extent().x(), 500.f, 5.f);
+  auto view = MeshFileView(box, {}, options, 2);
+  ASSERT_TRUE(view.ok());
+  EXPECT_LT(view->points.size(), 2000u);
+  EXPECT_TRUE(view->sensor);
+  Placement mm;
+  mm.sizing = *ParseUnit("mm");
+  auto metres = MeshFileView(box, mm, options, 2);
+  ASSERT_TRUE(metres.ok());
+  EXPECT_NEAR(bounds(metres->points).extent().z(), 0.3f, 0.01f);
+  EXPECT_FALSE(MeshFileView((dir_ / "none.off").string(), {}, options, 0).ok());
+}
+
+TEST_F(ObjectsTest, AStreamedCloudFileIsTheScanAsItIsUnlessAViewIsAskedFor) {
+  Cloud scan;
+  for (int i = 0; i < 40; ++i)
+    for (int j = 0; j < 40; ++j) scan.points.emplace_back(0.01f * i, 0.01f * j, 0.3f + 0.02f * std::sin(0.3f * i));
+  const std::string plain = (dir_ / "plain.xyz").string();
+  ASSERT_TRUE(write_cloud(plain, scan).ok());
+  StreamOptions o;
+  o.file = plain;
+  auto as_is = StreamView(o);
+  ASSERT_TRUE(as_is.ok());
+  EXPECT_EQ(as_is->points, scan.points);  // all of it: no view cut out of a sensorless cloud
+  EXPECT_FALSE(as_is->sensor);
+
+  scan.sensor = Vec3::Zero();  // a real sensor at the origin is a sensor
+  const std::string at_origin = (dir_ / "origin.ply").string();
+  ASSERT_TRUE(write_cloud(at_origin, scan).ok());
+  o.file = at_origin;
+  auto with_sensor = StreamView(o);
+  ASSERT_TRUE(with_sensor.ok());
+  EXPECT_EQ(with_sensor->points.size(), scan.points.size());
+  ASSERT_TRUE(with_sensor->sensor);
+  EXPECT_EQ(*with_sensor->sensor, Vec3::Zero());
+
+  o.file = plain;
+  o.viewpoint = 1;  // asked for: a new view from the paper's viewpoint 1
+  auto recut = StreamView(o);
+  ASSERT_TRUE(recut.ok());
+  EXPECT_TRUE(recut->sensor);
+  EXPECT_LE(recut->points.size(), scan.points.size());
+}
+
+}  // namespace
+}  // namespace glimpse::client
