@@ -210,8 +210,12 @@ Expected<Model> train(const std::vector<TrainingCloud>& data, const TrainParams&
   };
   std::vector<Job> jobs;
   std::vector<Cloud> learnt(data.size());
+  std::map<std::string, uint64_t> seen;  // clouds so far per object
   for (size_t i = 0; i < data.size(); ++i) {
-    learnt[i] = training_view(data[i].cloud, params, i);
+    // The tilt is seeded by the object's name and the cloud's place among its views, not by its
+    // place in the list: the same views learnt anywhere (the lab, the service) get the same tilts.
+    const uint64_t salt = data[i].object_id.empty() ? i : object_seed(params.seed, data[i].object_id) + seen[data[i].object_id]++;
+    learnt[i] = training_view(data[i].cloud, params, salt);
     jobs.push_back({i, 0});
     const size_t n = data[i].cloud.points.size();
     for (double f : params.partial_prefixes) {

@@ -120,6 +120,32 @@ TEST(Classify, Errors) {
   EXPECT_EQ(cancelled.error().code, ErrorCode::kCancelled);
 }
 
+// A training cloud's tilt is seeded by its object's name and its place among that object's clouds,
+// not by its place in the list: the lab and the service, which list clouds differently, learn the
+// same tilted views. Objects listed in another order give the same references, so the same scores.
+TEST(Train, TiltsFollowTheObjectNotItsPlaceInTheList) {
+  TrainParams p = small_params();
+  p.methods = {MethodId::kUSH};
+  p.default_method = MethodId::kUSH;
+  p.partial_prefixes.clear();
+  p.calibration_folds = 0;
+  ASSERT_GT(p.tilt_deg, 0.f);
+  const std::vector<TrainingCloud> data = test::synthetic_views(2, 2, 13);
+  std::vector<TrainingCloud> objects_reversed;  // each object's clouds keep their order
+  for (size_t end = data.size(); end > 0; end -= 2) {
+    objects_reversed.push_back(data[end - 2]);
+    objects_reversed.push_back(data[end - 1]);
+  }
+  auto a = train(data, p), b = train(objects_reversed, p);
+  ASSERT_TRUE(a.ok() && b.ok());
+  for (const TrainingCloud& query : test::synthetic_views(1, 2, 14)) {
+    auto ca = classify(*a, query.cloud), cb = classify(*b, query.cloud);
+    ASSERT_TRUE(ca.ok() && cb.ok());
+    ASSERT_EQ(ca->scores.size(), cb->scores.size());
+    for (size_t i = 0; i < ca->scores.size(); ++i) EXPECT_NEAR(ca->scores[i], cb->scores[i], 1e-9) << query.object_id;
+  }
+}
+
 TEST(Train, Errors) {
   auto none = train({}, small_params());
   ASSERT_FALSE(none.ok());
