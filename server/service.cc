@@ -285,6 +285,7 @@ grpc::Status GlimpseService::Train(grpc::ServerContext* ctx,
     last.set_clouds_received(input.clouds.size());
     stream->Write(last);
     auto progress = [&](const TrainingProgress& p) {
+      if (p.stage == "done") return;  // core's end; the call is done once the model is stored
       std::lock_guard lock(write_mutex);
       if (p.stage == "features") last.set_features_extracted(p.done);
       if (p.stage == "codebooks") {

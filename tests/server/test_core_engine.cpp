@@ -140,7 +140,10 @@ class CoreEngineTest : public ::testing::Test {
       ASSERT_TRUE(stream->Write(req));
     }
     stream->WritesDone();
-    for (v1::TrainProgress p; stream->Read(&p);) trained_ = p;
+    for (v1::TrainProgress p; stream->Read(&p);) {
+      trained_ = p;
+      stages_.push_back(p.stage());
+    }
     grpc::Status s = stream->Finish();
     ASSERT_TRUE(s.ok()) << s.error_message();
   }
@@ -149,6 +152,7 @@ class CoreEngineTest : public ::testing::Test {
   static std::shared_ptr<const Model>* direct_;
   std::unique_ptr<testing::Harness> harness_;
   v1::TrainProgress trained_;
+  std::vector<std::string> stages_;  // of every progress message, in order
 };
 
 std::vector<TrainingCloud>* CoreEngineTest::data_ = nullptr;
@@ -247,6 +251,21 @@ TEST_F(CoreEngineTest, StreamClassifyOverGrpcGivesExactlyTheSessionsDecisions) {
   const MethodId m = (*direct_)->default_method;
   if (m == MethodId::kBoK || m == MethodId::kBoG || m == MethodId::kKGH) EXPECT_GT(last.keypoints(), 0u);
   else EXPECT_EQ(last.keypoints(), 0u);
+}
+
+TEST_F(CoreEngineTest, ProgressNamesOnlyTheDocumentedStagesAndEndsOnceWithDone) {
+  const std::vector<std::string> documented = {"received", "features", "codebooks", "centres", "calibration", "storing", "done"};
+  ASSERT_FALSE(stages_.empty());
+  size_t last = 0;
+  for (const std::string& stage : stages_) {
+    const size_t at = size_t(std::find(documented.begin(), documented.end(), stage) - documented.begin());
+    ASSERT_LT(at, documented.size()) << "undocumented stage " << stage;
+    EXPECT_GE(at, last) << stage << " after " << documented[last];
+    last = at;
+  }
+  EXPECT_EQ(std::count(stages_.begin(), stages_.end(), "done"), 1);
+  EXPECT_EQ(stages_.back(), "done");
+  EXPECT_GT(std::count(stages_.begin(), stages_.end(), "calibration"), 0);
 }
 
 TEST_F(CoreEngineTest, ModelInfoCarriesTheParametersUsedAndTheFeatureVersion) {
