@@ -459,6 +459,11 @@ void stream_views(Protocol& P) {
       t.confidence.push_back(d->confidence);
       t.settled.push_back(d->settled ? 1 : 0);
       t.keypoints.push_back(d->keypoints);
+      t.points.push_back(d->points);
+      std::vector<double> raw(r.categories.size(), 0.0);
+      for (size_t c = 0; c < d->raw_scores.size(); ++c)
+        raw[static_cast<size_t>(P.fold_to_ours[static_cast<size_t>(fold)][c])] = d->raw_scores[c];
+      t.raw_scores.push_back(std::move(raw));
     }
   });
   size_t chunks = 0;

@@ -441,13 +441,20 @@ void write_streams(std::ostringstream& o, const EvalResult& r) {
 
 std::string streams_csv(const EvalResult& r) {
   std::ostringstream o;
-  o << "fold,object,view,truth,chunk,visible_fraction,winner,confidence,settled,keypoints\n";
+  o << "fold,object,view,truth,chunk,visible_fraction,winner,confidence,settled,keypoints,points";
+  for (const std::string& c : r.categories) o << ",raw_" << c;
+  o << "\n";
   for (const StreamTrace& t : r.streams)
-    for (size_t i = 0; i < t.winners.size(); ++i)
+    for (size_t i = 0; i < t.winners.size(); ++i) {
       o << t.fold << "," << r.object_ids[static_cast<size_t>(t.object)] << "," << t.view << ","
         << r.categories[static_cast<size_t>(t.truth)] << "," << i << "," << fmt("%.4f", t.visible_fraction[i]) << ","
         << (t.winners[i] >= 0 ? r.categories[static_cast<size_t>(t.winners[i])] : std::string()) << ","
-        << fmt("%.4f", t.confidence[i]) << "," << int(t.settled[i]) << "," << t.keypoints[i] << "\n";
+        << fmt("%.4f", t.confidence[i]) << "," << int(t.settled[i]) << "," << t.keypoints[i] << ","
+        << (i < t.points.size() ? t.points[i] : 0);
+      for (size_t c = 0; c < r.categories.size(); ++c)
+        o << "," << (i < t.raw_scores.size() && c < t.raw_scores[i].size() ? fmt("%.4f", t.raw_scores[i][c]) : "");
+      o << "\n";
+    }
   return o.str();
 }
 

@@ -166,6 +166,8 @@ struct StreamTrace {
   std::vector<double> confidence;
   std::vector<uint8_t> settled;          // the session's own flag
   std::vector<size_t> keypoints;
+  std::vector<size_t> points;                    // accumulated after duplicate removal
+  std::vector<std::vector<double>> raw_scores;   // per chunk, the chunk's own scores (report's category order)
 };
 
 // How early and how right settled decisions are: each view counts at its first settled chunk.
