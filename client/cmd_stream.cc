@@ -1,6 +1,6 @@
 // glimpse stream: a simulated scanner. One single view of an object (a cloud file as it is, or a
 // view of a mesh or zoo shape) is revealed chunk by chunk over StreamClassify at a fixed rate, and the
-// server's evolving decision is shown live.
+// server's evolving decision is shown live, then the final one (Classify's of the whole scan).
 #include <chrono>
 #include <condition_variable>
 #include <mutex>
@@ -56,11 +56,13 @@ Expected<Cloud> StreamView(const StreamOptions& o) {
   auto file = LoadFile(o.file);
   if (!file) return file.error();
   if (file->is_mesh) {
+    if (o.sensor) return invalid_argument(o.file + ": --sensor is for cloud files; a mesh's view has its own sensor");
     ProtocolOptions protocol = o.protocol;
     protocol.seed = o.seed;
     return MeshFileView(o.file, o.placement, protocol, o.viewpoint.value_or(0));
   }
   RemoveNonFinite(file->cloud);
+  if (o.sensor) file->cloud.sensor = *o.sensor;
   // A cloud file is the scan: it streams as it is, with its sensor if it has one (wherever that is),
   // and is cut into a new view only when asked.
   if (!o.viewpoint) return std::move(file->cloud);
@@ -123,7 +125,7 @@ int RunStream(const ConnectionOptions& conn, const StreamOptions& o) {
   size_t answered = 0;
   while (stream->Read(&decision)) {
     shown.Show(decision);
-    ++answered;
+    if (!decision.final()) ++answered;
   }
   scanner.request_stop();  // wakes it from the rate wait; a pending Write fails now the call is over
   scanner.join();

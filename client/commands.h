@@ -46,6 +46,8 @@ struct ClassifyOptions {
   ProtocolOptions protocol;  // meshes: samples, seed
   int view = 0;              // meshes: the paper's viewpoint (0-5) of the single view sent
   bool whole = false;        // meshes: the whole sampled cloud instead of a view
+  std::optional<Vec3> sensor;  // clouds: the sensor position, replacing the file's (a PCD's identity
+                               // VIEWPOINT reads as "no sensor"; --sensor 0,0,0 says it is at the origin)
   bool json = false;         // one JSON object per file, errors included
 };
 int RunClassify(const ConnectionOptions& conn, const ClassifyOptions& options);
@@ -63,6 +65,7 @@ struct StreamOptions {
   // Which of the paper's six viewpoints takes the single view: meshes and zoo shapes always need one
   // (default 0); a cloud file streams as it is unless a view is asked for.
   std::optional<int> viewpoint;
+  std::optional<Vec3> sensor;  // cloud files: as ClassifyOptions::sensor
   Placement placement;        // meshes: --up, --unit, --height
   ProtocolOptions protocol;   // meshes: samples
   bool json = false;

@@ -32,6 +32,7 @@ const CLI::Validator kModelRef = Checked(ParseModelRef, "NAME[:VERSION]");
 const CLI::Validator kMethod = Checked(ParseMethod, "METHOD");
 const CLI::Validator kMethodList = Checked(ParseMethodList, "M1,M2,..");
 const CLI::Validator kOrder = Checked(ParseRevealOrder, "top-down|random|sweep");
+const CLI::Validator kSensor = Checked(ParseSensor, "X,Y,Z");
 
 void AddConnectionOptions(CLI::App& app, ConnectionOptions& conn) {
   app.add_option("--server", conn.server, "server address host:port")->envname("GLIMPSE_SERVER")
@@ -158,6 +159,10 @@ int Main(int argc, char** argv) {
   auto* view = classify->add_option("--view", c.view, "meshes: which of the paper's 6 viewpoints (azimuth 60*N deg) sees the object")
                    ->capture_default_str()->check(CLI::Range(0, 5))->group("Meshes");
   classify->add_flag("--whole", c.whole, "meshes: the whole sampled cloud instead of a single view")->excludes(view)->group("Meshes");
+  classify->add_option_function<std::string>("--sensor", [&c](const std::string& t) { c.sensor = *ParseSensor(t); },
+                                              "clouds: where the sensor was, X,Y,Z in the cloud's frame (replaces the "
+                                              "file's; a PCD's default VIEWPOINT 0 0 0 1 0 0 0 reads as no sensor)")
+      ->check(kSensor);
   AddProtocolOptions(*classify, c.protocol, false);
   AddPlacementOptions(*classify, c.placement);
   classify->callback([&] { run = [&] { return RunClassify(conn, c); }; });
@@ -180,10 +185,14 @@ int Main(int argc, char** argv) {
       ->capture_default_str()->check(kOrder);
   stream->add_option("--rate", s.rate_hz, "chunks per second, 0 = as fast as possible")->capture_default_str()
       ->check(CLI::NonNegativeNumber);
-  stream->add_option_function<int>("--view", [&s](const int& v) { s.viewpoint = v; },
+  auto* stream_view = stream->add_option_function<int>("--view", [&s](const int& v) { s.viewpoint = v; },
                                    "which of the paper's 6 viewpoints (azimuth 60*N deg) sees the object: meshes and zoo "
                                    "shapes [0]; a cloud file streams as it is unless given")
       ->check(CLI::Range(0, 5));
+  stream->add_option_function<std::string>("--sensor", [&s](const std::string& t) { s.sensor = *ParseSensor(t); },
+                                            "cloud files: where the sensor was, X,Y,Z in the cloud's frame (replaces "
+                                            "the file's; a PCD's default VIEWPOINT reads as no sensor)")
+      ->check(kSensor)->excludes(stream_view);
   stream->add_flag("--json", s.json, "one JSON object per decision");
   stream->add_option("--mesh-points", s.protocol.points, "points sampled on a mesh's surface")
       ->capture_default_str()->check(CLI::Range(size_t{0}, size_t{5'000'000}))->group("Meshes");

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <charconv>
+#include <cmath>
 
 namespace glimpse::client {
 namespace {
@@ -54,6 +55,25 @@ Expected<v1::ModelRef> ParseModelRef(std::string_view text) {
                             "': a positive integer or 'latest'");
   ref.set_version(v);
   return ref;
+}
+
+Expected<Vec3> ParseSensor(std::string_view text) {
+  const std::string bad = "bad sensor '" + std::string(text) + "': three finite numbers X,Y,Z in metres";
+  Vec3 out;
+  std::string_view rest = text;
+  for (int axis = 0; axis < 3; ++axis) {
+    const size_t comma = rest.find(',');
+    if ((axis < 2) == (comma == std::string_view::npos)) return invalid_argument(bad);
+    const std::string_view item = Trim(rest.substr(0, comma));
+    double v = 0;
+    auto [end, ec] = std::from_chars(item.data(), item.data() + item.size(), v);
+    if (item.empty() || ec != std::errc() || end != item.data() + item.size() || !std::isfinite(v) ||
+        std::abs(v) > 1e6)
+      return invalid_argument(bad);
+    out[axis] = static_cast<float>(v);
+    if (axis < 2) rest = rest.substr(comma + 1);
+  }
+  return out;
 }
 
 std::string FormatModelRef(const v1::ModelRef& ref) {

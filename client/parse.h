@@ -8,6 +8,7 @@
 #include <string_view>
 #include <vector>
 
+#include "glimpse/cloud.h"
 #include "glimpse/expected.h"
 #include "glimpse/v1/glimpse.pb.h"
 
@@ -26,6 +27,10 @@ Expected<std::vector<v1::Method>> ParseMethodList(std::string_view text);
 // "bok" ... "fusion"; "default" for METHOD_UNSPECIFIED.
 std::string MethodName(v1::Method method);
 std::vector<std::string> MethodNames();  // the names ParseMethod accepts, in enum order
+
+// A sensor position "X,Y,Z" in the cloud's frame (metres, finite), e.g. "0,0,0" for a camera-frame
+// scan whose file does not say where the camera was.
+Expected<Vec3> ParseSensor(std::string_view text);
 
 // "NOT_FOUND", "DEADLINE_EXCEEDED", ... as in grpc/status.h and every other gRPC client.
 const char* StatusCodeName(grpc::StatusCode code);

@@ -2,6 +2,7 @@
 #include <bit>
 #include <cstdint>
 #include <cstring>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -52,6 +53,7 @@ Expected<Cloud> read_pcd(const std::string& path, std::string_view text) {
   uint64_t width = 0, height = 1, points = 0;
   bool have_points = false, have_data = false, binary = false;
   Cloud cloud;
+  std::optional<Vec3> commented_sensor;  // "# glimpse_sensor x y z": says "at the origin" too
   auto per_field = [&](size_t ln, auto&& set) -> Status {
     if (tok.size() != fields.size() + 1)
       return text_error(path, ln, std::string(tok[0]) + " needs one value per field");
@@ -60,6 +62,11 @@ Expected<Cloud> read_pcd(const std::string& path, std::string_view text) {
     return {};
   };
   while (!have_data && lines.next(line)) {
+    if (const std::string_view raw = trim(line); !raw.empty() && raw.front() == '#') {
+      Vec3 s;
+      if (parse_sensor_comment(raw.substr(1), s)) commented_sensor = s;
+      continue;
+    }
     split(strip_comment(line), tok);
     if (tok.empty()) continue;
     const size_t ln = lines.line_no();
@@ -111,6 +118,7 @@ Expected<Cloud> read_pcd(const std::string& path, std::string_view text) {
     if (height != 0 && width > kMaxPoints / height) return text_error(path, lines.line_no(), "WIDTH*HEIGHT too large");
     points = width * height;
   }
+  if (commented_sensor) cloud.sensor = commented_sensor;
   int xyz[3] = {-1, -1, -1};
   uint64_t offset = 0, column = 0;
   for (size_t k = 0; k < fields.size(); ++k) {
@@ -164,8 +172,16 @@ Expected<Cloud> read_pcd(const std::string& path, std::string_view text) {
 
 Status write_pcd(const std::string& path, const Cloud& cloud) {
   const std::string n = std::to_string(cloud.points.size());
-  std::string s = "# .PCD v0.7 - Point Cloud Data file format (written by glimpse)\nVERSION 0.7\n"
-                  "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH " + n + "\nHEIGHT 1\nVIEWPOINT ";
+  std::string s = "# .PCD v0.7 - Point Cloud Data file format (written by glimpse)\n";
+  if (cloud.sensor) {  // the comment keeps a sensor at the origin, which VIEWPOINT alone cannot say
+    s += "# glimpse_sensor ";
+    for (int a = 0; a < 3; ++a) {
+      append_float(s, (*cloud.sensor)[a]);
+      s += a < 2 ? ' ' : '\n';
+    }
+  }
+  s += "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH " + n + "\nHEIGHT 1\n";
+  s += "VIEWPOINT ";
   if (cloud.sensor) {
     for (int a = 0; a < 3; ++a) {
       append_float(s, (*cloud.sensor)[a]);

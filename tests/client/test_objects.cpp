@@ -197,6 +197,28 @@ TEST_F(ObjectsTest, AStreamedCloudFileIsTheScanAsItIsUnlessAViewIsAskedFor) {
   ASSERT_TRUE(with_sensor->sensor);
   EXPECT_EQ(*with_sensor->sensor, Vec3::Zero());
 
+  // A PCD written with PCL's default VIEWPOINT 0 0 0 1 0 0 0 cannot say "sensor at the origin": it reads
+  // as no sensor unless the user says where the sensor was.
+  const std::string pcd = (dir_ / "camera.pcd").string();
+  {
+    std::ofstream out(pcd);
+    out << "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH " << scan.points.size()
+        << "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " << scan.points.size() << "\nDATA ascii\n";
+    out.precision(9);
+    for (const Vec3& p : scan.points) out << p.x() << ' ' << p.y() << ' ' << p.z() << '\n';
+  }
+  o.file = pcd;
+  auto pcd_default = StreamView(o);
+  ASSERT_TRUE(pcd_default.ok());
+  EXPECT_FALSE(pcd_default->sensor);
+  o.sensor = Vec3(0, 0, 0);
+  auto told = StreamView(o);
+  ASSERT_TRUE(told.ok());
+  ASSERT_TRUE(told->sensor);
+  EXPECT_EQ(*told->sensor, Vec3::Zero());
+  EXPECT_EQ(told->points.size(), scan.points.size());
+  o.sensor.reset();
+
   o.file = plain;
   o.viewpoint = 1;  // asked for: a new view from the paper's viewpoint 1
   auto recut = StreamView(o);

@@ -52,6 +52,18 @@ TEST(ParseMethodList, CommaSeparatedWithoutDuplicates) {
   EXPECT_FALSE(ParseMethodList("bok,nope").ok());
 }
 
+TEST(ParseSensor, ThreeFiniteNumbers) {
+  auto origin = ParseSensor("0,0,0");
+  ASSERT_TRUE(origin.ok());
+  EXPECT_EQ(*origin, Vec3::Zero());
+  auto p = ParseSensor(" 1.5, -2 ,3e-1");
+  ASSERT_TRUE(p.ok());
+  EXPECT_EQ(*p, Vec3(1.5f, -2.0f, 0.3f));
+  for (const char* bad : {"", "0,0", "0,0,0,0", "a,0,0", "0,,0", "nan,0,0", "inf,0,0", "1e9,0,0", "0 0 0"})
+    EXPECT_FALSE(ParseSensor(bad).ok()) << bad;
+  EXPECT_NE(ParseSensor("x").error().message.find("X,Y,Z"), std::string::npos);
+}
+
 TEST(StatusCodeName, MatchesGrpcNames) {
   EXPECT_STREQ(StatusCodeName(grpc::StatusCode::NOT_FOUND), "NOT_FOUND");
   EXPECT_STREQ(StatusCodeName(grpc::StatusCode::DEADLINE_EXCEEDED), "DEADLINE_EXCEEDED");

@@ -79,6 +79,20 @@ TEST_F(IoTest, CloudRoundTripEveryWriterFormat) {
   }
 }
 
+TEST_F(IoTest, ASensorAtTheOriginRoundTripsInEveryFormat) {
+  Cloud cloud = random_cloud(50, 8);
+  cloud.sensor = Vec3::Zero();  // a camera-frame scan: not "no sensor", although PCD's VIEWPOINT says identity
+  for (const char* ext : {".pcd", ".ply", ".xyz"}) {
+    SCOPED_TRACE(ext);
+    const std::string p = path(std::string("origin") + ext);
+    ASSERT_TRUE(write_cloud(p, cloud).ok());
+    Expected<Cloud> back = read_cloud(p);
+    ASSERT_TRUE(back.ok()) << back.error().message;
+    ASSERT_TRUE(back->sensor.has_value());
+    EXPECT_EQ(*back->sensor, Vec3::Zero());
+  }
+}
+
 TEST_F(IoTest, CloudWithoutSensorAndWithNanRoundTrips) {
   Cloud cloud;
   cloud.points = {Vec3(1, 2, 3), Vec3(std::nanf(""), 0, 0), Vec3(-1, -2, -3)};

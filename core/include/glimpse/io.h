@@ -26,8 +26,9 @@ Expected<Mesh> read_mesh(const std::string& path);
 // fields; NaN points are kept), .ply, .xyz/.txt/.csv (x y z per line separated by blanks or commas,
 // further columns ignored, '#' comments), .off/.obj/.stl (their vertices).
 // Sensor: a PCD VIEWPOINT other than the default "0 0 0 1 0 0 0" sets Cloud.sensor to its translation
-// (its rotation is ignored); PLY and XYZ files written by write_cloud carry it as a
-// "glimpse_sensor x y z" comment. A sensor exactly at the origin written to PCD reads back as none.
+// (its rotation is ignored); files written by write_cloud also carry it as a "glimpse_sensor x y z"
+// comment, which wins over VIEWPOINT and can say "at the origin"; without it a PCD with the default
+// VIEWPOINT has no sensor (the format cannot tell the default from a sensor at the origin).
 Expected<Cloud> read_cloud(const std::string& path);
 
 // .pcd (ascii, fields x y z), .ply (binary_little_endian, float x y z), .xyz (ascii "x y z" lines).
