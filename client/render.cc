@@ -202,7 +202,9 @@ std::string KeypointsField(const v1::Decision& d, std::string_view gap) {
 
 std::string DecisionLine(const v1::Decision& d, size_t chunks_total) {
   std::string winner = d.winner().empty() ? "-" : d.winner() + " " + Score(WinnerScore(d));
-  return "chunk " + std::to_string(d.chunk_index() + 1) + "/" + std::to_string(chunks_total) + " points " +
+  const std::string which =
+      d.final() ? "final" : "chunk " + std::to_string(d.chunk_index() + 1) + "/" + std::to_string(chunks_total);
+  return which + " points " +
          std::to_string(d.points()) + " " + KeypointsField(d, " ") + "winner " + winner +
          " changes " + std::to_string(d.category_changes()) + " settled " + YesNo(d.settled()) + " confidence " +
          Fixed(d.confidence(), 2);
@@ -210,8 +212,9 @@ std::string DecisionLine(const v1::Decision& d, size_t chunks_total) {
 
 std::string DecisionPanel(const v1::Decision& d, size_t chunks_total, std::string_view previous_winner,
                           int bar_width) {
-  std::string out = "model " + FormatModelRef(d.model()) + " (" + MethodName(d.method()) + ")   chunk " +
-                    std::to_string(d.chunk_index() + 1) + "/" + std::to_string(chunks_total) + "   points " +
+  const std::string which = d.final() ? "final (the whole scan, as Classify)"
+                                      : "chunk " + std::to_string(d.chunk_index() + 1) + "/" + std::to_string(chunks_total);
+  std::string out = "model " + FormatModelRef(d.model()) + " (" + MethodName(d.method()) + ")   " + which + "   points " +
                     std::to_string(d.points()) + "   " + KeypointsField(d, "   ") +
                     Fixed(d.latency_ms(), 1) + " ms\n";
   if (d.winner().empty()) {
@@ -237,6 +240,7 @@ std::string DecisionJson(const v1::Decision& d, size_t chunks_total) {
   return "{\"chunk\":" + std::to_string(d.chunk_index() + 1) + ",\"chunks\":" + std::to_string(chunks_total) +
          ",\"points\":" + std::to_string(d.points()) + ",\"keypoints\":" + std::to_string(d.keypoints()) +
          ",\"winner\":" + JsonString(d.winner()) + ",\"scores\":" + JsonScores(d.scores()) +
+         ",\"raw_scores\":" + JsonScores(d.raw_scores()) + ",\"final\":" + (d.final() ? "true" : "false") +
          ",\"changes\":" + std::to_string(d.category_changes()) + ",\"held\":" + std::to_string(d.winner_held_chunks()) +
          ",\"settled\":" + (d.settled() ? "true" : "false") + ",\"confidence\":" + JsonNumber(d.confidence()) +
          ",\"model\":" + JsonString(d.model().name()) + ",\"version\":" + std::to_string(d.model().version()) +

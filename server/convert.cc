@@ -215,6 +215,13 @@ void ToProto(const StreamDecision& d, v1::Decision* out) {
   out->set_points(d.points);
   out->set_keypoints(d.keypoints);
   AddScores(d.categories, d.scores, d.winner, out);
+  if (d.raw_scores.size() == d.categories.size())
+    for (size_t i = 0; i < d.categories.size(); ++i) {
+      v1::CategoryScore* s = out->add_raw_scores();
+      s->set_category(d.categories[i]);
+      s->set_score(d.raw_scores[i]);
+    }
+  out->set_final(d.final);
   out->set_category_changes(static_cast<uint32_t>(std::max(0, d.category_changes)));
   out->set_winner_held_chunks(static_cast<uint32_t>(std::max(0, d.winner_held_chunks)));
   out->set_settled(d.settled);

@@ -192,6 +192,7 @@ grpc::Status GlimpseService::StreamClassify(grpc::ServerContext* ctx,
     LoadedModel model;
     MethodId method = MethodId::kFusion;
     v1::ScanChunk chunk;
+    bool caller_left = false;
     while (stream->Read(&chunk)) {
       const auto start = options_.clock();
       ++log.messages;
@@ -242,10 +243,26 @@ grpc::Status GlimpseService::StreamClassify(grpc::ServerContext* ctx,
       FillRef(model.record, reply.mutable_model());
       reply.set_method(MethodToProto(method));
       reply.set_latency_ms(MsSince(start, options_.clock()));
-      if (!stream->Write(reply)) break;  // the caller went away
+      if (!stream->Write(reply)) {  // the caller went away
+        caller_left = true;
+        break;
+      }
     }
     if (ticket->expired()) return StreamTooLong(options_.limits);
     if (ctx->IsCancelled()) return cancelled("the caller cancelled the stream");
+    // The scanner is done (WritesDone): the final answer, every feature on the whole scan, is Classify's.
+    if (session && !caller_left && !session->last().raw_scores.empty()) {
+      const auto start = options_.clock();
+      auto finished = session->finish();
+      if (!finished) return finished.error();
+      v1::Decision reply;
+      ToProto(*finished, &reply);
+      reply.set_chunk_index(log.messages - 1);
+      FillRef(model.record, reply.mutable_model());
+      reply.set_method(MethodToProto(method));
+      reply.set_latency_ms(MsSince(start, options_.clock()));
+      stream->Write(reply);
+    }
     return {};
   });
 }

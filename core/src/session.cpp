@@ -139,6 +139,15 @@ Expected<StreamDecision> Session::finish() {
   if (!update_method_features(true) && !have_features_) return last_;
   last_.keypoints = method_features_.positions.size();
   decide();
+  // The scan is over: the answer is Classify's of the whole scan, not the running average.
+  last_.scores = last_.raw_scores;
+  const int classify_winner = static_cast<int>(
+      std::max_element(last_.raw_scores.begin(), last_.raw_scores.end()) - last_.raw_scores.begin());
+  if (classify_winner != last_.winner) {
+    ++last_.category_changes;
+    last_.winner_held_chunks = 1;
+    last_.winner = classify_winner;
+  }
   last_.final = true;
   return last_;
 }

@@ -173,14 +173,19 @@ run 2 classify "$BOX" --model boxes --view 2 --whole
 GLIMPSE_MODEL=folder run 0 classify "$BLOB" && out_has "folder:1"
 
 # ---- stream ----
-run 0 stream --zoo chair --model tiny:1 --chunks 5 --rate 50 && out_lines 5
+run 0 stream --zoo chair --model tiny:1 --chunks 5 --rate 50 && out_lines 6 && out_has "^final points "
 out_has "^chunk 1/5 points [0-9]+ (keypoints [0-9]+ )?winner " && out_has "^chunk 5/5 .* settled (yes|no) confidence [0-9.]+$"
-run 0 stream "$BOX" --model tiny --chunk-points 1000 --order random --rate 0 --json && out_has '"chunk":1,' && out_has '"model":"tiny","version":2,"method":"(bok|esf)"'
-run 0 stream "$DATA/blob/s1.xyz" --model folder --chunks 3 --order sweep --rate 0 && out_lines 3
+run 0 stream "$BOX" --model tiny --chunk-points 1000 --order random --rate 0 --json && out_has '"chunk":1,' && out_has '"final":true' && out_has '"model":"tiny","version":2,"method":"(bok|esf)"'
+run 0 stream "$DATA/blob/s1.xyz" --model folder --chunks 3 --order sweep --rate 0 && out_lines 4
 # A cloud without a sensor streams as it is: all of its 1800 points (a view is cut only when asked).
 run 0 stream "$DATA/blob/s3.xyz" --model folder --chunks 3 --rate 0 && out_has "^chunk 3/3 points 1800 "
-run 0 stream "$DATA/blob/s3.xyz" --model folder --chunks 3 --rate 0 --view 1 && out_lines 3
+run 0 stream "$DATA/blob/s3.xyz" --model folder --chunks 3 --rate 0 --view 1 && out_lines 4
 grep -q "^chunk 3/3 points 1800 " "$OUT" && fail "stream --view 1 did not cut a view"
+# A sensor the file cannot state (a camera-frame scan, VIEWPOINT at the origin) is given by hand.
+run 0 stream "$DATA/blob/s3.xyz" --model folder --chunks 3 --rate 0 --sensor 0,0,-2 && out_has "^chunk 3/3 points 1800 "
+run 2 stream "$DATA/blob/s3.xyz" --model folder --sensor 0,0 && err_has "X,Y,Z"
+run 2 stream "$DATA/blob/s3.xyz" --model folder --sensor 0,0,0 --view 1
+run 1 stream "$BOX" --model tiny --sensor 0,0,0 --rate 0 && err_has "sensor is for cloud files"
 run 1 stream --zoo human --model nope --rate 0 && err_has "^glimpse: stream --zoo human: NOT_FOUND"
 run 1 stream "$GLIMPSE_TEST_TMP/nothing.off" --model tiny && err_has "nothing\.off"
 

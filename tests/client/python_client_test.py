@@ -189,8 +189,19 @@ class PythonClientTest(unittest.TestCase):
                     msg.model.name = "py"
                 yield msg
 
-        decisions = list(self.stub.StreamClassify(requests(), timeout=120))
+        answers = list(self.stub.StreamClassify(requests(), timeout=120))
+        # one decision per chunk, then the final one (the whole scan, as Classify) after WritesDone
+        self.assertEqual([d.final for d in answers], [False] * len(chunks) + [True])
+        decisions, final = answers[:-1], answers[-1]
         self.assertEqual([d.chunk_index for d in decisions], list(range(len(chunks))))
+        self.assertEqual(final.chunk_index, len(chunks) - 1)
+        whole = self.stub.Classify(pb.ClassifyRequest(model=pb.ModelRef(name="py"),
+                                                      cloud=pb.PointCloud(xyz=packed(points), sensor=sensor)),
+                                   timeout=60)
+        self.assertEqual(final.winner, whole.winner)
+        self.assertEqual([(s.category, s.score) for s in final.raw_scores],
+                         [(s.category, s.score) for s in whole.scores])
+        self.assertEqual(len(decisions[-1].raw_scores), 5)
         self.assertTrue(all(a.points <= b.points for a, b in zip(decisions, decisions[1:])))
         last = decisions[-1]
         self.assertEqual((last.model.name, last.model.version), ("py", 1))
@@ -209,7 +220,8 @@ class PythonClientTest(unittest.TestCase):
                 yield pb.ScanChunk(cloud=pb.PointCloud(xyz=packed(points[i:i + 400])))
 
         decisions = list(self.stub.StreamClassify(requests(), timeout=120))
-        self.assertEqual([d.chunk_index for d in decisions], [0, 1, 2, 3])
+        self.assertEqual([(d.chunk_index, d.final) for d in decisions],
+                         [(0, False), (1, False), (2, False), (3, False), (3, True)])
         self.assertEqual(decisions[0].winner_index, -1)
 
     def test_classify_batch_answers_each_cloud_with_its_own_status(self):

@@ -24,6 +24,11 @@ v1::Decision MakeDecision() {
     score->set_category(c);
     score->set_score(s);
   }
+  for (auto [c, s] : {std::pair{"human", 0.2}, {"chair", 0.7}, {"table", 0.1}}) {
+    auto* score = d.add_raw_scores();
+    score->set_category(c);
+    score->set_score(s);
+  }
   d.set_winner("chair");
   d.set_winner_index(1);
   d.set_category_changes(1);
@@ -124,6 +129,11 @@ TEST(Render, DecisionLineIsTheDocumentedPlainFormat) {
   global.set_method(v1::METHOD_BOK);
   EXPECT_EQ(DecisionLine(global, 20),
             "chunk 3/20 points 1234 keypoints 0 winner chair 0.820 changes 1 settled no confidence 0.41");
+  v1::Decision final = MakeDecision();
+  final.set_final(true);
+  EXPECT_EQ(DecisionLine(final, 20),
+            "final points 1234 keypoints 17 winner chair 0.820 changes 1 settled no confidence 0.41");
+  EXPECT_NE(DecisionPanel(final, 20, "chair", 10).find("final (the whole scan, as Classify)"), std::string::npos);
 }
 
 TEST(Render, DecisionPanelMarksWinnerAndAChange) {
@@ -143,7 +153,8 @@ TEST(Render, DecisionPanelMarksWinnerAndAChange) {
 TEST(Render, DecisionJson) {
   EXPECT_EQ(DecisionJson(MakeDecision(), 20),
             "{\"chunk\":3,\"chunks\":20,\"points\":1234,\"keypoints\":17,\"winner\":\"chair\","
-            "\"scores\":{\"human\":0.1,\"chair\":0.82,\"table\":0.3},\"changes\":1,\"held\":2,\"settled\":false,"
+            "\"scores\":{\"human\":0.1,\"chair\":0.82,\"table\":0.3},\"raw_scores\":{\"human\":0.2,\"chair\":0.7,"
+            "\"table\":0.1},\"final\":false,\"changes\":1,\"held\":2,\"settled\":false,"
             "\"confidence\":0.41,\"model\":\"zoo\",\"version\":3,\"method\":\"fusion\",\"latency_ms\":12.5}");
 }
 

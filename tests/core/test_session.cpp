@@ -156,6 +156,8 @@ TEST(ScanSession, FinishedStreamScoresAreClassifysOfTheWholeCloud) {
           EXPECT_EQ(d.keypoints, whole->keypoints);
           ASSERT_EQ(d.raw_scores.size(), whole->scores.size());
           for (size_t c = 0; c < d.raw_scores.size(); ++c) EXPECT_EQ(d.raw_scores[c], whole->scores[c]) << c;
+          EXPECT_EQ(d.scores, d.raw_scores);  // the final answer is Classify's, not the running average
+          EXPECT_EQ(d.winner, whole->winner);
         }
   }
 }

@@ -255,6 +255,7 @@ int Run(const Options& o) {
           ++calls;
         }
         stream->WritesDone();
+        for (v1::Decision final; stream->Read(&final);) {}  // the final decision (the whole scan)
         grpc::Status s = stream->Finish();
         stream_calls.Add(std::chrono::duration<double, std::milli>(Clock::now() - s0).count(), s.error_code());
       }
@@ -290,10 +291,12 @@ int Run(const Options& o) {
       v1::Decision d;
       extra->Read(&d);
       extra->WritesDone();
+      while (extra->Read(&d)) {}
       limit_streams.Add(0, extra->Finish().error_code());
     }
     for (auto& h : held) {
       h->WritesDone();
+      for (v1::Decision rest; h->Read(&rest);) {}
       h->Finish();
     }
     if (opened != o.max_streams) std::fprintf(stderr, "glimpse-load: only %d of %d slots opened\n", opened, o.max_streams);

@@ -116,6 +116,7 @@ class BadInput : public ::testing::Test {
       if (!stream->Read(&d)) break;
     }
     stream->WritesDone();
+    for (v1::Decision rest; stream->Read(&rest);) {}
     return stream->Finish();
   }
   static v1::ScanChunk Chunk(const Cloud& cloud, const std::string& model = "") {
@@ -404,6 +405,7 @@ TEST_F(BadInput, EveryCaseGetsItsStatusAndTheServerKeepsServing) {
          grpc::Status fifth = B::Stream({B::Chunk(good, "zoo")});
          for (auto& s : open) {
            s->WritesDone();
+           for (v1::Decision rest; s->Read(&rest);) {}
            s->Finish();
          }
          return fifth;

@@ -242,7 +242,30 @@ TEST_F(CoreEngineTest, StreamClassifyOverGrpcGivesExactlyTheSessionsDecisions) {
     for (size_t i = 0; i < direct->scores.size(); ++i) EXPECT_EQ(d.scores(int(i)).score(), direct->scores[i]);
   }
   stream->WritesDone();
+  // Then the final decision: the session's finish(), which is Classify's answer on the whole scan.
+  v1::Decision final;
+  ASSERT_TRUE(stream->Read(&final));
+  EXPECT_TRUE(final.final());
+  v1::Decision after;
+  EXPECT_FALSE(stream->Read(&after));  // nothing after the final one
   EXPECT_TRUE(stream->Finish().ok());
+  auto finished = (*session)->finish();
+  ASSERT_TRUE(finished.ok());
+  EXPECT_EQ(final.chunk_index(), chunks - 1);
+  EXPECT_EQ(final.winner_index(), finished->winner);
+  ASSERT_EQ(final.raw_scores_size(), int(finished->raw_scores.size()));
+  for (size_t i = 0; i < finished->raw_scores.size(); ++i) EXPECT_EQ(final.raw_scores(int(i)).score(), finished->raw_scores[i]);
+  grpc::ClientContext cctx;
+  v1::ClassifyRequest whole;
+  whole.mutable_model()->set_name("shapes");
+  Cloud streamed;  // the points the chunks carried (no sensor)
+  streamed.points = scan.cloud.points;
+  *whole.mutable_cloud() = CloudToProto(streamed);
+  v1::ClassifyResponse classified;
+  ASSERT_TRUE(harness_->stub->Classify(&cctx, whole, &classified).ok());
+  EXPECT_EQ(final.winner(), classified.winner());
+  ASSERT_EQ(final.scores_size(), classified.scores_size());
+  for (int i = 0; i < classified.scores_size(); ++i) EXPECT_EQ(final.scores(i).score(), classified.scores(i).score());
   EXPECT_EQ(last.chunk_index(), chunks - 1);
   EXPECT_GE(last.winner_index(), 0);
   EXPECT_GT(last.points(), 0u);

@@ -222,6 +222,9 @@ TEST(E2E, TrainClassifyAndStreamOverLoopback) {
   ASSERT_TRUE(stream->Read(&d));
   EXPECT_EQ(d.points(), 10u);
   stream->WritesDone();
+  ASSERT_TRUE(stream->Read(&d));
+  EXPECT_TRUE(d.final());
+  EXPECT_FALSE(stream->Read(&d));
   EXPECT_TRUE(stream->Finish().ok());
 }
 
@@ -306,6 +309,7 @@ TEST(E2E, ShutdownLetsAnInFlightStreamFinish) {
   ASSERT_TRUE(stream->Read(&d));
   EXPECT_EQ(d.points(), 20u);
   stream->WritesDone();
+  while (stream->Read(&d)) {}
   EXPECT_TRUE(stream->Finish().ok());
   EXPECT_EQ(stopped.wait_for(std::chrono::seconds(10)), std::future_status::ready);
   server.running.server.reset();

@@ -198,6 +198,7 @@ struct Calls {
     v1::Decision d;
     stream->Read(&d);
     stream->WritesDone();
+    while (stream->Read(&d)) {}
     return stream->Finish();
   }
   grpc::Status List() const {

@@ -402,8 +402,16 @@ TEST(StreamClassify, AnswersEveryChunkWithTheEvolvingDecision) {
     decisions.push_back(d);
   }
   stream->WritesDone();
+  v1::Decision final;
+  ASSERT_TRUE(stream->Read(&final));  // the scan is over: the session's final decision
   EXPECT_FALSE(stream->Read(&d));
   ASSERT_TRUE(stream->Finish().ok());
+  EXPECT_TRUE(final.final());
+  EXPECT_FALSE(decisions.back().final());
+  EXPECT_EQ(final.chunk_index(), decisions.back().chunk_index());
+  EXPECT_EQ(final.points(), 100u);
+  EXPECT_EQ(final.raw_scores_size(), 2);
+  EXPECT_EQ(final.model().name(), "m");
 
   EXPECT_EQ(decisions[0].winner_index(), -1);
   EXPECT_EQ(decisions[0].winner(), "");
@@ -435,6 +443,7 @@ TEST(StreamClassify, Errors) {
       if (!stream->Read(&d)) break;
     }
     stream->WritesDone();
+    for (v1::Decision d; stream->Read(&d);) {}
     return stream->Finish();
   };
   EXPECT_EQ(run({Chunk(10, "nope")}).error_code(), grpc::StatusCode::NOT_FOUND);
@@ -474,6 +483,7 @@ TEST(StreamClassify, ConcurrentStreamsBeyondTheLimitAreResourceExhausted) {
   EXPECT_EQ(h.Train("m", {"a", "b"}, &rejected).error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
 
   first->WritesDone();
+  while (first->Read(&d)) {}
   ASSERT_TRUE(first->Finish().ok());
   for (int i = 0; i < 200 && h.service->streams().active() > 0; ++i)
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
@@ -482,6 +492,7 @@ TEST(StreamClassify, ConcurrentStreamsBeyondTheLimitAreResourceExhausted) {
   ASSERT_TRUE(third->Write(Chunk(10, "m")));
   EXPECT_TRUE(third->Read(&d));
   third->WritesDone();
+  while (third->Read(&d)) {}
   EXPECT_TRUE(third->Finish().ok());
 }
 

@@ -48,6 +48,7 @@ struct StreamDecision {
   size_t keypoints = 0;
   std::vector<std::string> categories;
   std::vector<double> scores;       // one per category, in [0, 1]: smoothed over the chunks so far
+                                    // (final: Classify's scores of the whole scan)
   std::vector<double> raw_scores;   // this chunk's own scores (after finish: Classify's of the cloud)
   bool final = false;               // the answer of finish(): every feature of the whole scan
   int winner = -1;                  // -1 while there is nothing to decide on
@@ -77,7 +78,8 @@ class ScanSession {
   // Adds a chunk (points in the session's common frame) and returns the updated decision.
   virtual Expected<StreamDecision> add(const Cloud& chunk) = 0;
   // The scanner is done: every feature brought up to date on the whole scan (VFH and ESF too), so the
-  // raw scores are Classify's of the accumulated cloud; the smoothed track takes them in as a last step.
+  // raw scores are Classify's of the accumulated cloud, and the final decision's scores and winner are
+  // those raw scores and their argmax (Classify's answer), not the running average.
   virtual Expected<StreamDecision> finish() = 0;
   virtual const StreamDecision& last() const = 0;
 };
