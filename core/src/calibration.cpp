@@ -1,7 +1,11 @@
 // Calibration: what a model learns about its own decisions from held-out folds of its training set
 // (inner cross-validation by object), so that no threshold is set on the clouds it will be judged on.
-// Today: the score margin at which its decisions can be trusted, which makes a streamed decision settle.
+// The score margin at which its decisions can be trusted (a streamed decision settles there), and how
+// far from anything learnt its known clouds fall, so that a cloud of no learnt category can be told
+// ("none of these") with no example of one.
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <map>
 #include <random>
 
@@ -15,7 +19,125 @@ uint32_t fnv1a(const std::string& s) {  // std::hash differs between standard li
   for (unsigned char c : s) h = (h ^ c) * 16777619u;
   return h;
 }
+
+double median(std::vector<double> v) {
+  std::erase_if(v, [](double x) { return !std::isfinite(x); });
+  if (v.empty()) return 0.0;
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+
+// What the held-out decisions of the inner folds measured: per decision, its winner and, per component
+// method, every category's nearest reference.
+struct HeldOut {
+  std::vector<int> winners;
+  std::vector<std::vector<NearestReferences>> nearest;  // [decision][component]
+};
+
+// Novelty scales: per component, category and kind of nearest reference (a top-down prefix or a whole
+// cloud: a full table is far from every other full table, its top close to every other top), the
+// median distance from the held-out decisions decided as that category (right or wrong: an unknown
+// cloud is decided as something too) to its nearest reference; and the median of what the stage's PCA
+// leaves out of the held-out histograms, per kind of the winner's nearest reference (last two). Then the
+// held-out novelties' quantiles.
+void calibrate_novelty(Calibration& c, const HeldOut& h, size_t components, int categories, double known_acceptance) {
+  if (h.winners.empty() || components == 0) return;
+  const size_t n_cat = static_cast<size_t>(categories);
+  c.novelty_scale.assign(components, std::vector<double>(2 * n_cat + 2, 1.0));
+  for (size_t j = 0; j < components; ++j) {
+    std::vector<double> all, residuals[2];
+    for (size_t i = 0; i < h.winners.size(); ++i) {
+      const NearestReferences& n = h.nearest[i][j];
+      residuals[n.whole[static_cast<size_t>(h.winners[i])]].push_back(n.residual);
+    }
+    for (size_t kind = 0; kind < 2; ++kind) {
+      const double m = median(residuals[kind].size() >= 5 ? residuals[kind] : residuals[1 - kind]);
+      c.novelty_scale[j][2 * n_cat + kind] = m > 0 ? m : 1.0;
+    }
+    std::vector<std::vector<double>> of(n_cat), of_kind(2 * n_cat);
+    for (size_t i = 0; i < h.winners.size(); ++i) {
+      const size_t w = static_cast<size_t>(h.winners[i]);
+      const NearestReferences& n = h.nearest[i][j];
+      all.push_back(n.distance[h.winners[i]]);
+      of[w].push_back(n.distance[h.winners[i]]);
+      of_kind[2 * w + n.whole[w]].push_back(n.distance[h.winners[i]]);
+    }
+    const double component = median(all);
+    for (size_t k = 0; k < 2 * n_cat; ++k) {
+      // Too few to say: the category's, then the component's.
+      const double m = of_kind[k].size() >= 5 ? median(of_kind[k]) : of[k / 2].size() >= 5 ? median(of[k / 2]) : component;
+      c.novelty_scale[j][k] = m > 0 ? m : (component > 0 ? component : 1.0);
+    }
+  }
+  std::vector<double> known;
+  for (size_t i = 0; i < h.winners.size(); ++i) {
+    const Eigen::VectorXd n = category_novelty(c, h.nearest[i]);
+    if (n.size() && std::isfinite(n[h.winners[i]])) known.push_back(n[h.winners[i]]);
+  }
+  if (known.empty()) return;
+  std::sort(known.begin(), known.end());
+  c.novelty_quantiles.resize(kNoveltyQuantiles);
+  for (size_t q = 0; q < kNoveltyQuantiles; ++q) {
+    // The smallest novelty accepting at least this share of the held-out decisions.
+    const double a = double(q) / double(kNoveltyQuantiles - 1);
+    const size_t rank = static_cast<size_t>(std::ceil(a * double(known.size()) - 1e-9));
+    c.novelty_quantiles[q] = known[std::min(known.size() - 1, rank > 0 ? rank - 1 : 0)];
+  }
+  c.known_acceptance = known_acceptance;
+  c.novelty_threshold = novelty_threshold(c, known_acceptance);
+}
+
+// Per reference of a stage fitted on `rows`: whether it is a whole cloud. Rules whose references are
+// centres, not training vectors, count every reference as whole.
+std::vector<uint8_t> whole_references(DecisionRule rule, const std::vector<uint8_t>& whole, const std::vector<Eigen::Index>& rows) {
+  if (rule != DecisionRule::kNearestReference && rule != DecisionRule::kNearestNeighbours) return {};
+  std::vector<uint8_t> out;
+  for (Eigen::Index r : rows) out.push_back(whole.empty() ? 1 : whole[static_cast<size_t>(r)]);
+  return out;
+}
+
 }  // namespace
+
+NearestReferences nearest_references(StageScores&& s, const std::vector<uint8_t>& reference_whole) {
+  NearestReferences n;
+  n.distance = std::move(s.nearest_distance);
+  n.residual = s.residual;
+  n.whole.assign(static_cast<size_t>(n.distance.size()), 1);
+  for (Eigen::Index k = 0; k < s.nearest_reference.size() && k < n.distance.size(); ++k) {
+    const int r = s.nearest_reference[k];
+    if (r >= 0 && static_cast<size_t>(r) < reference_whole.size()) n.whole[static_cast<size_t>(k)] = reference_whole[static_cast<size_t>(r)] ? 1 : 0;
+  }
+  return n;
+}
+
+Eigen::VectorXd category_novelty(const Calibration& c, const std::vector<NearestReferences>& components) {
+  if (c.novelty_scale.empty() || c.novelty_scale.size() != components.size()) return {};
+  const Eigen::Index categories = components.front().distance.size();
+  const size_t n_cat = static_cast<size_t>(categories);
+  Eigen::VectorXd near = Eigen::VectorXd::Zero(categories), outside = Eigen::VectorXd::Zero(categories);
+  for (size_t j = 0; j < components.size(); ++j) {
+    const std::vector<double>& scale = c.novelty_scale[j];
+    const NearestReferences& n = components[j];
+    if (n.distance.size() != categories || n.whole.size() != n_cat || scale.size() != 2 * n_cat + 2) return {};
+    for (Eigen::Index k = 0; k < categories; ++k) {
+      const size_t whole = n.whole[static_cast<size_t>(k)] ? 1 : 0;
+      near[k] += n.distance[k] / scale[2 * static_cast<size_t>(k) + whole];
+      outside[k] += n.residual / scale[2 * n_cat + whole];
+    }
+  }
+  // Novel either way: far from every reference of the category, or outside what training histograms span.
+  return near.cwiseMax(outside) / double(components.size());
+}
+
+double novelty_threshold(const Calibration& c, double known_acceptance) {
+  const std::vector<double>& q = c.novelty_quantiles;
+  if (q.size() < 2 || !(known_acceptance > 0 && known_acceptance <= 1)) return std::numeric_limits<double>::quiet_NaN();
+  // Linear between the stored quantiles.
+  const double x = known_acceptance * double(q.size() - 1);
+  const size_t lo = std::min(q.size() - 2, static_cast<size_t>(x));
+  const double t = x - double(lo);
+  return q[lo] + t * (q[lo + 1] - q[lo]);
+}
 
 std::vector<int> stratified_folds(const std::vector<std::string>& object_categories, int folds, uint64_t seed) {
   std::vector<int> fold(object_categories.size(), 0);
@@ -51,7 +173,7 @@ double settle_margin(std::vector<std::pair<double, bool>> decisions, double prec
 }
 
 Calibration calibrate(const ModelImpl& impl, MethodId method, const std::vector<Eigen::MatrixXd>& histograms,
-                      const std::vector<int>& labels, const std::vector<int>& objects,
+                      const std::vector<int>& labels, const std::vector<int>& objects, const std::vector<uint8_t>& whole,
                       const std::vector<std::string>& object_categories, int categories, int threads) {
   const TrainParams& p = impl.params;
   Calibration c;
@@ -66,6 +188,7 @@ Calibration calibrate(const ModelImpl& impl, MethodId method, const std::vector<
   const std::vector<int> object_fold = stratified_folds(object_categories, folds, p.seed + 101);
   const std::vector<MethodId> parts = component_methods(impl, method);
   std::vector<std::pair<double, bool>> decisions;
+  HeldOut held_out;
   size_t correct = 0;
   for (int k = 0; k < folds; ++k) {
     std::vector<Eigen::Index> train_rows, test_rows;
@@ -77,8 +200,8 @@ Calibration calibrate(const ModelImpl& impl, MethodId method, const std::vector<
     std::vector<int> seen(static_cast<size_t>(categories), 0);
     for (int l : train_labels) seen[static_cast<size_t>(l)] = 1;
     if (std::count(seen.begin(), seen.end(), 0)) continue;  // a category wholly in this fold
-    Eigen::VectorXd dummy;
     std::vector<Eigen::MatrixXd> scores(parts.size());
+    std::vector<std::vector<NearestReferences>> nearest(test_rows.size());
     bool ok = true;
     for (size_t j = 0; j < parts.size() && ok; ++j) {
       const Eigen::MatrixXd& h = histograms[static_cast<size_t>(parts[j])];
@@ -92,9 +215,13 @@ Calibration calibrate(const ModelImpl& impl, MethodId method, const std::vector<
         ok = false;
         break;
       }
+      const std::vector<uint8_t> reference_whole = whole_references(stage->kind, whole, train_rows);
       scores[j].resize(static_cast<Eigen::Index>(test_rows.size()), categories);
-      for (size_t r = 0; r < test_rows.size(); ++r)
-        scores[j].row(static_cast<Eigen::Index>(r)) = decide(*stage, h.row(test_rows[r]).transpose()).transpose();
+      for (size_t r = 0; r < test_rows.size(); ++r) {
+        StageScores answer = decide_with_distances(*stage, h.row(test_rows[r]).transpose());
+        scores[j].row(static_cast<Eigen::Index>(r)) = answer.scores.transpose();
+        nearest[r].push_back(nearest_references(std::move(answer), reference_whole));
+      }
     }
     if (!ok) continue;
     for (size_t r = 0; r < test_rows.size(); ++r) {
@@ -108,12 +235,21 @@ Calibration calibrate(const ModelImpl& impl, MethodId method, const std::vector<
       const bool right = winner == labels[static_cast<size_t>(test_rows[r])];
       decisions.push_back({s[winner] - second, right});
       correct += right;
+      held_out.winners.push_back(winner);
+      held_out.nearest.push_back(std::move(nearest[r]));
     }
   }
   c.held_out = decisions.size();
   if (decisions.empty()) return c;
   c.held_out_accuracy = double(correct) / double(decisions.size());
   c.settle_margin = settle_margin(std::move(decisions), p.settle_precision, 20);
+  calibrate_novelty(c, held_out, parts.size(), categories, p.known_acceptance);
+  if (!c.novelty_scale.empty())
+    for (MethodId m : parts) {  // the model's own stages learnt every row
+      std::vector<Eigen::Index> rows(labels.size());
+      for (size_t i = 0; i < rows.size(); ++i) rows[i] = static_cast<Eigen::Index>(i);
+      c.reference_whole.push_back(whole_references(impl.stages[static_cast<int>(m)]->kind, whole, rows));
+    }
   return c;
 }
 

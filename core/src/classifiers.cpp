@@ -260,11 +260,19 @@ Expected<DecisionStage> fit_decision(const Eigen::MatrixXd& histograms, const st
   return st;
 }
 
-Eigen::VectorXd decide(const DecisionStage& st, const Eigen::VectorXd& histogram) {
+StageScores decide_with_distances(const DecisionStage& st, const Eigen::VectorXd& histogram) {
   const Eigen::VectorXd y = project_row(st.pca, histogram);
   const Eigen::Index n = st.references.rows();
   std::vector<std::pair<double, Eigen::Index>> d(static_cast<size_t>(n));
   for (Eigen::Index i = 0; i < n; ++i) d[static_cast<size_t>(i)] = {l1_rows(st.references, i, y), i};
+  StageScores out;
+  Eigen::VectorXd& best = out.nearest_distance;
+  best = Eigen::VectorXd::Constant(st.categories, INFINITY);
+  out.nearest_reference = Eigen::VectorXi::Constant(st.categories, -1);
+  for (const auto& [dist, i] : d) {
+    const int c = st.labels[static_cast<size_t>(i)];
+    if (dist < best[c]) best[c] = dist, out.nearest_reference[c] = static_cast<int>(i);
+  }
   Eigen::VectorXd scores = Eigen::VectorXd::Zero(st.categories);
   if (st.kind == DecisionRule::kNearestNeighbours) {
     const size_t k = std::min<size_t>(static_cast<size_t>(st.neighbours), d.size());
@@ -274,14 +282,18 @@ Eigen::VectorXd decide(const DecisionStage& st, const Eigen::VectorXd& histogram
       scores[st.labels[static_cast<size_t>(d[i].second)]] += std::exp(-(d[i].first - d[0].first) / st.temperature);
   } else {
     // Softmin over each category's nearest centre (or, for kNearestReference, training vector).
-    Eigen::VectorXd best = Eigen::VectorXd::Constant(st.categories, INFINITY);
-    for (const auto& [dist, i] : d) best[st.labels[static_cast<size_t>(i)]] = std::min(best[st.labels[static_cast<size_t>(i)]], dist);
     const double lo = best.minCoeff();
     for (int c = 0; c < st.categories; ++c) scores[c] = std::exp(-(best[c] - lo) / st.temperature);
   }
   // A small floor keeps every category possible (no hard zero), then scores sum to 1.
   scores.array() += 1e-3;
-  return scores / scores.sum();
+  out.scores = scores / scores.sum();
+  out.residual = (histogram - st.pca.mean - st.pca.basis * y).lpNorm<1>();
+  return out;
+}
+
+Eigen::VectorXd decide(const DecisionStage& st, const Eigen::VectorXd& histogram) {
+  return decide_with_distances(st, histogram).scores;
 }
 
 }  // namespace glimpse

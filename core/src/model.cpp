@@ -127,14 +127,74 @@ Eigen::VectorXd method_histogram(const ModelImpl& impl, MethodId method, const C
   return {};
 }
 
-Eigen::VectorXd method_scores(const ModelImpl& impl, MethodId method, const CloudFeatures& f) {
+MethodDecision method_decision(const ModelImpl& impl, MethodId method, const CloudFeatures& f) {
   const std::vector<MethodId> parts = component_methods(impl, method);
-  Eigen::VectorXd sum;
-  for (MethodId m : parts) {
-    const Eigen::VectorXd s = decide(*impl.stages[static_cast<int>(m)], method_histogram(impl, m, f));
-    sum = sum.size() ? Eigen::VectorXd(sum + s) : s;
+  const Calibration& cal = impl.calibration;
+  const bool calibrated = cal.method == method && !cal.novelty_scale.empty() && cal.reference_whole.size() == parts.size();
+  MethodDecision out;
+  std::vector<NearestReferences> nearest;
+  for (size_t j = 0; j < parts.size(); ++j) {
+    StageScores s = decide_with_distances(*impl.stages[static_cast<int>(parts[j])], method_histogram(impl, parts[j], f));
+    out.scores = out.scores.size() ? Eigen::VectorXd(out.scores + s.scores) : s.scores;
+    if (calibrated) nearest.push_back(nearest_references(std::move(s), cal.reference_whole[j]));
   }
-  return sum / static_cast<double>(std::max<size_t>(1, parts.size()));
+  out.scores /= static_cast<double>(std::max<size_t>(1, parts.size()));
+  if (calibrated) out.novelty = category_novelty(cal, nearest);
+  return out;
+}
+
+Eigen::VectorXd method_scores(const ModelImpl& impl, MethodId method, const CloudFeatures& f) {
+  return method_decision(impl, method, f).scores;
+}
+
+std::string cannot_judge(MethodId method, const std::vector<MethodId>& components, const CloudFeatures& f) {
+  // A keypoint histogram of too few keypoints is empty (BoG's graphs join 4 keypoints, KGH's pairs 2):
+  // its nearest category is an accident. Fusion judges as long as one component can.
+  auto blind = [&](MethodId m) {
+    const size_t k = f.positions.size();
+    return (m == MethodId::kBoK && k == 0) || (m == MethodId::kBoG && k < 4) || (m == MethodId::kKGH && k < 2);
+  };
+  if (components.empty() || !std::all_of(components.begin(), components.end(), blind)) return {};
+  return std::to_string(f.positions.size()) + " keypoint" + (f.positions.size() == 1 ? "" : "s") + ": " +
+         method_name(method) + " cannot judge this cloud (an empty histogram)";
+}
+
+namespace {
+
+// `unknown` and its reason from the novelty at `threshold` (NaN: no novelty threshold, never unknown).
+void judge_novelty(Classification& c, double threshold, double known_acceptance) {
+  c.unknown = std::isfinite(threshold) && std::isfinite(c.novelty) && c.novelty > threshold;
+  c.unknown_reason.clear();
+  if (!c.unknown) return;
+  char why[200];
+  std::snprintf(why, sizeof why,
+                "novelty %.2f above %.2f, the threshold accepting %.1f %% of known clouds (held out in training)",
+                c.novelty, threshold, 100 * known_acceptance);
+  c.unknown_reason = why;
+}
+
+}  // namespace
+
+void judge_unknown(const Model& model, const MethodDecision& decision, const CloudFeatures& f, Classification& c) {
+  if (std::string why = cannot_judge(c.method, component_methods(*model.impl, c.method), f); !why.empty()) {
+    c.novelty = std::numeric_limits<double>::quiet_NaN();
+    c.unknown = true;
+    c.unknown_reason = std::move(why);
+    return;
+  }
+  if (decision.novelty.size() && c.winner >= 0) c.novelty = decision.novelty[c.winner];
+  (void)set_known_acceptance(model, c, 0);  // 0 (the default) is always valid
+}
+
+Status set_known_acceptance(const Model& model, Classification& c, double known_acceptance) {
+  if (!(known_acceptance >= 0 && known_acceptance <= 1))
+    return invalid_argument("known acceptance must be in (0, 1] (0: the model's default), not " +
+                            std::to_string(known_acceptance));
+  if (c.unknown && !std::isfinite(c.novelty)) return {};  // the method cannot judge the cloud at all
+  const Calibration& cal = calibration(model);
+  const double a = known_acceptance > 0 ? known_acceptance : cal.known_acceptance;
+  judge_novelty(c, cal.method == c.method ? novelty_threshold(cal, a) : std::numeric_limits<double>::quiet_NaN(), a);
+  return {};
 }
 
 // ---- Training -------------------------------------------------------------------------------------
@@ -142,6 +202,16 @@ Eigen::VectorXd method_scores(const ModelImpl& impl, MethodId method, const Clou
 const Calibration& calibration(const Model& model) {
   static const Calibration none;
   return model.impl ? model.impl->calibration : none;
+}
+
+std::vector<MethodId> base_methods(const TrainParams& params) {
+  std::vector<MethodId> base;
+  for (MethodId m : params.methods)
+    if (m != MethodId::kFusion && !needs(base, m)) base.push_back(m);
+  if (needs(params.methods, MethodId::kFusion))
+    for (MethodId m : params.fusion_of)
+      if (m != MethodId::kFusion && !needs(base, m)) base.push_back(m);
+  return base;
 }
 
 Cloud training_view(const Cloud& cloud, const TrainParams& params, uint64_t salt) {
@@ -168,18 +238,11 @@ Status validate(const std::vector<Sample>& data, const TrainParams& params) {
       params.bog_volume_clusters < 1 || params.kgh_distance_bins < 1)
     return invalid_argument("codebook sizes must be at least 2 clusters (and 1 volume cluster / distance bin)");
   if (params.bog_keypoint_clusters > 40) return invalid_argument("bog_keypoint_clusters above 40 is not supported");
+  if (!(params.known_acceptance > 0 && params.known_acceptance <= 1))
+    return invalid_argument("known_acceptance must be in (0, 1]");
   return {};
 }
 
-std::vector<MethodId> base_methods(const TrainParams& params) {
-  std::vector<MethodId> base;
-  for (MethodId m : params.methods)
-    if (m != MethodId::kFusion && !needs(base, m)) base.push_back(m);
-  if (needs(params.methods, MethodId::kFusion))
-    for (MethodId m : params.fusion_of)
-      if (m != MethodId::kFusion && !needs(base, m)) base.push_back(m);
-  return base;
-}
 
 // Every keypoint descriptor of the training set, subsampled evenly above `cap` rows.
 Eigen::MatrixXd pooled_descriptors(const std::vector<CloudFeatures>& feats, size_t cap) {
@@ -250,7 +313,7 @@ Expected<Model> train(const std::vector<TrainingCloud>& data, const TrainParams&
                                               (jobs[j].prefix ? ", top " + std::to_string(jobs[j].prefix) + " points" : "") +
                                               ": " + feats[j].error().message};
     }
-    samples.push_back({d.category, d.object_id, std::move(*feats[j])});
+    samples.push_back({d.category, d.object_id, std::move(*feats[j]), jobs[j].prefix == 0});
   }
   feats.clear();
   auto model = train_on_features(std::move(samples), params, progress, cancel);
@@ -285,9 +348,11 @@ Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainP
     model.categories.push_back(name);
   }
   std::vector<int> labels, object_of;
+  std::vector<uint8_t> whole;
   std::map<std::string, int> object_index;
   for (const auto& d : data) {
     labels.push_back(index[d.category]);
+    whole.push_back(d.whole ? 1 : 0);
     // A cloud without an object id is an object of its own.
     const std::string key = d.object_id.empty() ? "#" + std::to_string(labels.size()) : d.category + "/" + d.object_id;
     object_of.push_back(object_index.emplace(key, static_cast<int>(object_index.size())).first->second);
@@ -373,7 +438,7 @@ Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainP
   std::vector<std::string> object_categories(object_index.size());
   for (size_t i = 0; i < labels.size(); ++i)
     object_categories[static_cast<size_t>(object_of[i])] = model.categories[static_cast<size_t>(labels[i])];
-  impl->calibration = calibrate(*impl, model.default_method, histograms, labels, object_of, object_categories,
+  impl->calibration = calibrate(*impl, model.default_method, histograms, labels, object_of, whole, object_categories,
                                 static_cast<int>(model.categories.size()), threads);
   report("calibration", 1, 1);
   if (cancelled_now()) return cancelled("training cancelled");
@@ -442,12 +507,14 @@ Expected<Classification> classify(const Model& model, const Cloud& cloud, std::o
   Classification c;
   c.feature_ms = ms_since(t0);
   const auto t1 = std::chrono::steady_clock::now();
-  const Eigen::VectorXd scores = method_scores(impl, m, *f);
+  const MethodDecision decision = method_decision(impl, m, *f);
+  const Eigen::VectorXd& scores = decision.scores;
   c.decision_ms = ms_since(t1);
   c.method = m;
+  c.winner = argmax(scores);
+  judge_unknown(model, decision, *f, c);
   c.categories = model.categories;
   c.scores.assign(scores.data(), scores.data() + scores.size());
-  c.winner = argmax(scores);
   c.points = f->points;
   c.keypoints = f->positions.size();
   c.warning = size_warning(model.stats, cloud);

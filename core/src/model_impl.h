@@ -3,6 +3,7 @@
 #pragma once
 
 #include <array>
+#include <limits>
 #include <optional>
 
 #include "glimpse/classifiers.h"
@@ -38,6 +39,10 @@ struct CloudFeatures {
   float extent_m = 0;  // the largest bounding-box extent of the cleaned cloud
 };
 
+// The base methods (every one but fusion) whose features and stages params.methods need: the
+// methods themselves and, with fusion, its components.
+std::vector<MethodId> base_methods(const TrainParams& params);
+
 // The methods a model needs computed for `method` (fusion expands to its components).
 std::vector<MethodId> component_methods(const ModelImpl& impl, MethodId method);
 
@@ -65,15 +70,17 @@ struct TrainingSample {
   std::string category;
   std::string object_id;
   CloudFeatures features;
+  bool whole = true;  // the whole training cloud, not one of its top-down prefixes
 };
 Expected<Model> train_on_features(std::vector<TrainingSample> samples, const TrainParams& params,
                                   const ProgressFn& progress = {}, const CancelFn& cancel = {});
 
 // Inner cross-validation of `method`'s decision stages over params.calibration_folds folds of the
 // training objects (`objects[i]` the object of row i, `object_categories` per object); histograms[m] the
-// training rows of base method m. The codebooks are the model's own (fitted without labels).
+// training rows of base method m, `whole` per row: a whole cloud (1) or a top-down prefix (0). The
+// codebooks are the model's own (fitted without labels).
 Calibration calibrate(const ModelImpl& impl, MethodId method, const std::vector<Eigen::MatrixXd>& histograms,
-                      const std::vector<int>& labels, const std::vector<int>& objects,
+                      const std::vector<int>& labels, const std::vector<int>& objects, const std::vector<uint8_t>& whole,
                       const std::vector<std::string>& object_categories, int categories, int threads);
 
 // A failed precondition naming both versions when the model's features were computed differently.
@@ -81,5 +88,31 @@ Status check_feature_version(const Model& model);
 
 // Scores of `method` (fusion: the mean of its components' scores).
 Eigen::VectorXd method_scores(const ModelImpl& impl, MethodId method, const CloudFeatures& f);
+
+// One component's nearest references: per category, the distance to it and whether it is a whole
+// training cloud (1) or a top-down prefix (0), whose typical distances differ (Calibration).
+struct NearestReferences {
+  Eigen::VectorXd distance;
+  std::vector<uint8_t> whole;
+  double residual = 0;  // StageScores::residual
+};
+NearestReferences nearest_references(StageScores&& scores, const std::vector<uint8_t>& reference_whole);
+
+// The scores of `method` with the novelty of each category (empty when `method` was not calibrated
+// for novelty: only the model's default method is). The decision's novelty is that of its winner.
+struct MethodDecision {
+  Eigen::VectorXd scores;
+  Eigen::VectorXd novelty;
+};
+MethodDecision method_decision(const ModelImpl& impl, MethodId method, const CloudFeatures& f);
+// Per category, the larger of two means over the components, each over its calibrated scale
+// (Calibration::novelty_scale): the distance to the category's nearest reference, and what the stage's
+// PCA leaves out of the histogram. Empty when not calibrated or the sizes differ.
+Eigen::VectorXd category_novelty(const Calibration& c, const std::vector<NearestReferences>& components);
+// novelty, unknown and unknown_reason of `c` (its method and winner set) from `decision` on `f`, at the
+// model's default operating point: what classify answers (the lab and sessions' final answer share it).
+void judge_unknown(const Model& model, const MethodDecision& decision, const CloudFeatures& f, Classification& c);
+// Why `method` cannot judge the features at all (a keypoint method with no keypoint); empty if it can.
+std::string cannot_judge(MethodId method, const std::vector<MethodId>& components, const CloudFeatures& f);
 
 }  // namespace glimpse

@@ -24,8 +24,9 @@ namespace {
 constexpr char kMagic[8] = {'G', 'L', 'M', 'P', 'S', 'M', 'D', 'L'};
 // 1: stage slots of the first 5 methods. 2: a u8 slot count first (USH is method 6). 3: the size-only
 // baseline (method 7), the calibration after the stages, the feature pipeline version and the training
-// extents after the statistics.
-constexpr uint32_t kFormatVersion = 3;
+// extents after the statistics. 4: the novelty calibration after the settle margin ("none of these";
+// older models read with none: novelty NaN, nothing unknown but what a method cannot judge).
+constexpr uint32_t kFormatVersion = 4;
 constexpr uint32_t kOldestReadableVersion = 1;
 
 uint32_t crc32(const uint8_t* data, size_t n) {
@@ -170,6 +171,7 @@ void visit_params(TrainParams& p, F&& f) {
   f("kmeans_restarts", p.kmeans_restarts);
   f("calibration_folds", p.calibration_folds);
   f("settle_precision", p.settle_precision);
+  f("known_acceptance", p.known_acceptance);
   f("tilt_deg", p.tilt_deg);
   f("seed", p.seed);
 }
@@ -297,6 +299,70 @@ DecisionStage read_stage(Reader& r, int categories, Eigen::Index histogram_size)
 
 }  // namespace
 
+// Format 4: per component a u32 scale count (2 x categories + 2) and its scales, then a u32 reference count
+// and a byte per reference (1: a whole cloud); the quantile table, the default known acceptance and its
+// threshold (NaN when not calibrated).
+void write_novelty(Writer& w, const Calibration& c) {
+  w.u32(static_cast<uint32_t>(c.novelty_scale.size()));
+  for (size_t j = 0; j < c.novelty_scale.size(); ++j) {
+    w.u32(static_cast<uint32_t>(c.novelty_scale[j].size()));
+    for (double v : c.novelty_scale[j]) w.f64(v);
+    const std::vector<uint8_t> none;
+    const std::vector<uint8_t>& whole = j < c.reference_whole.size() ? c.reference_whole[j] : none;
+    w.u32(static_cast<uint32_t>(whole.size()));
+    for (uint8_t b : whole) w.u8(b);
+  }
+  w.u32(static_cast<uint32_t>(c.novelty_quantiles.size()));
+  for (double v : c.novelty_quantiles) w.f64(v);
+  w.f64(c.known_acceptance);
+  w.f64(c.novelty_threshold);
+}
+
+// `impl`'s stages are read: each component's reference flags must match its stage.
+void read_novelty(Reader& r, Calibration& c, uint32_t ncat, const ModelImpl& impl) {
+  const uint32_t parts = r.u32("novelty components");
+  const std::vector<MethodId> components = component_methods(impl, c.method);
+  if (parts != 0 && parts != components.size()) r.fail("novelty components do not match the calibrated method");
+  for (uint32_t j = 0; j < parts && !r.failed(); ++j) {
+    if (r.u32("novelty scales") != 2 * ncat + 2) r.fail("novelty scales do not match the categories");
+    r.need(size_t{ncat} * 16 + 16, "novelty scales");
+    std::vector<double> per;
+    for (uint32_t k = 0; k < 2 * ncat + 2 && !r.failed(); ++k) {
+      per.push_back(r.f64("novelty scale"));
+      if (!(per.back() > 0 && std::isfinite(per.back()))) r.fail("novelty scale out of range");
+    }
+    c.novelty_scale.push_back(std::move(per));
+    const uint32_t refs = r.u32("reference flags");
+    const auto& stage = impl.stages[static_cast<int>(components[j])];
+    if (!r.failed() && !stage) r.fail("novelty of a method without a decision stage");
+    const Eigen::Index rows = r.failed() ? 0 : stage->references.rows();
+    if (!r.failed() && refs != 0 && refs != static_cast<uint64_t>(rows)) r.fail("reference flags do not match the stage");
+    r.need(refs, "reference flags");
+    std::vector<uint8_t> whole;
+    for (uint32_t k = 0; k < refs && !r.failed(); ++k) {
+      whole.push_back(r.u8("reference flag"));
+      if (whole.back() > 1) r.fail("reference flag out of range");
+    }
+    c.reference_whole.push_back(std::move(whole));
+  }
+  const uint32_t nq = r.u32("novelty quantiles");
+  if (nq != 0 && nq != kNoveltyQuantiles) r.fail("unexpected novelty quantile count");
+  r.need(size_t{nq} * 8, "novelty quantiles");
+  for (uint32_t q = 0; q < nq && !r.failed(); ++q) {
+    c.novelty_quantiles.push_back(r.f64("novelty quantile"));
+    if (!(c.novelty_quantiles.back() >= 0 && std::isfinite(c.novelty_quantiles.back())) ||
+        (q && c.novelty_quantiles[q] < c.novelty_quantiles[q - 1]))
+      r.fail("novelty quantiles out of range or not ascending");
+  }
+  c.known_acceptance = r.f64("known acceptance");
+  c.novelty_threshold = r.f64("novelty threshold");
+  if (r.failed()) return;
+  if (c.novelty_scale.empty() != c.novelty_quantiles.empty()) r.fail("half a novelty calibration");
+  else if (!(c.known_acceptance > 0 && c.known_acceptance <= 1)) r.fail("known acceptance out of range");
+  else if (!c.novelty_quantiles.empty() && !(c.novelty_threshold >= 0 && std::isfinite(c.novelty_threshold)))
+    r.fail("novelty threshold out of range");
+}
+
 std::vector<uint8_t> serialize(const Model& model) {
   Writer w;
   w.u32(static_cast<uint32_t>(model.categories.size()));
@@ -346,6 +412,7 @@ std::vector<uint8_t> serialize(const Model& model) {
     w.f64(m.calibration.settle_margin);
     w.u64(m.calibration.held_out);
     w.f64(m.calibration.held_out_accuracy);
+    write_novelty(w, m.calibration);
   }
 
   Writer out;
@@ -471,6 +538,7 @@ Expected<Model> deserialize(std::span<const uint8_t> bytes) {
       c.settle_margin = r.f64("settle margin");
       c.held_out = r.u64("calibration count");
       c.held_out_accuracy = r.f64("calibration accuracy");
+      if (version >= 4) read_novelty(r, c, ncat, *impl);
       if (!r.failed() && (!(c.settle_margin >= 0 && c.settle_margin <= 2) ||
                           !(c.held_out_accuracy >= 0 && c.held_out_accuracy <= 1)))
         r.fail("calibration out of range");

@@ -96,6 +96,18 @@ Expected<DecisionStage> fit_decision(const Eigen::MatrixXd& histograms, const st
                                      const std::vector<int>& groups = {});
 // Scores per category in [0, 1], summing to 1 (L1 distances, sec. 4).
 Eigen::VectorXd decide(const DecisionStage& stage, const Eigen::VectorXd& histogram);
+// The scores with, per category, the L1 distance (in the stage's PCA space) to its nearest reference,
+// which the scores are made of: how far the cloud is from anything of the category learnt, what a
+// novelty score ("none of these") measures an answer against. Computed once, for the cost of decide.
+struct StageScores {
+  Eigen::VectorXd scores;
+  Eigen::VectorXd nearest_distance;
+  Eigen::VectorXi nearest_reference;  // per category: the row of stage.references it was measured to
+  // L1 norm of what the stage's PCA leaves out of the histogram (histogram - mean - its projection back):
+  // large for a cloud unlike every training cloud in a way the kept components cannot show.
+  double residual = 0;
+};
+StageScores decide_with_distances(const DecisionStage& stage, const Eigen::VectorXd& histogram);
 
 int argmax(const Eigen::VectorXd& scores);  // ties: the lowest index
 

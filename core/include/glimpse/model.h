@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <span>
@@ -58,6 +59,8 @@ struct TrainingSummary {
 // compared with features computed differently).
 inline constexpr uint32_t kFeaturePipelineVersion = 3;
 
+inline constexpr size_t kNoveltyQuantiles = 201;  // every half percent of known acceptance (Calibration)
+
 // What a model measured of its own decisions on held-out folds of its training set (inner
 // cross-validation by object, TrainParams::calibration_folds), so no threshold is set on the clouds it
 // is judged on.
@@ -69,6 +72,24 @@ struct Calibration {
   double settle_margin = 0;
   size_t held_out = 0;           // held-out decisions (views and prefixes) it was measured on
   double held_out_accuracy = 0;  // their share right
+  // Novelty ("none of these"): per component of `method` (fusion: each of its methods), category and
+  // kind of nearest reference (index 2 x category + 1 for a whole training cloud, + 0 for a top-down
+  // prefix), the median distance from held-out clouds decided as that category to its nearest
+  // reference; last (+ 0 prefix, + 1 whole, by the winner's nearest reference), the median of what the
+  // stage's PCA leaves out of held-out histograms. A cloud's
+  // novelty for a category is the larger of two means over the components: its distance to the
+  // category's nearest reference over that median, and what PCA leaves out of its histogram over that
+  // median. Known clouds come out near 1, clouds of nothing learnt above. Empty: not calibrated (a model
+  // of format 3 or older, or too few objects).
+  std::vector<std::vector<double>> novelty_scale;
+  // Per component, per reference of the model's decision stage: 1 a whole training cloud, 0 a prefix
+  // (empty: every reference whole, as for decision rules whose references are centres).
+  std::vector<std::vector<uint8_t>> reference_whole;
+  // The held-out known clouds' novelty (of their decided category) at known acceptance 0, 1/(n-1), ...,
+  // 1 (n = kNoveltyQuantiles): the threshold accepting a share a of known clouds is its a-quantile.
+  std::vector<double> novelty_quantiles;
+  double known_acceptance = 0.95;  // the model's default operating point (TrainParams::known_acceptance)
+  double novelty_threshold = std::numeric_limits<double>::quiet_NaN();  // at known_acceptance; NaN: none
 };
 
 struct ModelImpl;  // codebooks, bases, centres: defined in core/src (model_impl.h)
@@ -94,7 +115,24 @@ struct Classification {
   double feature_ms = 0;
   double decision_ms = 0;
   std::string warning;  // for a person: e.g. the cloud is far larger than anything the model learnt
+  // "None of these": the winner stays the nearest known category; unknown when its novelty (see
+  // Calibration) is above the threshold of the model's operating point, or when the method cannot
+  // judge the cloud (a keypoint method with no keypoint), with the reason and a NaN novelty. NaN
+  // novelty otherwise: the method was not calibrated (only the model's default method is).
+  double novelty = std::numeric_limits<double>::quiet_NaN();
+  bool unknown = false;
+  std::string unknown_reason;
 };
+
+// The novelty above which a decision is "unknown" when `known_acceptance` (in (0, 1]) of the held-out
+// known clouds are to be accepted; NaN when the calibration has no novelty (nothing is then unknown
+// but what a method cannot judge).
+double novelty_threshold(const Calibration& calibration, double known_acceptance);
+
+// Re-decides `unknown` at another operating point (known acceptance in (0, 1]; 0: the model's default);
+// the winner and scores stay. A decision the method cannot judge stays unknown. Invalid argument
+// outside [0, 1].
+Status set_known_acceptance(const Model& model, Classification& classification, double known_acceptance);
 
 // A warning when the cloud's largest extent is more than 4x outside the extents the model learnt
 // ("the cloud spans 1700 m, the model knows 0.03-2.1 m objects: millimetres?"); empty otherwise.

@@ -66,6 +66,9 @@ struct TrainParams {
   // score margin at which the default method's decisions are settle_precision right. 0 or 1: none.
   int calibration_folds = 4;
   double settle_precision = 0.98;
+  // The default operating point of "unknown": the novelty threshold accepts this share of the held-out
+  // known decisions (so about 1 - this of known clouds are called unknown).
+  double known_acceptance = 0.95;
   int kmeans_restarts = 4;
   uint64_t seed = 42;
   int threads = 0;  // 0 = all cores; results do not depend on it

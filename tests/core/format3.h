@@ -1,0 +1,41 @@
+// Model bytes of format 3 made from a format-4 model, for tests and benchmarks of models written before
+// novelty existed ("none of these"): format 3 is format 4 without the novelty block that ends the payload.
+#pragma once
+
+#include <cstdint>
+#include <cstring>
+#include <vector>
+
+#include "glimpse/model.h"
+
+namespace glimpse::test {
+
+inline uint32_t crc32(const uint8_t* data, size_t n) {
+  uint32_t c = 0xFFFFFFFFu;
+  for (size_t i = 0; i < n; ++i) {
+    c ^= data[i];
+    for (int k = 0; k < 8; ++k) c = (c & 1) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+  }
+  return c ^ 0xFFFFFFFFu;
+}
+
+// Format 3 is format 4 without the novelty block that ends the payload: u32 components, per component a
+// u32 count and its f64 scales, a u32 count and its reference flags (a byte each); u32 quantiles and
+// theirs, f64 known acceptance, f64 threshold.
+inline std::vector<uint8_t> as_format_3(std::vector<uint8_t> bytes, const Calibration& c) {
+  size_t block = 4 + 4 + 8 * c.novelty_quantiles.size() + 16;
+  for (const auto& per : c.novelty_scale) block += 4 + 8 * per.size();
+  for (size_t j = 0; j < c.novelty_scale.size(); ++j) block += 4 + (j < c.reference_whole.size() ? c.reference_whole[j].size() : 0);
+  const size_t payload = bytes.size() - 24;
+  if (payload <= block) return {};
+  bytes.erase(bytes.end() - 4 - static_cast<std::ptrdiff_t>(block), bytes.end() - 4);
+  const uint32_t version = 3;
+  const uint64_t length = payload - block;
+  std::memcpy(bytes.data() + 8, &version, 4);  // little-endian hosts, as the format
+  std::memcpy(bytes.data() + 12, &length, 8);
+  const uint32_t crc = crc32(bytes.data() + 20, length);
+  std::memcpy(bytes.data() + 20 + length, &crc, 4);
+  return bytes;
+}
+
+}  // namespace glimpse::test
