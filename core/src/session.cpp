@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 #include "glimpse/features.h"
@@ -21,6 +22,10 @@ class Session final : public ScanSession {
     if (const Calibration& c = impl_.calibration;
         params_.use_model_calibration && c.method == method_ && c.settle_margin > 0 && params_.settle_confidence > 0)
       params_.full_margin = c.settle_margin / params_.settle_confidence;
+    const Calibration& c = impl_.calibration;
+    threshold_ = c.method == method_ ? novelty_threshold(c, params_.known_acceptance > 0 ? params_.known_acceptance
+                                                                                        : c.known_acceptance)
+                                     : std::numeric_limits<double>::quiet_NaN();
     last_.categories = model_->categories;
     last_.scores.assign(model_->categories.size(), 0.0);
   }
@@ -52,6 +57,8 @@ class Session final : public ScanSession {
   size_t chunks_ = 0;
   DecisionTrack track_;
   StreamDecision last_;
+  double threshold_;               // novelty above it is unknown (NaN: never, the method has no novelty)
+  MethodDecision method_decision_;  // of the last decide()
 };
 
 Status Session::check(const Cloud& chunk) const {
@@ -96,11 +103,16 @@ bool Session::update_method_features(bool whole_cloud_too) {
 }
 
 void Session::decide() {
-  const Eigen::VectorXd scores = method_scores(impl_, method_, method_features_);
+  method_decision_ = method_decision(impl_, method_, method_features_);
+  const Eigen::VectorXd& scores = method_decision_.scores;
   last_.raw_scores.assign(scores.data(), scores.data() + scores.size());
+  ChunkEvidence e;
+  e.scores = last_.raw_scores;
+  e.novelty.assign(method_decision_.novelty.data(), method_decision_.novelty.data() + method_decision_.novelty.size());
+  e.keypoints = method_features_.positions.size();
+  e.cannot_judge = cannot_judge(method_, components_, method_features_);
   track_.decision.chunk_index = last_.chunk_index;
-  track_decision(track_, last_.raw_scores, method_features_.positions.size(),
-                 std::any_of(components_.begin(), components_.end(), uses_keypoints), params_);
+  track_decision(track_, e, std::any_of(components_.begin(), components_.end(), uses_keypoints), threshold_, params_);
   const StreamDecision& d = track_.decision;
   last_.scores = d.scores;
   last_.winner = d.winner;
@@ -108,6 +120,9 @@ void Session::decide() {
   last_.winner_held_chunks = d.winner_held_chunks;
   last_.confidence = d.confidence;
   last_.settled = d.settled;
+  last_.unknown = d.unknown;
+  last_.novelty = d.novelty;
+  last_.unknown_reason = d.unknown_reason;
 }
 
 Expected<StreamDecision> Session::add(const Cloud& chunk) {
@@ -139,51 +154,98 @@ Expected<StreamDecision> Session::finish() {
   if (!update_method_features(true) && !have_features_) return last_;
   last_.keypoints = method_features_.positions.size();
   decide();
-  // The scan is over: the answer is Classify's of the whole scan, not the running average.
+  // The scan is over: the answer is Classify's of the whole scan (at the session's operating point),
+  // not the running average.
+  Classification c;
+  c.method = method_;
+  c.winner = static_cast<int>(std::max_element(last_.raw_scores.begin(), last_.raw_scores.end()) - last_.raw_scores.begin());
+  judge_unknown(*model_, method_decision_, method_features_, c);
+  (void)set_known_acceptance(*model_, c, params_.known_acceptance);  // checked by create()
   last_.scores = last_.raw_scores;
-  const int classify_winner = static_cast<int>(
-      std::max_element(last_.raw_scores.begin(), last_.raw_scores.end()) - last_.raw_scores.begin());
-  if (classify_winner != last_.winner) {
+  const int before = track_.winners.empty() ? -1 : track_.winners.back();
+  const int now = c.unknown ? static_cast<int>(last_.scores.size()) : c.winner;
+  if (before >= 0 && now != before) {
     ++last_.category_changes;
     last_.winner_held_chunks = 1;
-    last_.winner = classify_winner;
   }
+  last_.winner = c.winner;
+  last_.unknown = c.unknown;
+  last_.novelty = c.novelty;
+  last_.unknown_reason = c.unknown_reason;
   last_.final = true;
   return last_;
 }
 
 }  // namespace
 
-void track_decision(DecisionTrack& t, const std::vector<double>& scores, size_t keypoints, bool keypoints_matter,
+namespace {
+
+void smooth(std::vector<double>& running, const std::vector<double>& now, double weight) {
+  if (running.size() != now.size()) {
+    running = now;
+    return;
+  }
+  for (size_t i = 0; i < now.size(); ++i) running[i] = weight * now[i] + (1 - weight) * running[i];
+}
+
+}  // namespace
+
+void track_decision(DecisionTrack& t, const ChunkEvidence& e, bool keypoints_matter, double threshold,
                     const SessionParams& params) {
   StreamDecision& d = t.decision;
-  if (t.smoothed.size() != scores.size()) t.smoothed = scores;
-  else
-    for (size_t i = 0; i < scores.size(); ++i) t.smoothed[i] = params.smoothing * scores[i] + (1 - params.smoothing) * t.smoothed[i];
+  smooth(t.smoothed, e.scores, params.smoothing);
+  smooth(t.smoothed_novelty, e.novelty, params.smoothing);
   int winner = -1;
   for (size_t i = 0; i < t.smoothed.size(); ++i)
     if (winner < 0 || t.smoothed[i] > t.smoothed[static_cast<size_t>(winner)]) winner = static_cast<int>(i);
-  const bool was_settled = d.settled && winner == d.winner;
-  if (d.winner >= 0 && winner != d.winner) ++d.category_changes;
-  d.winner_held_chunks = winner == d.winner ? d.winner_held_chunks + 1 : 1;
+  d.novelty = std::numeric_limits<double>::quiet_NaN();
+  if (e.cannot_judge.empty() && winner >= 0 && t.smoothed_novelty.size() == t.smoothed.size())
+    d.novelty = t.smoothed_novelty[static_cast<size_t>(winner)];
+  d.unknown = !e.cannot_judge.empty() || (std::isfinite(threshold) && std::isfinite(d.novelty) && d.novelty > threshold);
+  d.unknown_reason = e.cannot_judge;
+  if (d.unknown && e.cannot_judge.empty()) {
+    char why[120];
+    std::snprintf(why, sizeof why, "novelty %.2f above %.2f, the operating point's threshold", d.novelty, threshold);
+    d.unknown_reason = why;
+  }
+  // "Unknown" is one more category (index n) for changes, stability and settling.
+  const int decided = d.unknown ? static_cast<int>(t.smoothed.size()) : winner;
+  const int before = t.winners.empty() ? -1 : t.winners.back();
+  const bool was_settled = d.settled && decided == before;
+  if (before >= 0 && decided != before) ++d.category_changes;
+  d.winner_held_chunks = decided == before ? d.winner_held_chunks + 1 : 1;
   d.winner = winner;
   d.scores = t.smoothed;
-  d.raw_scores = scores;
-  t.winners.push_back(winner);
+  d.raw_scores = e.scores;
+  t.winners.push_back(decided);
 
-  // Confidence from the tendency of the history: the margin between the best two smoothed scores,
-  // times the share of the recent decisions the winner won.
-  std::vector<double> sorted(t.smoothed);
-  std::sort(sorted.rbegin(), sorted.rend());
-  const double margin = sorted.size() > 1 ? sorted[0] - sorted[1] : 1.0;
+  // Confidence from the tendency of the history: the margin (between the best two smoothed scores; for
+  // unknown, of the novelty over its threshold), times the share of the recent decisions it won.
+  double margin = 0;
+  if (d.unknown) {
+    if (e.cannot_judge.empty())
+      margin = (d.novelty / threshold - 1) / std::max(1e-9, params.unknown_full_excess);
+  } else {
+    std::vector<double> sorted(t.smoothed);
+    std::sort(sorted.rbegin(), sorted.rend());
+    margin = (sorted.size() > 1 ? sorted[0] - sorted[1] : 1.0) / params.full_margin;
+  }
   const size_t window = static_cast<size_t>(std::max(1, params.stability_window));
   const size_t from = t.winners.size() > window ? t.winners.size() - window : 0;
-  const auto held = std::count(t.winners.begin() + static_cast<std::ptrdiff_t>(from), t.winners.end(), winner);
+  const auto held = std::count(t.winners.begin() + static_cast<std::ptrdiff_t>(from), t.winners.end(), decided);
   const double stability = static_cast<double>(held) / static_cast<double>(window);
-  d.confidence = std::clamp(margin / params.full_margin, 0.0, 1.0) * stability;
-  const bool enough = !keypoints_matter || keypoints >= params.min_keypoints;
+  d.confidence = std::clamp(margin, 0.0, 1.0) * stability;
+  const bool enough = !keypoints_matter || e.keypoints >= params.min_keypoints;
   const double needed = was_settled ? params.settle_confidence - params.unsettle_margin : params.settle_confidence;
   d.settled = enough && d.confidence >= needed;
+}
+
+void track_decision(DecisionTrack& t, const std::vector<double>& scores, size_t keypoints, bool keypoints_matter,
+                    const SessionParams& params) {
+  ChunkEvidence e;
+  e.scores = scores;
+  e.keypoints = keypoints;
+  track_decision(t, e, keypoints_matter, std::numeric_limits<double>::quiet_NaN(), params);
 }
 
 Expected<std::unique_ptr<ScanSession>> ScanSession::create(std::shared_ptr<const Model> model,
@@ -195,6 +257,9 @@ Expected<std::unique_ptr<ScanSession>> ScanSession::create(std::shared_ptr<const
     return failed_precondition(std::string("the model was not trained for method '") + method_name(method) + "'");
   if (params.max_points == 0 || params.max_chunks == 0 || params.max_chunk_points == 0)
     return invalid_argument("session limits must be positive");
+  if (!(params.known_acceptance >= 0 && params.known_acceptance <= 1))
+    return invalid_argument("known acceptance must be in (0, 1] (0: the model's default), not " +
+                            std::to_string(params.known_acceptance));
   return std::unique_ptr<ScanSession>(std::make_unique<Session>(std::move(model), params, method));
 }
 

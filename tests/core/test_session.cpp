@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <numeric>
 
 #include "glimpse/features.h"
@@ -158,8 +159,69 @@ TEST(ScanSession, FinishedStreamScoresAreClassifysOfTheWholeCloud) {
           for (size_t c = 0; c < d.raw_scores.size(); ++c) EXPECT_EQ(d.raw_scores[c], whole->scores[c]) << c;
           EXPECT_EQ(d.scores, d.raw_scores);  // the final answer is Classify's, not the running average
           EXPECT_EQ(d.winner, whole->winner);
+          // "None of these" too: Classify's novelty and unknown (fusion is the calibrated method).
+          EXPECT_EQ(d.unknown, whole->unknown);
+          EXPECT_EQ(d.unknown_reason, whole->unknown_reason);
+          if (std::isfinite(whole->novelty)) {
+            EXPECT_EQ(d.novelty, whole->novelty);
+          } else {
+            EXPECT_TRUE(std::isnan(d.novelty));
+          }
+          EXPECT_EQ(std::isfinite(d.novelty), m == MethodId::kFusion);
         }
   }
+}
+
+// A model of balls and boxes: a streamed can and a 2 m wavy sheet end unknown exactly when Classify says
+// so, at the stream's own operating point; the sheet, like nothing learnt, is unknown and settles so.
+TEST(ScanSession, AStreamOfSomethingNeverLearntEndsAsClassifySaysAtItsOperatingPoint) {
+  TrainParams p;
+  p.methods = {MethodId::kUSH, MethodId::kVFH, MethodId::kFusion};
+  std::vector<TrainingCloud> known = test::synthetic_views(5, 2, 11);
+  std::erase_if(known, [](const TrainingCloud& c) { return c.category == "can"; });
+  auto trained = train(known, p);
+  ASSERT_TRUE(trained.ok()) << trained.error().message;
+  const auto model = std::make_shared<const Model>(std::move(*trained));
+  std::vector<Cloud> scans;
+  for (const TrainingCloud& view : test::synthetic_views(1, 2, 82))
+    if (view.category == "can") scans.push_back(view.cloud);
+  Cloud sheet;
+  for (int i = 0; i < 70; ++i)
+    for (int j = 0; j < 70; ++j)
+      sheet.points.emplace_back(0.03f * float(i), 0.03f * float(j), 0.1f * std::sin(0.3f * float(i)) + 0.002f * float(j));
+  scans.push_back(sheet);
+  bool sheet_settled_unknown = false;
+  for (size_t k = 0; k < scans.size(); ++k) {
+    const std::vector<Cloud> chunks = chunks_of(scans[k], 12, Order::kTopDown, 5);
+    for (double acceptance : {0.0, 0.5, 1.0}) {
+      SessionParams sp;
+      sp.known_acceptance = acceptance;
+      auto session = ScanSession::create(model, sp);
+      ASSERT_TRUE(session.ok());
+      for (const Cloud& c : chunks) {
+        auto d = (*session)->add(c);
+        ASSERT_TRUE(d.ok());
+        if (k + 1 == scans.size() && acceptance == 0.0 && d->unknown && d->settled) sheet_settled_unknown = true;
+      }
+      auto d = (*session)->finish();
+      ASSERT_TRUE(d.ok());
+      auto whole = classify(*model, concatenated(chunks));
+      ASSERT_TRUE(whole.ok());
+      ASSERT_TRUE(set_known_acceptance(*model, *whole, acceptance).ok());
+      EXPECT_EQ(d->unknown, whole->unknown) << k << " at " << acceptance;
+      EXPECT_EQ(d->novelty, whole->novelty);
+      EXPECT_EQ(d->winner, whole->winner);
+      if (k + 1 == scans.size() && acceptance == 0.0) {
+        EXPECT_TRUE(d->unknown) << "the sheet's novelty " << d->novelty;
+      }
+    }
+  }
+  EXPECT_TRUE(sheet_settled_unknown) << "\"unknown\" never settled on the sheet";
+  SessionParams bad;
+  bad.known_acceptance = 1.5;
+  auto refused = ScanSession::create(model, bad);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.error().code, ErrorCode::kInvalidArgument);
 }
 
 TEST(ScanSession, DuplicateOverlappingAndEmptyChunksChangeNothing) {
@@ -332,6 +394,61 @@ TEST(DecisionTrack, ASettledWinnerStaysSettledThroughASmallDip) {
   // A new winner is never settled on the strength of the old one's history.
   p.unsettle_margin = 1.0;
   EXPECT_FALSE(step({0.2, 0.8}).settled);
+}
+
+// "Unknown" is one more category: it changes, holds and settles like one; the winner stays the nearest.
+TEST(DecisionTrack, UnknownSettlesLikeACategory) {
+  SessionParams p;
+  p.smoothing = 1.0;
+  p.stability_window = 2;
+  p.full_margin = 0.4;
+  p.settle_confidence = 0.6;
+  p.unknown_full_excess = 0.5;
+  const double threshold = 2.0;
+  DecisionTrack t;
+  auto step = [&](std::vector<double> s, std::vector<double> novelty, std::string cannot = {}) {
+    ChunkEvidence e;
+    e.scores = std::move(s);
+    e.novelty = std::move(novelty);
+    e.keypoints = 20;
+    e.cannot_judge = std::move(cannot);
+    track_decision(t, e, false, threshold, p);
+    return t.decision;
+  };
+  StreamDecision d = step({0.9, 0.1}, {1.0, 3.0});
+  EXPECT_FALSE(d.unknown);
+  EXPECT_DOUBLE_EQ(d.novelty, 1.0);  // the winner's
+  d = step({0.9, 0.1}, {1.0, 3.0});
+  EXPECT_TRUE(d.settled);
+  d = step({0.9, 0.1}, {2.5, 3.0});  // novelty 2.5 above 2: unknown, closest still category 0
+  EXPECT_TRUE(d.unknown);
+  EXPECT_EQ(d.winner, 0);
+  EXPECT_EQ(d.category_changes, 1);
+  EXPECT_EQ(d.winner_held_chunks, 1);
+  EXPECT_FALSE(d.settled) << "a change resets the stability";
+  EXPECT_NE(d.unknown_reason.find("novelty 2.50 above 2.00"), std::string::npos) << d.unknown_reason;
+  EXPECT_NEAR(d.confidence, 0.5 * 0.5, 1e-12);  // (2.5 / 2 - 1) / 0.5 = 0.5, held 1 of 2
+  d = step({0.9, 0.1}, {3.0, 3.0});
+  EXPECT_EQ(d.category_changes, 1);
+  EXPECT_EQ(d.winner_held_chunks, 2);
+  EXPECT_NEAR(d.confidence, 1.0, 1e-12);  // (3 / 2 - 1) / 0.5 = 1, held 2 of 2
+  EXPECT_TRUE(d.settled) << "unknown settles like a category";
+  d = step({0.9, 0.1}, {1.5, 3.0});
+  EXPECT_FALSE(d.unknown);
+  EXPECT_EQ(d.category_changes, 2);
+  EXPECT_FALSE(d.settled);
+  d = step({0.9, 0.1}, {1.5, 3.0}, "0 keypoints: bok cannot judge this cloud (an empty histogram)");
+  EXPECT_TRUE(d.unknown);
+  EXPECT_TRUE(std::isnan(d.novelty));
+  EXPECT_EQ(d.unknown_reason.rfind("0 keypoints", 0), 0u);
+  EXPECT_EQ(d.confidence, 0.0);  // cannot judge is never a settled answer
+  // Without a threshold (an uncalibrated method) nothing is unknown by novelty.
+  DecisionTrack plain;
+  ChunkEvidence e;
+  e.scores = {0.9, 0.1};
+  e.novelty = {100.0, 100.0};
+  track_decision(plain, e, false, std::nan(""), p);
+  EXPECT_FALSE(plain.decision.unknown);
 }
 
 TEST(DecisionTrack, SmoothingDampsASingleOutlier) {

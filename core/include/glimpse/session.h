@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstddef>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -40,6 +41,12 @@ struct SessionParams {
   // four-legged animal look alike less than their whole), which must not make the answer flicker.
   double unsettle_margin = 0.2;
   size_t min_keypoints = 10;         // keypoint methods never settle on fewer keypoints
+  // "None of these": the operating point, the share of known clouds accepted (held out in training;
+  // in (0, 1], 0: the model's default). "Unknown" settles like a category, its margin being how far
+  // the smoothed novelty is above the threshold: this fraction of the threshold above it gives full
+  // margin confidence.
+  double known_acceptance = 0;
+  double unknown_full_excess = 0.5;
 };
 
 struct StreamDecision {
@@ -56,17 +63,35 @@ struct StreamDecision {
   int winner_held_chunks = 0;       // consecutive chunks the current winner has held
   bool settled = false;
   double confidence = 0;            // in [0, 1]
+  // "None of these": unknown when the winner's novelty (smoothed like the scores; final: Classify's) is
+  // above the operating point's threshold, or when the method cannot judge the scan (the reason says
+  // which). The winner stays the nearest known category. Changes, held chunks, confidence and settled
+  // count "unknown" as one more category. NaN novelty: not calibrated, or cannot judge.
+  bool unknown = false;
+  double novelty = std::numeric_limits<double>::quiet_NaN();
+  std::string unknown_reason;
 };
 
 // The evolving decision on its own (a pure function of the score history, so it can be scripted):
-// each call folds one chunk's scores into the running average and updates winner, changes, held
-// chunks, confidence and settled. `keypoints_matter`: the method needs keypoints, so fewer than
-// params.min_keypoints never settle.
+// each call folds one chunk's scores (and novelties) into the running average and updates winner,
+// unknown, changes, held chunks, confidence and settled. `keypoints_matter`: the method needs
+// keypoints, so fewer than params.min_keypoints never settle.
 struct DecisionTrack {
   std::vector<double> smoothed;
-  std::vector<int> winners;  // every decision's winner so far
+  std::vector<double> smoothed_novelty;  // per category
+  std::vector<int> winners;  // every decision's winner so far; unknown counts as category n (one more)
   StreamDecision decision;
 };
+// What one chunk's decision rests on.
+struct ChunkEvidence {
+  std::vector<double> scores;
+  std::vector<double> novelty;  // per category; empty: not calibrated
+  size_t keypoints = 0;
+  std::string cannot_judge;     // why the method cannot judge the chunk at all; empty: it can
+};
+void track_decision(DecisionTrack& track, const ChunkEvidence& chunk, bool keypoints_matter,
+                    double novelty_threshold, const SessionParams& params);
+// Scores only (no novelty: never unknown).
 void track_decision(DecisionTrack& track, const std::vector<double>& scores, size_t keypoints,
                     bool keypoints_matter, const SessionParams& params);
 
