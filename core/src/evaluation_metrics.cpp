@@ -1,5 +1,6 @@
 // Accuracy, confusion and the category changes of the exploration (sec. 4).
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <tuple>
 
@@ -10,7 +11,7 @@ namespace glimpse {
 Tally accuracy(std::span<const StageDecision> decisions, std::string_view stage, MethodId method) {
   Tally t;
   for (const StageDecision& d : decisions) {
-    if (d.method != method || d.stage != stage) continue;
+    if (d.method != method || d.stage != stage || d.truth < 0) continue;
     ++t.total;
     t.correct += d.winner == d.truth;
   }
@@ -81,7 +82,7 @@ std::vector<ExplorationTrace> exploration_traces(std::span<const StageDecision> 
   };
   std::map<std::tuple<int, int, int>, Partial> views;  // (fold, object, view), so traces come out ordered
   for (const StageDecision& d : decisions) {
-    if (d.method != method) continue;
+    if (d.method != method || d.truth < 0) continue;
     const bool full = d.stage == "full";
     auto g = grid_index.find(d.stage);
     if (!full && g == grid_index.end()) continue;

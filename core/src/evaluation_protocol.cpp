@@ -30,17 +30,6 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 
 bool contains(const std::vector<MethodId>& v, MethodId m) { return std::find(v.begin(), v.end(), m) != v.end(); }
 
-// The base methods whose features the evaluated methods need (fusion brings its components).
-std::vector<MethodId> feature_methods(const TrainParams& tp) {
-  std::vector<MethodId> base;
-  auto add = [&](MethodId m) {
-    if (m != MethodId::kFusion && !contains(base, m)) base.push_back(m);
-  };
-  for (MethodId m : tp.methods) add(m);
-  if (contains(tp.methods, MethodId::kFusion))
-    for (MethodId m : tp.fusion_of) add(m);
-  return base;
-}
 
 // body(i) for i in [0, n) on `threads` threads; progress is reported from thread 0 only.
 template <class Body>
@@ -96,7 +85,11 @@ struct Protocol {
   EvalResult r;
 
   bool tested(size_t v) const { return r.object_fold[static_cast<size_t>(views[v].object)] >= 0; }
-  bool learnt(size_t v) const { return objects[static_cast<size_t>(views[v].object)].role != EvalRole::kTestOnly; }
+  bool learnt(size_t v) const {
+    const EvalRole role = objects[static_cast<size_t>(views[v].object)].role;
+    return role == EvalRole::kCrossValidate || role == EvalRole::kTrainOnly;
+  }
+  bool unknown(size_t v) const { return r.object_truth[static_cast<size_t>(views[v].object)] < 0; }
   size_t full_points(size_t v) const { return std::max<size_t>(1, full[static_cast<size_t>(views[v].object)].size()); }
   const Cloud& learnt_cloud(size_t v) const { return views[v].learnt.points.empty() ? views[v].cloud : views[v].learnt; }
   bool tilted(size_t v) const { return !views[v].learnt.points.empty(); }
@@ -112,9 +105,12 @@ Status validate(const std::vector<EvalObject>& objects, const EvalParams& p) {
   for (const EvalObject& o : objects) {
     if (o.mesh.vertices.empty()) return invalid_argument("object " + o.category + "/" + o.id + " has no vertices");
     categories.insert(o.category);
-    if (o.role != EvalRole::kTestOnly) learnt.insert(o.category);
+    if (o.role == EvalRole::kCrossValidate || o.role == EvalRole::kTrainOnly) learnt.insert(o.category);
     cv += o.role == EvalRole::kCrossValidate, train += o.role == EvalRole::kTrainOnly, test += o.role == EvalRole::kTestOnly;
   }
+  for (const EvalObject& o : objects)
+    if (o.role == EvalRole::kUnknown && learnt.count(o.category))
+      return invalid_argument("'" + o.category + "' is learnt, so its objects cannot stand for the unknown");
   if (cv && test) return invalid_argument("objects are either cross-validated or split into training and test sources");
   if (cv) {
     if (p.folds < 2) return invalid_argument("cross-validation needs at least 2 folds");
@@ -133,7 +129,10 @@ Status validate(const std::vector<EvalObject>& objects, const EvalParams& p) {
 // ---- 0. categories, folds, sources ----
 void assign_folds(Protocol& P) {
   EvalResult& r = P.r;
-  r.categories = paper_category_order(P.objects);
+  std::vector<EvalObject> known_list;  // the report's categories are the learnt and tested ones
+  for (const EvalObject& o : P.objects)
+    if (o.role != EvalRole::kUnknown) known_list.push_back({o.category, o.id, {}, o.source, o.any_pose, o.role});
+  r.categories = paper_category_order(known_list);
   std::vector<std::string> cv_categories;
   std::vector<size_t> cv_objects;
   for (size_t i = 0; i < P.objects.size(); ++i) {
@@ -141,11 +140,21 @@ void assign_folds(Protocol& P) {
     const bool several_sources = std::any_of(P.objects.begin(), P.objects.end(),
                                              [&](const EvalObject& x) { return x.source != P.objects[0].source; });
     r.object_ids.push_back((several_sources ? o.source + ":" : "") + o.category + "/" + o.id);
-    r.object_truth.push_back(static_cast<int>(
-        std::find(r.categories.begin(), r.categories.end(), o.category) - r.categories.begin()));
+    if (o.role == EvalRole::kUnknown) {
+      auto it = std::find(r.unknown_categories.begin(), r.unknown_categories.end(), o.category);
+      if (it == r.unknown_categories.end()) it = r.unknown_categories.insert(it, o.category);
+      r.object_truth.push_back(-1);
+      r.object_unknown_class.push_back(static_cast<int>(it - r.unknown_categories.begin()));
+    } else {
+      r.object_truth.push_back(static_cast<int>(
+          std::find(r.categories.begin(), r.categories.end(), o.category) - r.categories.begin()));
+      r.object_unknown_class.push_back(-1);
+    }
     r.object_source.push_back(o.source);
-    auto& list = o.role == EvalRole::kTestOnly ? r.test_sources : r.train_sources;
-    if (std::find(list.begin(), list.end(), o.source) == list.end()) list.push_back(o.source);
+    if (o.role != EvalRole::kUnknown) {
+      auto& list = o.role == EvalRole::kTestOnly ? r.test_sources : r.train_sources;
+      if (std::find(list.begin(), list.end(), o.source) == list.end()) list.push_back(o.source);
+    }
     if (o.any_pose && std::find(r.any_pose_categories.begin(), r.any_pose_categories.end(), o.category) ==
                           r.any_pose_categories.end())
       r.any_pose_categories.push_back(o.category);
@@ -159,12 +168,19 @@ void assign_folds(Protocol& P) {
   if (r.cross_source) {
     P.folds = 1;
     for (size_t i = 0; i < P.objects.size(); ++i)
-      if (P.objects[i].role == EvalRole::kTestOnly) r.object_fold[i] = 0;
+      if (P.objects[i].role == EvalRole::kTestOnly || P.objects[i].role == EvalRole::kUnknown) r.object_fold[i] = 0;
   } else {
     P.folds = P.params.folds;
     r.test_sources = r.train_sources;
     const std::vector<int> f = stratified_folds(cv_categories, P.params.folds, P.params.seed);
     for (size_t j = 0; j < cv_objects.size(); ++j) r.object_fold[cv_objects[j]] = f[j];
+    // Objects of no learnt category are dealt to the folds too: each is tested by one fold's model.
+    std::vector<std::string> unknown_categories;
+    std::vector<size_t> unknown_objects;
+    for (size_t i = 0; i < P.objects.size(); ++i)
+      if (P.objects[i].role == EvalRole::kUnknown) unknown_categories.push_back(P.objects[i].category), unknown_objects.push_back(i);
+    const std::vector<int> u = stratified_folds(unknown_categories, P.params.folds, P.params.seed + 1);
+    for (size_t j = 0; j < unknown_objects.size(); ++j) r.object_fold[unknown_objects[j]] = u[j];
   }
 }
 
@@ -193,7 +209,7 @@ void make_views(Protocol& P) {
     P.views[j].object = static_cast<int>(o);
     P.views[j].view = static_cast<int>(v);
     P.views[j].cloud = object_view(P.full[o], v, n, object.any_pose, P.object_seed(o), P.params.hpr_radius_factor);
-    if (object.role != EvalRole::kTestOnly && P.tp.tilt_deg > 0)
+    if ((object.role == EvalRole::kCrossValidate || object.role == EvalRole::kTrainOnly) && P.tp.tilt_deg > 0)
       P.views[j].learnt = training_view(P.views[j].cloud, P.tp, P.object_seed(o) + v);
   });
   size_t posed = 0;
@@ -308,7 +324,7 @@ void stage_statistics(Protocol& P) {
     std::set<int> counted;
     size_t total_ok = 0;
     for (size_t v = 0; v < P.views.size(); ++v) {
-      if (!P.tested(v)) continue;
+      if (!P.tested(v) || P.unknown(v)) continue;
       const int c = r.object_truth[static_cast<size_t>(P.views[v].object)];
       const int id = P.stage_slot[v][s];
       if (id < 0 || !P.slots[id].ok) {
@@ -361,8 +377,8 @@ Status train_and_classify(Protocol& P) {
       if (!P.learnt(v)) continue;
       const EvalObject& object = P.objects[static_cast<size_t>(o)];
       const std::string id = object.source + "/" + object.id;
-      for (int s : P.train_slots[v])
-        if (P.slots[s].ok) samples.push_back({object.category, id, P.slots[s].features});
+      for (int s : P.train_slots[v])  // the first is the whole (learnt) view, then its prefixes
+        if (P.slots[s].ok) samples.push_back({object.category, id, P.slots[s].features, s == P.train_slots[v].front()});
     }
     train_samples += samples.size();
     auto trained = train_on_features(std::move(samples), P.tp);
@@ -371,6 +387,7 @@ Status train_and_classify(Protocol& P) {
     P.fold_models.push_back(model);
     r.settle_margins.push_back(model->impl->calibration.settle_margin);
     r.calibration_accuracy.push_back(model->impl->calibration.held_out_accuracy);
+    r.novelty_thresholds.push_back(model->impl->calibration.novelty_threshold);
     train_seconds += seconds_since(t0);
     if (P.progress) P.progress({tag + ": train", 1, 1});
 
@@ -395,14 +412,22 @@ Status train_and_classify(Protocol& P) {
         d.stage = stage_name(P.stages[s]);
         d.method = P.params.methods[m];
         d.truth = r.object_truth[static_cast<size_t>(d.object)];
+        d.unknown_class = r.object_unknown_class[static_cast<size_t>(d.object)];
         d.points = id >= 0 ? P.slots[id].count : 0;
         d.visible_fraction = double(d.points) / double(P.full_points(v));
         if (!ok) continue;
         d.keypoints = P.slots[id].features.positions.size();
-        const Eigen::VectorXd scores = method_scores(impl, d.method, P.slots[id].features);
+        const MethodDecision decision = method_decision(impl, d.method, P.slots[id].features);
+        const Eigen::VectorXd& scores = decision.scores;
         d.scores.assign(n_cat, 0.0);
         for (int c = 0; c < static_cast<int>(scores.size()); ++c) d.scores[to_ours[c]] = scores[c];
-        d.winner = to_ours[argmax(scores)];
+        Classification c;
+        c.method = d.method;
+        c.winner = argmax(scores);
+        judge_unknown(*model, decision, P.slots[id].features, c);
+        d.winner = to_ours[c.winner];
+        d.novelty = c.novelty;
+        d.unknown = c.unknown;
       }
     });
     r.decisions.insert(r.decisions.end(), std::make_move_iterator(decisions.begin()),
@@ -431,7 +456,7 @@ void stream_views(Protocol& P) {
   const auto t0 = Clock::now();
   std::vector<size_t> tested;
   for (size_t v = 0; v < P.views.size(); ++v)
-    if (P.tested(v)) tested.push_back(v);
+    if (P.tested(v) && !P.unknown(v)) tested.push_back(v);
   r.streams.resize(tested.size());
   SessionParams sp = P.params.session;
   sp.method = r.change_method;
@@ -556,7 +581,7 @@ Expected<EvalResult> run_evaluation(const std::vector<EvalObject>& objects, cons
   P.tp.seed = params.seed;
   P.tp.threads = P.threads;
   if (!contains(P.tp.methods, P.tp.default_method)) P.tp.default_method = P.tp.methods.front();
-  P.base = feature_methods(P.tp);
+  P.base = base_methods(P.tp);
   P.r.grid = exploration_grid(params.explore_max_keypoints, params.explore_step);
   P.stages = params.stages;
   for (size_t g : P.r.grid)

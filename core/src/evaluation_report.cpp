@@ -128,7 +128,8 @@ void write_protocol(std::ostringstream& o, const EvalResult& r) {
   for (size_t n : r.object_points) min_pts = std::min(min_pts, n), max_pts = std::max(max_pts, n), mean_pts += double(n);
   if (!r.object_points.empty()) mean_pts /= double(r.object_points.size());
   std::map<std::string, size_t> per_cat;
-  for (int t : r.object_truth) ++per_cat[r.categories[t]];
+  for (int t : r.object_truth)
+    if (t >= 0) ++per_cat[r.categories[static_cast<size_t>(t)]];
   std::string cats;
   for (const std::string& c : r.categories) cats += (cats.empty() ? "" : ", ") + c + " " + std::to_string(per_cat[c]);
 
@@ -138,7 +139,8 @@ void write_protocol(std::ostringstream& o, const EvalResult& r) {
     auto count = [&](bool tested) {
       std::map<std::string, size_t> n;
       for (size_t i = 0; i < r.object_fold.size(); ++i)
-        if ((r.object_fold[i] >= 0) == tested) ++n[r.categories[static_cast<size_t>(r.object_truth[i])]];
+        if ((r.object_fold[i] >= 0) == tested && r.object_truth[i] >= 0)
+          ++n[r.categories[static_cast<size_t>(r.object_truth[i])]];
       std::string s;
       for (const auto& [c, k] : n) s += (s.empty() ? "" : ", ") + c + " " + std::to_string(k);
       return s;
@@ -479,6 +481,7 @@ std::string markdown_report(const EvalResult& r) {
   write_confusions(o, r);
   write_changes(o, r);
   write_streams(o, r);
+  o << open_set_section(r);
   o << "## Things that look wrong\n\n";
   if (r.notes.empty()) o << "Nothing flagged.\n";
   for (const std::string& n : r.notes) o << "- " << n << "\n";
@@ -494,14 +497,15 @@ std::string decisions_csv(const EvalResult& r) {
   std::ostringstream o;
   o << "fold,object,view,stage,method,visible_fraction,points,keypoints,truth,winner";
   for (const std::string& c : r.categories) o << ",score_" << c;
-  o << "\n";
+  o << ",novelty,unknown\n";
   for (const StageDecision& d : r.decisions) {
     o << d.fold << "," << r.object_ids[d.object] << "," << d.view << "," << d.stage << "," << method_name(d.method) << ","
-      << fmt("%.4f", d.visible_fraction) << "," << d.points << "," << d.keypoints << "," << r.categories[d.truth] << ","
+      << fmt("%.4f", d.visible_fraction) << "," << d.points << "," << d.keypoints << ","
+      << (d.truth >= 0 ? r.categories[static_cast<size_t>(d.truth)] : "unknown:" + r.unknown_categories[static_cast<size_t>(d.unknown_class)]) << ","
       << (d.winner >= 0 ? r.categories[d.winner] : std::string("none"));
     for (size_t c = 0; c < r.categories.size(); ++c)
       o << "," << (c < d.scores.size() ? fmt("%.4f", d.scores[c]) : std::string());
-    o << "\n";
+    o << "," << (std::isfinite(d.novelty) ? fmt("%.4f", d.novelty) : std::string()) << "," << (d.unknown ? 1 : 0) << "\n";
   }
   return o.str();
 }

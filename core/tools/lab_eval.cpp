@@ -23,6 +23,7 @@ struct EvalOptions {
   std::string test;
   std::string size_blind = "fusion";
   std::string also_train;
+  std::string unknown;
   float tilt = -1;
   size_t zoo = 0;
   std::string points = "6000";
@@ -254,6 +255,15 @@ int run_eval(const EvalOptions& o) {
       for (EvalObject& x : *extra) objects.push_back(std::move(x));
       source += " (also trained on " + o.also_train + ")";
     }
+    if (!o.unknown.empty()) {
+      auto extra = load_sources(split_list(o.unknown), EvalRole::kUnknown, params->seed, max_objects, params->threads);
+      if (!extra.ok()) {
+        std::fprintf(stderr, "glimpse-lab eval: --unknown: %s\n", extra.error().message.c_str());
+        return 1;
+      }
+      for (EvalObject& x : *extra) objects.push_back(std::move(x));
+      source += " (unknown: " + o.unknown + ")";
+    }
     if (cross) {
       auto second = load_sources(split_list(o.test), EvalRole::kTestOnly, params->seed, max_objects, params->threads);
       if (!second.ok()) {
@@ -261,7 +271,8 @@ int run_eval(const EvalOptions& o) {
         return 1;
       }
       for (EvalObject& x : *second) objects.push_back(std::move(x));
-      source = "trained on " + o.train + (o.also_train.empty() ? "" : "," + o.also_train) + ", tested on " + o.test;
+      source = "trained on " + o.train + (o.also_train.empty() ? "" : "," + o.also_train) + ", tested on " + o.test +
+               (o.unknown.empty() ? "" : " and on " + o.unknown + " (unknown)");
     }
   } else {
     const size_t n = max_objects ? std::min(o.zoo, max_objects) : o.zoo;
@@ -302,6 +313,14 @@ int run_eval(const EvalOptions& o) {
   std::printf("category changes (%s), finally correct / incorrect:", method_name(result->change_method));
   for (const ChangeRow& c : result->changes)
     std::printf("  <=%zu kp %.2f / %.2f", c.up_to_keypoints, c.mean_correct, c.mean_incorrect);
+  if (!result->unknown_categories.empty()) {
+    std::printf("\nopen set (%s): stage AUROC FAR@95%% | at the operating point: known accepted, unknown accepted, known accuracy closed -> right and accepted\n",
+                method_name(result->change_method));
+    for (const OpenSetRow& row : open_set_summary(result->decisions, params->stages, result->change_method,
+                                                  result->unknown_categories.size()))
+      std::printf("  %-6s %.3f %5.1f %% | %5.1f %% %5.1f %% %5.1f -> %5.1f %%\n", row.stage.c_str(), row.auroc, row.far_at_95,
+                  row.known_acceptance, row.false_acceptance, row.known_accuracy_closed, row.known_accuracy_open);
+  }
   std::printf("\ntime %.1f s on %d threads\n", result->total_seconds, result->threads);
   std::printf("report: %s\n", (std::filesystem::path(o.out) / "report.md").string().c_str());
   return 0;
@@ -325,6 +344,9 @@ void add_eval_command(CLI::App& app) {
   cmd->add_option("--also-train", o->also_train,
                   "extra training-only sources DIR[,DIR...] or zoo:N (the procedural zoo, N per category), learnt by "
                   "every model and never tested");
+  cmd->add_option("--unknown", o->unknown,
+                  "objects of categories no model learns DIR[,DIR...] or zoo:N, tested besides the known ones: the "
+                  "report's open-set section (AUROC of novelty, false acceptance, known accuracy at the operating point)");
   cmd->add_option("--train-tilt", o->tilt, "training views turned by a random tilt of up to DEG degrees (default: the recogniser's)");
   cmd->add_option("--size-blind", o->size_blind,
                   "methods of the size-blind ablation (every object 1 m tall, train and test), or 'none'")

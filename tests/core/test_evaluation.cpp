@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -454,6 +455,90 @@ TEST(RunEvaluation, CrossSourceTrainsOneModelOnOneSourceAndTestsOnlyTheOther) {
   EXPECT_FALSE(run_evaluation(mixed, p, "mixed").ok());
   std::vector<EvalObject> only_train = with_role(zoo_objects(1, 3), EvalRole::kTrainOnly, "zoo-a");
   EXPECT_FALSE(run_evaluation(only_train, p, "no test").ok());
+}
+
+TEST(OpenSet, AurocRanksUnknownAboveKnownWithTiesHalf) {
+  EXPECT_DOUBLE_EQ(auroc({1, 2, 3}, {4, 5}), 1.0);
+  EXPECT_DOUBLE_EQ(auroc({4, 5}, {1, 2, 3}), 0.0);
+  EXPECT_DOUBLE_EQ(auroc({1, 2}, {2}), 0.75);  // one below, one tied
+  EXPECT_DOUBLE_EQ(auroc({}, {1}), 0.5);
+  EXPECT_DOUBLE_EQ(auroc({1.0}, {INFINITY}), 1.0);
+}
+
+TEST(OpenSet, SummaryOnAHandMadeList) {
+  auto make = [](int truth, int unknown_class, int winner, double novelty, bool unknown) {
+    StageDecision d;
+    d.stage = "full";
+    d.method = MethodId::kFusion;
+    d.truth = truth;
+    d.unknown_class = unknown_class;
+    d.winner = winner;
+    d.novelty = novelty;
+    d.unknown = unknown;
+    return d;
+  };
+  std::vector<StageDecision> ds;
+  for (int i = 0; i < 20; ++i) ds.push_back(make(0, -1, i < 18 ? 0 : 1, 0.1 * i, i == 19));  // 18 right, 1 rejected
+  ds.push_back(make(-1, 0, 0, 5.0, true));   // class 0: rejected
+  ds.push_back(make(-1, 0, 1, 1.05, false));  // class 0: accepted, below the 95 % novelty of the known
+  ds.push_back(make(-1, 1, -1, NAN, false)); // class 1: features failed, rejected for sure
+  ds.push_back(make(0, -1, 0, 0.5, false));  // another method's decision is not counted
+  ds.back().method = MethodId::kVFH;
+  const std::vector<OpenSetRow> rows = open_set_summary(ds, {{StageKind::kFull, 0}}, MethodId::kFusion, 2);
+  ASSERT_EQ(rows.size(), 1u);
+  const OpenSetRow& r = rows[0];
+  EXPECT_EQ(r.known, 20u);
+  EXPECT_EQ(r.unknown, 3u);
+  EXPECT_DOUBLE_EQ(r.known_acceptance, 95.0);
+  EXPECT_NEAR(r.false_acceptance, 100.0 / 3, 1e-9);
+  EXPECT_DOUBLE_EQ(r.known_accuracy_closed, 90.0);
+  EXPECT_DOUBLE_EQ(r.known_accuracy_open, 90.0);  // the rejected known view was wrong anyway
+  EXPECT_NEAR(r.accepted_accuracy, 100.0 * 18 / 19, 1e-9);
+  EXPECT_NEAR(r.far_at_95, 100.0 / 3, 1e-9);  // 1.05 is below 1.8, the novelty accepting 19 of 20 known
+  ASSERT_EQ(r.accepted_per_class.size(), 2u);
+  EXPECT_DOUBLE_EQ(r.accepted_per_class[0], 50.0);
+  EXPECT_DOUBLE_EQ(r.accepted_per_class[1], 0.0);
+  // Known novelties 0, 0.1 .. 1.9 against 5, 1.05 and infinity: 1.05 beats 11 of the 20.
+  EXPECT_NEAR(r.auroc, (20 + 11 + 20) / 60.0, 1e-9);
+}
+
+// The CI's open-set check: one zoo category is held out of every model and tested as unknown; its views
+// must come out more novel than the known ones' (novelty calibrated on held-out folds of the training
+// views only). Zoo 8 per category, seed 3, 2 folds, 3 views, 3000 points, fusion. Measured: AUROC 0.568
+// on full views, 0.620 at 20 % visible (the zoo's four-legged animals share legs and backs with its
+// chairs and tables: ranked above the known, barely); 81 % of known and 83 % of unknown full views
+// accepted at the default operating point.
+TEST(RunEvaluation, AZooCategoryHeldOutComesOutNovel) {
+  std::vector<EvalObject> objects = zoo_objects(8, 3);
+  for (EvalObject& o : objects)
+    if (o.category == "fourleg") o.role = EvalRole::kUnknown;
+  EvalParams p = reduced_params();
+  p.methods = {MethodId::kFusion};
+  p.stages = {{StageKind::kFull, 0}, {StageKind::kFraction, 0.2}};
+  p.explore_max_keypoints = 0;
+  p.stream_chunk_fraction = 0;
+  auto r = run_evaluation(objects, p, "zoo without fourleg");
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  EXPECT_EQ(r->categories.size(), 4u);
+  EXPECT_EQ(r->unknown_categories, std::vector<std::string>{"fourleg"});
+  size_t unknown_views = 0;
+  for (const StageDecision& d : r->decisions)
+    if (d.truth < 0) {
+      ++unknown_views;
+      EXPECT_EQ(d.unknown_class, 0);
+      EXPECT_TRUE(std::isfinite(d.novelty) || d.winner < 0);
+    }
+  EXPECT_EQ(unknown_views, 8u * 3 * 2);  // 8 objects, 3 views, 2 stages
+  const std::vector<OpenSetRow> rows = open_set_summary(r->decisions, p.stages, MethodId::kFusion, 1);
+  ASSERT_EQ(rows.size(), 2u);
+  std::cout << "zoo, fourleg unknown: AUROC full " << rows[0].auroc << ", 20 % " << rows[1].auroc
+            << "; known accepted " << rows[0].known_acceptance << " %, unknown accepted " << rows[0].false_acceptance
+            << " % (full)\n";
+  EXPECT_GE(rows[0].auroc, 0.55);  // measured 0.568
+  EXPECT_GE(rows[1].auroc, 0.60);  // measured 0.620
+  const std::string report = markdown_report(*r);
+  EXPECT_NE(report.find("## Open set"), std::string::npos);
+  EXPECT_NE(decisions_csv(*r).find(",unknown:fourleg,"), std::string::npos);
 }
 
 TEST(Metrics, BalancedAccuracyWeighsEveryCategoryTheSame) {

@@ -10,6 +10,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <span>
 #include <string>
 #include <string_view>
@@ -32,6 +33,8 @@ enum class EvalRole : uint8_t {
   kCrossValidate,  // in the folds: learnt by the other folds' models, tested by its own fold's
   kTrainOnly,      // learnt by every model, never tested
   kTestOnly,       // tested by the one model of all kTrainOnly objects, never learnt
+  kUnknown,        // of a category no model learns: tested (by one fold's model in a cross-validation),
+                   // it should come out "unknown" (the open-set section)
 };
 
 struct EvalObject {
@@ -105,9 +108,12 @@ struct StageDecision {
   double visible_fraction = 0;  // prefix points / full 3D cloud points
   size_t points = 0;            // prefix points
   size_t keypoints = 0;         // keypoints found on the prefix
-  int truth = 0;                // index into the report's categories
+  int truth = 0;                // index into the report's categories; -1 for an object of no learnt category
+  int unknown_class = -1;       // that object's index into EvalResult::unknown_categories
   int winner = -1;              // -1: no decision (features failed, e.g. too few points)
   std::vector<double> scores;   // per category, same order; empty without a decision
+  double novelty = std::numeric_limits<double>::quiet_NaN();  // NaN: the method has no novelty calibrated
+  bool unknown = false;         // the model said "none of these" at its own operating point
 };
 
 struct Tally {
@@ -116,7 +122,8 @@ struct Tally {
   double percent() const { return total ? 100.0 * double(correct) / double(total) : 0.0; }
 };
 
-// Decisions of one stage and method, pooled over folds. A missing decision counts as wrong.
+// Decisions of one stage and method, pooled over folds. A missing decision counts as wrong. Decisions
+// on objects of no learnt category (truth < 0) are left out of every metric but the open-set ones.
 Tally accuracy(std::span<const StageDecision> decisions, std::string_view stage, MethodId method);
 // Mean over the categories of the per-category recall (each category weighs the same, whatever its
 // number of views); categories without a decision of this stage and method are left out.
@@ -154,6 +161,31 @@ struct ChangeRow {
 // Changes among the grid decisions at keypoint counts <= up_to, for each entry of up_to.
 std::vector<ChangeRow> change_summary(const std::vector<ExplorationTrace>& traces,
                                       const std::vector<size_t>& up_to);
+
+// ---- Open set: objects of no learnt category ("none of these") ------------------------------------
+
+// A decision's novelty as the open-set metrics rank it: NaN (left out) when its method has none,
+// +infinity when it was rejected for sure (features failed, or the method cannot judge the cloud).
+double open_set_score(const StageDecision& d);
+
+struct OpenSetRow {
+  std::string stage;
+  size_t known = 0, unknown = 0;           // decisions ranked (with a novelty)
+  double auroc = 0.5;                      // P(an unknown view's novelty > a known view's), ties half
+  double far_at_95 = 0;                    // % of unknown views accepted at the novelty accepting 95 % of
+                                           // the tested known views (an oracle threshold: the test side's)
+  double known_acceptance = 0;             // % of known views the models' own operating point accepts
+  double false_acceptance = 0;             // % of unknown views it accepts (as some known category)
+  double known_accuracy_closed = 0;        // % of known views right, "unknown" ignored (the closed set)
+  double known_accuracy_open = 0;          // % of known views right and accepted
+  double accepted_accuracy = 0;            // % right among the accepted known views
+  std::vector<double> accepted_per_class;  // per unknown class: % of its views accepted
+};
+// One row per stage of `method`.
+std::vector<OpenSetRow> open_set_summary(std::span<const StageDecision> decisions, const std::vector<Stage>& stages,
+                                         MethodId method, size_t unknown_classes);
+// Mann-Whitney AUROC: P(positive > negative), ties counting half; 0.5 when either side is empty.
+double auroc(std::vector<double> negatives, std::vector<double> positives);
 
 // ---- Streaming: when the decision settles (ScanSession, sec. 4) ----------------------------------------
 
@@ -246,6 +278,9 @@ struct EvalResult {
   std::vector<std::string> train_sources;   // collections learnt from
   std::vector<std::string> test_sources;    // collections tested
   std::vector<std::string> any_pose_categories;  // their objects' views are taken in random poses
+  std::vector<std::string> unknown_categories;   // of the kUnknown objects (never learnt)
+  std::vector<int> object_unknown_class;         // per object: index into unknown_categories, -1 known
+  std::vector<double> novelty_thresholds;        // per model: its calibrated operating point
   std::vector<std::string> categories;
   std::vector<std::string> object_ids;      // "category/id" per object
   std::vector<int> object_truth;
@@ -294,6 +329,8 @@ std::string streams_csv(const EvalResult& result);
 // panel per true category; `correct` picks the finally-correct or finally-incorrect views.
 std::string evolution_svg(const std::vector<ExplorationTrace>& traces, const std::vector<std::string>& categories,
                           bool correct, std::string_view title);
+// The report's open-set section (empty without objects of an unknown category).
+std::string open_set_section(const EvalResult& result);
 // A short plain-text accuracy table (method x main stage) for a terminal.
 std::string summary_table(const EvalResult& result);
 
