@@ -208,6 +208,9 @@ void ToProto(const Classification& c, v1::ClassifyResponse* out) {
   out->mutable_timings()->set_feature_ms(c.feature_ms);
   out->mutable_timings()->set_decision_ms(c.decision_ms);
   out->set_warning(c.warning);
+  out->set_unknown(c.unknown);
+  if (std::isfinite(c.novelty)) out->set_novelty(c.novelty);
+  out->set_unknown_reason(c.unknown_reason);
 }
 
 void ToProto(const StreamDecision& d, v1::Decision* out) {
@@ -226,6 +229,15 @@ void ToProto(const StreamDecision& d, v1::Decision* out) {
   out->set_winner_held_chunks(static_cast<uint32_t>(std::max(0, d.winner_held_chunks)));
   out->set_settled(d.settled);
   out->set_confidence(d.confidence);
+  out->set_unknown(d.unknown);
+  if (std::isfinite(d.novelty)) out->set_novelty(d.novelty);
+  out->set_unknown_reason(d.unknown_reason);
+}
+
+Expected<double> KnownAcceptanceFromProto(double known_acceptance) {
+  if (known_acceptance >= 0 && known_acceptance <= 1) return known_acceptance;
+  return invalid_argument("known_acceptance must be in (0, 1] (0: the model's default), not " +
+                          std::to_string(known_acceptance));
 }
 
 grpc::Status ToGrpcStatus(const Error& error, bool deadline_exceeded) {

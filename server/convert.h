@@ -25,6 +25,10 @@ std::string PackPoints(const Points& points);
 Expected<std::optional<MethodId>> MethodFromProto(int method);
 v1::Method MethodToProto(MethodId method);
 
+// A request's operating point of "unknown": 0 (the model's default) or a share in (0, 1];
+// INVALID_ARGUMENT otherwise (NaN included).
+Expected<double> KnownAcceptanceFromProto(double known_acceptance);
+
 // Names are 1-128 characters from [A-Za-z0-9._-].
 Status ValidateModelName(std::string_view name);
 // Checks a Train header: name, methods, parameter ranges, description length.

@@ -125,6 +125,9 @@ Engine CoreEngine(int request_threads) {
     if (!params) return params.error();
     return FromTrainParams(*params);
   };
+  e.set_known_acceptance = [](const Model& model, Classification& c, double known_acceptance) {
+    return glimpse::set_known_acceptance(model, c, known_acceptance);
+  };
   e.serialize = [](const Model& model) { return glimpse::serialize(model); };
   e.deserialize = [](std::span<const uint8_t> bytes) { return glimpse::deserialize(bytes); };
   e.create_session = [](std::shared_ptr<const Model> model, const SessionParams& params) {

@@ -34,6 +34,9 @@ struct Engine {
   std::function<std::vector<Expected<Classification>>(const Model&, std::span<const Cloud>, std::optional<MethodId>,
                                                       const CancelFn&)>
       classify_batch;
+  // Re-decides "unknown" of a classification at a request's operating point (known acceptance in
+  // (0, 1]; 0: the model's default); winner and scores stay. Empty: every answer stays at the default.
+  std::function<Status(const Model&, Classification&, double)> set_known_acceptance;
   std::function<std::vector<uint8_t>(const Model&)> serialize;
   std::function<Expected<Model>(std::span<const uint8_t>)> deserialize;
   std::function<Expected<std::unique_ptr<ScanSession>>(std::shared_ptr<const Model>, const SessionParams&)>

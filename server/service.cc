@@ -121,6 +121,8 @@ grpc::Status GlimpseService::Classify(grpc::ServerContext* ctx, const v1::Classi
     auto method = MethodFromProto(request->method());
     if (!method) return method.error();
     log.method = MethodText(*method);
+    auto acceptance = KnownAcceptanceFromProto(request->known_acceptance());
+    if (!acceptance) return acceptance.error();
     auto cloud = CloudFromProto(request->cloud(), options_.limits.max_points_per_cloud);
     if (!cloud) return cloud.error();
     log.points = cloud->points.size();
@@ -131,6 +133,8 @@ grpc::Status GlimpseService::Classify(grpc::ServerContext* ctx, const v1::Classi
     if (CancelFor(ctx)()) return cancelled("the caller cancelled or the deadline passed before classification");
     auto result = options_.engine.classify(*loaded->model, *cloud, *method, CancelFor(ctx));
     if (!result) return result.error();
+    if (*acceptance > 0 && options_.engine.set_known_acceptance)
+      if (Status s = options_.engine.set_known_acceptance(*loaded->model, *result, *acceptance); !s.ok()) return s;
     ToProto(*result, response);
     FillRef(loaded->record, response->mutable_model());
     response->set_model_id(static_cast<uint64_t>(loaded->record.id));
@@ -152,6 +156,8 @@ grpc::Status GlimpseService::ClassifyBatch(grpc::ServerContext* ctx, const v1::C
     auto method = MethodFromProto(request->method());
     if (!method) return method.error();
     log.method = MethodText(*method);
+    auto acceptance = KnownAcceptanceFromProto(request->known_acceptance());
+    if (!acceptance) return acceptance.error();
     auto batch = UnpackBatch(*request, options_.limits);
     if (!batch) return batch.error();
     log.points = batch->points;
@@ -163,10 +169,14 @@ grpc::Status GlimpseService::ClassifyBatch(grpc::ServerContext* ctx, const v1::C
     if (std::find(loaded->model->methods.begin(), loaded->model->methods.end(), used) == loaded->model->methods.end())
       return failed_precondition(std::string("the model was not trained for method '") + method_name(used) + "'");
     if (CancelFor(ctx)()) return cancelled("the caller cancelled or the deadline passed before classification");
-    auto results = options_.engine.classify_batch(*loaded->model, batch->clouds, *method, CancelFor(ctx));
+    std::vector<Expected<Classification>> results = options_.engine.classify_batch(*loaded->model, batch->clouds, *method, CancelFor(ctx));
     for (const Expected<Classification>& r : results)
       if (!r && (r.error().code == ErrorCode::kCancelled || r.error().code == ErrorCode::kFailedPrecondition))
         return r.error();  // the call was stopped, or the model cannot classify at all (its feature version)
+    if (*acceptance > 0 && options_.engine.set_known_acceptance)
+      for (Expected<Classification>& r : results)
+        if (r)
+          if (Status s = options_.engine.set_known_acceptance(*loaded->model, *r, *acceptance); !s.ok()) return s;
     FillBatchResponse(*batch, results, loaded->record, loaded->load_ms, response);
     FillRef(loaded->record, response->mutable_model());
     response->set_method(MethodToProto(used));
@@ -191,6 +201,7 @@ grpc::Status GlimpseService::StreamClassify(grpc::ServerContext* ctx,
     std::unique_ptr<ScanSession> session;
     LoadedModel model;
     MethodId method = MethodId::kFusion;
+    double known_acceptance = 0;
     v1::ScanChunk chunk;
     bool caller_left = false;
     while (stream->Read(&chunk)) {
@@ -202,6 +213,9 @@ grpc::Status GlimpseService::StreamClassify(grpc::ServerContext* ctx,
         if (Status s = ValidateModelName(chunk.model().name()); !s.ok()) return s;
         auto m = MethodFromProto(chunk.method());
         if (!m) return m.error();
+        auto acceptance = KnownAcceptanceFromProto(chunk.known_acceptance());
+        if (!acceptance) return acceptance.error();
+        known_acceptance = *acceptance;
         auto loaded = cache_.Load(chunk.model().name(), chunk.model().version());
         if (!loaded) return loaded.error();
         model = std::move(*loaded);
@@ -213,6 +227,7 @@ grpc::Status GlimpseService::StreamClassify(grpc::ServerContext* ctx,
         params.max_points = options_.limits.max_session_points;
         params.max_chunks = options_.limits.max_session_chunks;
         params.max_chunk_points = options_.limits.max_points_per_cloud;
+        params.known_acceptance = known_acceptance;
         auto created = options_.engine.create_session(model.model, params);
         if (!created) return created.error();
         session = std::move(*created);
@@ -222,8 +237,9 @@ grpc::Status GlimpseService::StreamClassify(grpc::ServerContext* ctx,
                                                  (ref.version() == 0 || ref.version() == model.record.version));
         auto m = MethodFromProto(chunk.method());
         bool same_method = m.ok() && (!*m || **m == method);
-        if (!same_model || !same_method)
-          return invalid_argument("only the first chunk chooses the model and method; chunk " +
+        const double a = chunk.known_acceptance();
+        if (!same_model || !same_method || (a != 0 && a != known_acceptance))
+          return invalid_argument("only the first chunk chooses the model, method and known acceptance; chunk " +
                                   std::to_string(log.messages - 1) + " names others");
       }
       auto cloud = CloudFromProto(chunk.cloud(), options_.limits.max_points_per_cloud);

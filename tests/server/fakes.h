@@ -61,6 +61,18 @@ inline Expected<Model> FakeDeserialize(std::span<const uint8_t> bytes) {
   return m;
 }
 
+// "None of these" in the fake: novelty = point count modulo 5, unknown above the threshold of the
+// operating point: 2 for the model's default (known acceptance 0), 4 x known_acceptance otherwise.
+inline double FakeThreshold(double known_acceptance) { return known_acceptance > 0 ? 4 * known_acceptance : 2.0; }
+inline void FakeJudge(double known_acceptance, double novelty, bool& unknown, std::string& reason) {
+  unknown = novelty > FakeThreshold(known_acceptance);
+  reason = unknown ? "novelty " + std::to_string(int(novelty)) + " above the fake threshold" : "";
+}
+inline void FakeNovelty(size_t points, double known_acceptance, double& novelty, bool& unknown, std::string& reason) {
+  novelty = double(points % 5);
+  FakeJudge(known_acceptance, novelty, unknown, reason);
+}
+
 // Winner = point count modulo the number of categories; scores favour it. Deterministic.
 inline Classification FakeScores(const Model& model, size_t points, MethodId method) {
   Classification c;
@@ -74,13 +86,14 @@ inline Classification FakeScores(const Model& model, size_t points, MethodId met
   c.keypoints = points / 10;
   c.feature_ms = 1.5;
   c.decision_ms = 0.5;
+  FakeNovelty(points, 0, c.novelty, c.unknown, c.unknown_reason);
   return c;
 }
 
 class FakeSession final : public ScanSession {
  public:
-  FakeSession(std::shared_ptr<const Model> model, MethodId method, FakeBehaviour* b)
-      : model_(std::move(model)), method_(method), b_(b) {
+  FakeSession(std::shared_ptr<const Model> model, MethodId method, FakeBehaviour* b, double known_acceptance = 0)
+      : model_(std::move(model)), method_(method), b_(b), known_acceptance_(known_acceptance) {
     last_.categories = model_->categories;
     last_.scores.assign(model_->categories.size(), 0.0);
   }
@@ -100,6 +113,7 @@ class FakeSession final : public ScanSession {
     d.winner_held_chunks = last_.winner == d.winner ? last_.winner_held_chunks + 1 : 1;
     d.settled = d.winner_held_chunks >= 3;
     d.confidence = 0.7;
+    FakeNovelty(points_, known_acceptance_, d.novelty, d.unknown, d.unknown_reason);
     last_ = d;
     return d;
   }
@@ -113,6 +127,7 @@ class FakeSession final : public ScanSession {
   std::shared_ptr<const Model> model_;
   MethodId method_;
   FakeBehaviour* b_;
+  double known_acceptance_;
   StreamDecision last_;
   size_t points_ = 0;
   size_t chunks_ = 0;
@@ -172,6 +187,10 @@ inline Engine FakeEngine(FakeBehaviour* b) {
     for (const Cloud& c : clouds) out.push_back(classify(model, c, method, cancel));
     return out;
   };
+  e.set_known_acceptance = [](const Model&, Classification& c, double known_acceptance) -> Status {
+    FakeJudge(known_acceptance, c.novelty, c.unknown, c.unknown_reason);
+    return {};
+  };
   e.serialize = [](const Model& m) { return FakeSerialize(m); };
   e.deserialize = [b](std::span<const uint8_t> bytes) {
     ++b->deserialize_calls;
@@ -180,7 +199,7 @@ inline Engine FakeEngine(FakeBehaviour* b) {
   e.create_session = [b](std::shared_ptr<const Model> model,
                          const SessionParams& p) -> Expected<std::unique_ptr<ScanSession>> {
     MethodId m = p.method.value_or(model->default_method);
-    return std::unique_ptr<ScanSession>(new FakeSession(std::move(model), m, b));
+    return std::unique_ptr<ScanSession>(new FakeSession(std::move(model), m, b, p.known_acceptance));
   };
   return e;
 }

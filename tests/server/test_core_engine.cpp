@@ -4,6 +4,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include <random>
 
 #include "fakes.h"
@@ -206,8 +208,45 @@ TEST_F(CoreEngineTest, ClassifyOverGrpcGivesExactlyCoresScores) {
       EXPECT_EQ(resp.method(), MethodToProto(method));
       EXPECT_EQ(resp.points(), direct->points);
       EXPECT_EQ(resp.keypoints(), direct->keypoints);
+      EXPECT_EQ(resp.unknown(), direct->unknown);
+      EXPECT_EQ(resp.has_novelty(), std::isfinite(direct->novelty));
+      if (resp.has_novelty()) {
+        EXPECT_EQ(resp.novelty(), direct->novelty);
+      }
+      EXPECT_EQ(resp.unknown_reason(), direct->unknown_reason);
     }
   }
+}
+
+// "None of these" at a request's operating point is core's set_known_acceptance, over gRPC too; a model
+// of the default method has a novelty for every answer, and a sheet of metal, never learnt, is unknown.
+TEST_F(CoreEngineTest, KnownAcceptanceOverGrpcIsCoresOperatingPoint) {
+  Cloud sheet;  // a 3 m x 3 m wavy sheet: nothing like a box, cylinder or sphere
+  for (int i = 0; i < 80; ++i)
+    for (int j = 0; j < 80; ++j)
+      sheet.points.emplace_back(0.04f * float(i), 0.04f * float(j), 0.1f * std::sin(0.3f * float(i)));
+  const TrainingCloud box = Sample("box", 7, 3);
+  for (const Cloud* cloud : std::vector<const Cloud*>{&box.cloud, &sheet})
+    for (double acceptance : {0.0, 0.5, 0.99}) {
+      auto direct = glimpse::classify(**direct_, *cloud);
+      ASSERT_TRUE(direct.ok()) << direct.error().message;
+      ASSERT_TRUE(glimpse::set_known_acceptance(**direct_, *direct, acceptance).ok());
+      grpc::ClientContext ctx;
+      v1::ClassifyRequest req;
+      req.mutable_model()->set_name("shapes");
+      req.set_known_acceptance(acceptance);
+      *req.mutable_cloud() = CloudToProto(*cloud);
+      v1::ClassifyResponse resp;
+      grpc::Status s = harness_->stub->Classify(&ctx, req, &resp);
+      ASSERT_TRUE(s.ok()) << s.error_message();
+      ASSERT_TRUE(resp.has_novelty());
+      EXPECT_EQ(resp.novelty(), direct->novelty);
+      EXPECT_EQ(resp.unknown(), direct->unknown) << acceptance;
+      EXPECT_EQ(resp.unknown_reason(), direct->unknown_reason);
+      if (cloud == &sheet && acceptance == 0.0) {
+        EXPECT_TRUE(resp.unknown()) << "novelty " << resp.novelty();
+      }
+    }
 }
 
 TEST_F(CoreEngineTest, StreamClassifyOverGrpcGivesExactlyTheSessionsDecisions) {

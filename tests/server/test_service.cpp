@@ -318,6 +318,37 @@ TEST(Classify, TheCoreWarningReachesTheResponse) {
   EXPECT_EQ(r.warning(), "the cloud is large");
 }
 
+// "None of these" travels as the engine decides it, at the request's operating point (the fake: novelty
+// = points modulo 5, unknown above 2 by default, above 4 x known_acceptance when a request sets one).
+TEST(Classify, UnknownAnswersCarryNoveltyReasonAndTheClosestCategory) {
+  Harness h;
+  v1::TrainProgress t;
+  ASSERT_TRUE(h.Train("m", {"a", "b"}, &t).ok());
+  v1::ClassifyResponse r;
+  ASSERT_TRUE(Classify(h, ClassifyReq("m", 13), &r).ok());  // novelty 3 > 2
+  EXPECT_TRUE(r.unknown());
+  ASSERT_TRUE(r.has_novelty());
+  EXPECT_DOUBLE_EQ(r.novelty(), 3.0);
+  EXPECT_THAT(r.unknown_reason(), HasSubstr("novelty 3"));
+  EXPECT_EQ(r.winner(), "b");  // the nearest known category stays the winner
+  ASSERT_TRUE(Classify(h, ClassifyReq("m", 11), &r).ok());  // novelty 1
+  EXPECT_FALSE(r.unknown());
+  EXPECT_EQ(r.unknown_reason(), "");
+  auto req = ClassifyReq("m", 13);
+  req.set_known_acceptance(0.9);  // threshold 3.6: novelty 3 is accepted
+  ASSERT_TRUE(Classify(h, req, &r).ok());
+  EXPECT_FALSE(r.unknown());
+  req.set_known_acceptance(0.25);  // threshold 1: novelty 3 is unknown
+  ASSERT_TRUE(Classify(h, req, &r).ok());
+  EXPECT_TRUE(r.unknown());
+  for (double bad : {-0.5, 1.01, std::nan("")}) {
+    req.set_known_acceptance(bad);
+    grpc::Status s = Classify(h, req);
+    EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << bad;
+    EXPECT_THAT(s.error_message(), HasSubstr("known_acceptance"));
+  }
+}
+
 TEST(Classify, NotFound) {
   Harness h;
   EXPECT_EQ(Classify(h, ClassifyReq("nobody", 10)).error_code(), grpc::StatusCode::NOT_FOUND);
@@ -427,6 +458,69 @@ TEST(StreamClassify, AnswersEveryChunkWithTheEvolvingDecision) {
   EXPECT_EQ(decisions[1].winner(), "a");   // 10, 30, 60, 100: all even
   EXPECT_TRUE(decisions[4].settled());
   EXPECT_EQ(h.metrics.ActiveStreams("StreamClassify"), 0);
+}
+
+TEST(StreamClassify, DecisionsCarryUnknownAtTheStreamsOperatingPoint) {
+  Harness h;
+  v1::TrainProgress t;
+  ASSERT_TRUE(h.Train("m", {"a", "b"}, &t).ok());
+  for (double acceptance : {0.0, 0.9}) {
+    grpc::ClientContext ctx;
+    auto stream = h.stub->StreamClassify(&ctx);
+    v1::ScanChunk first = Chunk(0, "m");
+    first.set_known_acceptance(acceptance);
+    ASSERT_TRUE(stream->Write(first));
+    v1::Decision d;
+    ASSERT_TRUE(stream->Read(&d));
+    std::vector<v1::Decision> decisions;
+    for (size_t points : {11u, 2u}) {  // 11 points: novelty 1; 13: novelty 3
+      v1::ScanChunk c = Chunk(points);
+      c.set_known_acceptance(acceptance);  // repeating the first chunk's is allowed
+      ASSERT_TRUE(stream->Write(c));
+      ASSERT_TRUE(stream->Read(&d));
+      decisions.push_back(d);
+    }
+    stream->WritesDone();
+    ASSERT_TRUE(stream->Read(&d));
+    EXPECT_TRUE(d.final());
+    ASSERT_TRUE(stream->Finish().ok());
+    EXPECT_FALSE(decisions[0].unknown());
+    EXPECT_DOUBLE_EQ(decisions[0].novelty(), 1.0);
+    EXPECT_EQ(decisions[1].unknown(), acceptance == 0.0) << acceptance;  // 3 > 2, but not > 3.6
+    EXPECT_DOUBLE_EQ(decisions[1].novelty(), 3.0);
+    EXPECT_EQ(decisions[1].winner(), "b");
+    if (acceptance == 0.0) {
+      EXPECT_THAT(decisions[1].unknown_reason(), HasSubstr("novelty 3"));
+    }
+  }
+  // Only the first chunk sets the operating point; a bad one is refused.
+  for (double bad : {1.5, -1.0}) {
+    grpc::ClientContext ctx;
+    auto stream = h.stub->StreamClassify(&ctx);
+    v1::ScanChunk first = Chunk(10, "m");
+    first.set_known_acceptance(bad);
+    stream->Write(first);
+    stream->WritesDone();
+    v1::Decision d;
+    EXPECT_FALSE(stream->Read(&d));
+    grpc::Status s = stream->Finish();
+    EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+    EXPECT_THAT(s.error_message(), HasSubstr("known_acceptance"));
+  }
+  grpc::ClientContext ctx;
+  auto stream = h.stub->StreamClassify(&ctx);
+  ASSERT_TRUE(stream->Write(Chunk(10, "m")));
+  v1::Decision d;
+  ASSERT_TRUE(stream->Read(&d));
+  v1::ScanChunk later = Chunk(10);
+  later.set_known_acceptance(0.5);
+  stream->Write(later);
+  stream->WritesDone();
+  while (stream->Read(&d)) {
+  }
+  grpc::Status s = stream->Finish();
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_THAT(s.error_message(), HasSubstr("known acceptance"));
 }
 
 TEST(StreamClassify, Errors) {
