@@ -48,6 +48,7 @@ grpc::Status BatchClassifier::Batch(std::span<const Cloud> clouds, std::span<Clo
   v1::ClassifyBatchRequest request;
   *request.mutable_model() = model_;
   request.set_method(method_);
+  request.set_known_acceptance(known_acceptance_);
   for (const Cloud& c : clouds) ToProto(c, request.add_clouds());
   grpc::ClientContext context;
   PrepareContext(context, conn_, timeout_per_cloud_s_ * double(clouds.size()));
@@ -77,6 +78,7 @@ grpc::Status BatchClassifier::Single(const Cloud& cloud, CloudAnswer& out) {
   v1::ClassifyRequest request;
   *request.mutable_model() = model_;
   request.set_method(method_);
+  request.set_known_acceptance(known_acceptance_);
   ToProto(cloud, request.mutable_cloud());
   grpc::ClientContext context;
   PrepareContext(context, conn_, timeout_per_cloud_s_);

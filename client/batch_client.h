@@ -40,6 +40,8 @@ class BatchClassifier {
   BatchClassifier(const ConnectionOptions& conn, v1::Glimpse::Stub& stub, v1::ModelRef model, v1::Method method,
                   double timeout_per_cloud_s, BatchLimits limits = {});
   BatchAnswers Classify(std::span<const Cloud> clouds);
+  // The operating point of "unknown" sent with every call (0: the model's default).
+  void set_known_acceptance(double known_acceptance) { known_acceptance_ = known_acceptance; }
 
  private:
   grpc::Status Batch(std::span<const Cloud> clouds, std::span<CloudAnswer> out);
@@ -52,6 +54,7 @@ class BatchClassifier {
   double timeout_per_cloud_s_;
   BatchLimits limits_;
   bool batch_supported_ = true;
+  double known_acceptance_ = 0;
 };
 
 }  // namespace glimpse::client

@@ -65,6 +65,7 @@ int RunClassify(const ConnectionOptions& conn, const ClassifyOptions& o) {
     if (!stub) return kExitError;
     BatchClassifier classifier(conn, *stub, *ParseModelRef(o.model),
                                o.method.empty() ? v1::METHOD_UNSPECIFIED : *ParseMethod(o.method), kTimeoutS);
+    classifier.set_known_acceptance(o.known_acceptance);
     BatchAnswers answers = classifier.Classify(clouds);
     for (size_t i = 0; i < sent.size(); ++i) {
       if (answers.answers[i].response) sent[i]->response = std::move(answers.answers[i].response);

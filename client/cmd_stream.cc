@@ -103,6 +103,7 @@ int RunStream(const ConnectionOptions& conn, const StreamOptions& o) {
     v1::ScanChunk chunk;
     if (!o.model.empty()) *chunk.mutable_model() = *ParseModelRef(o.model);
     if (!o.method.empty()) chunk.set_method(*ParseMethod(o.method));
+    chunk.set_known_acceptance(o.known_acceptance);
     for (size_t i = 0; i < ends.size(); ++i) {
       if (o.rate_hz > 0 && i > 0) {
         const auto due = start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
@@ -115,6 +116,7 @@ int RunStream(const ConnectionOptions& conn, const StreamOptions& o) {
       if (i == 0) {
         chunk.clear_model();
         chunk.clear_method();
+        chunk.clear_known_acceptance();
       }
     }
     stream->WritesDone();

@@ -49,6 +49,7 @@ struct ClassifyOptions {
   std::optional<Vec3> sensor;  // clouds: the sensor position, replacing the file's (a PCD's identity
                                // VIEWPOINT reads as "no sensor"; --sensor 0,0,0 says it is at the origin)
   bool json = false;         // one JSON object per file, errors included
+  double known_acceptance = 0;  // the operating point of "unknown" (0: the model's default)
 };
 int RunClassify(const ConnectionOptions& conn, const ClassifyOptions& options);
 
@@ -69,6 +70,7 @@ struct StreamOptions {
   Placement placement;        // meshes: --up, --unit, --height
   ProtocolOptions protocol;   // meshes: samples
   bool json = false;
+  double known_acceptance = 0;  // the operating point of "unknown" (0: the model's default)
 };
 int RunStream(const ConnectionOptions& conn, const StreamOptions& options);
 

@@ -156,6 +156,10 @@ int Main(int argc, char** argv) {
   classify->add_option("--model", c.model, "NAME[:VERSION]")->envname("GLIMPSE_MODEL")->required()->check(kModelRef);
   classify->add_option("--method", c.method, "bok|bog|kgh|vfh|esf|ush|fusion (default: the model's)")->check(kMethod);
   classify->add_flag("--json", c.json, "one JSON object per file instead of a table, errors included");
+  classify->add_option("--known-acceptance", c.known_acceptance,
+                       "operating point of \"unknown\": the share of known clouds to accept, in (0, 1] (default: "
+                       "the model's, 0.95 of its held-out training clouds)")
+      ->check(CLI::Range(0.0, 1.0));
   auto* view = classify->add_option("--view", c.view, "meshes: which of the paper's 6 viewpoints (azimuth 60*N deg) sees the object")
                    ->capture_default_str()->check(CLI::Range(0, 5))->group("Meshes");
   classify->add_flag("--whole", c.whole, "meshes: the whole sampled cloud instead of a single view")->excludes(view)->group("Meshes");
@@ -194,6 +198,10 @@ int Main(int argc, char** argv) {
                                             "the file's; a PCD's default VIEWPOINT reads as no sensor)")
       ->check(kSensor)->excludes(stream_view);
   stream->add_flag("--json", s.json, "one JSON object per decision");
+  stream->add_option("--known-acceptance", s.known_acceptance,
+                     "operating point of \"unknown\": the share of known clouds to accept, in (0, 1] (default: "
+                     "the model's)")
+      ->check(CLI::Range(0.0, 1.0));
   stream->add_option("--mesh-points", s.protocol.points, "points sampled on a mesh's surface")
       ->capture_default_str()->check(CLI::Range(size_t{0}, size_t{5'000'000}))->group("Meshes");
   AddPlacementOptions(*stream, s.placement);

@@ -68,6 +68,27 @@ std::string Methods(const v1::ModelInfo& m) {
 
 std::string YesNo(bool b) { return b ? "yes" : "no"; }
 
+// "chair" or, for "none of these", "unknown (closest: chair 0.310)": the winner stays the nearest known
+// category, so a person sees what it was closest to.
+template <class Answer>
+std::string WinnerText(const Answer& a, double winner_score) {
+  if (a.winner().empty()) return "-";
+  return a.unknown() ? "unknown (closest: " + a.winner() + " " + Score(winner_score) + ")" : a.winner();
+}
+
+double WinnerScore(const v1::ClassifyResponse& r) {
+  if (r.winner_index() < 0 || r.winner_index() >= r.scores_size()) return 0.0;
+  return r.scores(r.winner_index()).score();
+}
+
+// ,"unknown":..,"novelty":..,"unknown_reason":.. (novelty null when the method has none)
+template <class Answer>
+std::string UnknownJson(const Answer& a) {
+  return std::string(",\"unknown\":") + (a.unknown() ? "true" : "false") +
+         ",\"novelty\":" + (a.has_novelty() ? JsonNumber(a.novelty()) : std::string("null")) +
+         ",\"unknown_reason\":" + JsonString(a.unknown_reason());
+}
+
 }  // namespace
 
 std::string Bar(double fraction, int width) {
@@ -155,16 +176,19 @@ std::string ClassifyTable(const std::vector<ClassifyRow>& rows) {
   std::vector<std::vector<std::string>> table;
   std::vector<std::string> header = {"FILE", "WINNER"};
   header.insert(header.end(), categories.begin(), categories.end());
+  const bool novelty = std::any_of(rows.begin(), rows.end(), [](const ClassifyRow& r) { return r.response.has_novelty(); });
+  if (novelty) header.push_back("NOVELTY");
   header.insert(header.end(), {"POINTS", "KEYPOINTS", "MS"});
   table.push_back(header);
   for (const ClassifyRow& r : rows) {
-    std::vector<std::string> line = {r.file, r.response.winner().empty() ? "-" : r.response.winner()};
+    std::vector<std::string> line = {r.file, WinnerText(r.response, WinnerScore(r.response))};
     for (const std::string& c : categories) {
       std::string cell = "-";
       for (const v1::CategoryScore& s : r.response.scores())
         if (s.category() == c) cell = Score(s.score());
       line.push_back(cell);
     }
+    if (novelty) line.push_back(r.response.has_novelty() ? Fixed(r.response.novelty(), 2) : "-");
     line.push_back(std::to_string(r.response.points()));
     line.push_back(std::to_string(r.response.keypoints()));
     line.push_back(Fixed(r.response.timings().total_ms(), 1));
@@ -179,7 +203,8 @@ std::string ClassifyJson(const ClassifyRow& row) {
          ",\"version\":" + std::to_string(r.model().version()) + ",\"method\":" + JsonString(MethodName(r.method())) +
          ",\"winner\":" + JsonString(r.winner()) + ",\"scores\":" + JsonScores(r.scores()) +
          ",\"points\":" + std::to_string(r.points()) + ",\"keypoints\":" + std::to_string(r.keypoints()) +
-         ",\"total_ms\":" + JsonNumber(r.timings().total_ms()) + ",\"warning\":" + JsonString(r.warning()) + "}";
+         ",\"total_ms\":" + JsonNumber(r.timings().total_ms()) + ",\"warning\":" + JsonString(r.warning()) +
+         UnknownJson(r) + "}";
 }
 
 std::string ClassifyErrorJson(std::string_view file, std::string_view code, std::string_view message) {
@@ -201,13 +226,15 @@ std::string KeypointsField(const v1::Decision& d, std::string_view gap) {
 }  // namespace
 
 std::string DecisionLine(const v1::Decision& d, size_t chunks_total) {
-  std::string winner = d.winner().empty() ? "-" : d.winner() + " " + Score(WinnerScore(d));
+  std::string winner = d.winner().empty() ? "-"
+                       : d.unknown()       ? WinnerText(d, WinnerScore(d))
+                                           : d.winner() + " " + Score(WinnerScore(d));
   const std::string which =
       d.final() ? "final" : "chunk " + std::to_string(d.chunk_index() + 1) + "/" + std::to_string(chunks_total);
   return which + " points " +
          std::to_string(d.points()) + " " + KeypointsField(d, " ") + "winner " + winner +
          " changes " + std::to_string(d.category_changes()) + " settled " + YesNo(d.settled()) + " confidence " +
-         Fixed(d.confidence(), 2);
+         Fixed(d.confidence(), 2) + (d.has_novelty() ? " novelty " + Fixed(d.novelty(), 2) : "");
 }
 
 std::string DecisionPanel(const v1::Decision& d, size_t chunks_total, std::string_view previous_winner,
@@ -220,11 +247,13 @@ std::string DecisionPanel(const v1::Decision& d, size_t chunks_total, std::strin
   if (d.winner().empty()) {
     out += "winner -   (not enough points yet)\n";
   } else {
-    out += "winner " + d.winner() + " " + Score(WinnerScore(d));
+    out += "winner " + (d.unknown() ? WinnerText(d, WinnerScore(d)) : d.winner() + " " + Score(WinnerScore(d)));
     if (!previous_winner.empty() && previous_winner != d.winner())
       out += "   (was " + std::string(previous_winner) + ")";
     out += "   changes " + std::to_string(d.category_changes()) + "   held " + std::to_string(d.winner_held_chunks()) +
-           "   settled " + YesNo(d.settled()) + "   confidence " + Fixed(d.confidence(), 2) + "\n";
+           "   settled " + YesNo(d.settled()) + "   confidence " + Fixed(d.confidence(), 2) +
+           (d.has_novelty() ? "   novelty " + Fixed(d.novelty(), 2) : "") + "\n";
+    if (d.unknown() && !d.unknown_reason().empty()) out += "unknown: " + d.unknown_reason() + "\n";
   }
   size_t name_width = 0;
   for (const v1::CategoryScore& s : d.scores()) name_width = std::max(name_width, Width(s.category()));
@@ -244,7 +273,8 @@ std::string DecisionJson(const v1::Decision& d, size_t chunks_total) {
          ",\"changes\":" + std::to_string(d.category_changes()) + ",\"held\":" + std::to_string(d.winner_held_chunks()) +
          ",\"settled\":" + (d.settled() ? "true" : "false") + ",\"confidence\":" + JsonNumber(d.confidence()) +
          ",\"model\":" + JsonString(d.model().name()) + ",\"version\":" + std::to_string(d.model().version()) +
-         ",\"method\":" + JsonString(MethodName(d.method())) + ",\"latency_ms\":" + JsonNumber(d.latency_ms()) + "}";
+         ",\"method\":" + JsonString(MethodName(d.method())) + ",\"latency_ms\":" + JsonNumber(d.latency_ms()) +
+         UnknownJson(d) + "}";
 }
 
 // ---- train ----

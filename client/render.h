@@ -32,10 +32,12 @@ struct ClassifyRow {
   std::string file;
   v1::ClassifyResponse response;
 };
-// One row per file: FILE WINNER <category...> POINTS KEYPOINTS MS, categories in the model's order.
+// One row per file: FILE WINNER <category...> [NOVELTY] POINTS KEYPOINTS MS, categories in the model's
+// order; WINNER "unknown (closest: chair 0.310)" for "none of these", NOVELTY when an answer has one.
 std::string ClassifyTable(const std::vector<ClassifyRow>& rows);
 // {"file":..,"model":..,"version":..,"method":..,"winner":..,"scores":{cat:score,..},"points":..,
-//  "keypoints":..,"total_ms":..,"warning":..} (warning "" when all is well)
+//  "keypoints":..,"total_ms":..,"warning":..,"unknown":..,"novelty":..,"unknown_reason":..} (warning ""
+//  when all is well; novelty null when the method has none)
 std::string ClassifyJson(const ClassifyRow& row);
 // A file that got no answer, in the same shape a script can tell apart by "error":
 // {"file":..,"error":{"code":"NOT_FOUND","message":..}}
@@ -43,15 +45,16 @@ std::string ClassifyErrorJson(std::string_view file, std::string_view code, std:
 
 // ---- stream ----
 
-// "chunk 3/20 points 1234 keypoints 17 winner chair 0.820 changes 1 settled no confidence 0.41"
-// (chunk is 1-based; winner "-" while undecided).
+// "chunk 3/20 points 1234 keypoints 17 winner chair 0.820 changes 1 settled no confidence 0.41 novelty 0.93"
+// (chunk is 1-based; winner "-" while undecided, "unknown (closest: chair 0.820)" for "none of these";
+// novelty when the method has one).
 std::string DecisionLine(const v1::Decision& d, size_t chunks_total);
 // The live panel redrawn on a terminal: position, winner (and the previous one when it just changed),
 // settled state, and one bar per category. Ends with a newline; LineCount() tells how many.
 std::string DecisionPanel(const v1::Decision& d, size_t chunks_total, std::string_view previous_winner,
                           int bar_width = 30);
 // {"chunk":3,"chunks":20,"points":..,"keypoints":..,"winner":..,"scores":{..},"changes":..,
-//  "held":..,"settled":false,"confidence":..,"latency_ms":..}
+//  "held":..,"settled":false,"confidence":..,"latency_ms":..,"unknown":..,"novelty":..,"unknown_reason":..}
 std::string DecisionJson(const v1::Decision& d, size_t chunks_total);
 
 // ---- train ----

@@ -3,7 +3,7 @@
 #   e2e_cli_test.sh GLIMPSE_BINARY SERVER_BINARY
 # Trains on a tiny zoo, on a folder of meshes and clouds, on a mesh folder with a manifest (up axes and
 # sizes) and on one without (--up/--unit); evaluates a model on another folder; classifies several
-# files in one batch (JSON errors included, unit warnings); streams a sensorless cloud as it is;
+# files in one batch (JSON errors included, unit warnings, "unknown"); streams a sensorless cloud as it is;
 # manages models; checks exit codes and error messages. About a minute.
 set -uo pipefail
 GLIMPSE=$1
@@ -166,6 +166,12 @@ assert all(r["error"]["code"] == "NOT_FOUND" and "nope" in r["error"]["message"]
 # A mesh in millimetres against a model of metre-sized boxes: a warning a person reads.
 run 0 classify "$PLAIN/tall/t1.off" --model boxes && err_has "^glimpse: classify $PLAIN/tall/t1.off: warning: the cloud spans 1\.[0-9]+e\+03 m.*millimetres"
 run 0 classify "$PLAIN/tall/t1.off" --model boxes --json && out_has '"warning":"the cloud spans'
+# "None of these": a 1.7 km box is nothing the model learnt; the winner stays the closest category.
+run 0 classify "$PLAIN/tall/t1.off" --model boxes --json && out_has '"unknown":true,"novelty":[0-9.e+]+,"unknown_reason":"novelty '
+run 0 classify "$PLAIN/tall/t1.off" --model boxes && out_has "^$PLAIN/tall/t1.off +unknown \(closest: (tall|flat) [0-9.]+\) "
+out_has "NOVELTY"
+run 0 classify "$PLAIN/tall/t1.off" --model boxes --known-acceptance 1 --json && out_has '"novelty":[0-9.e+]+'
+run 2 classify "$BOX" --model boxes --known-acceptance 1.5
 run 0 classify "$PLAIN/tall/t1.off" --model boxes --up y --unit mm --view 2 && out_has "^$PLAIN/tall/t1.off +tall "
 [[ -s "$ERR" ]] && fail "classify in the right unit warned"
 run 0 classify "$PLAIN/tall/t1.off" --model boxes --unit mm --whole --json && out_has '"warning":""'

@@ -105,10 +105,39 @@ TEST(Render, ClassifyJsonIsOneObjectWithScoresByCategory) {
   EXPECT_EQ(ClassifyJson(MakeRow("dir/\"x\".ply")),
             "{\"file\":\"dir/\\\"x\\\".ply\",\"model\":\"zoo\",\"version\":1,\"method\":\"bok\",\"winner\":\"chair\","
             "\"scores\":{\"human\":0.125,\"chair\":0.875},\"points\":900,\"keypoints\":12,\"total_ms\":4.25,"
-            "\"warning\":\"\"}");
+            "\"warning\":\"\",\"unknown\":false,\"novelty\":null,\"unknown_reason\":\"\"}");
   ClassifyRow warned = MakeRow("mm.ply");
   warned.response.set_warning("the cloud spans 1.7e+03 m: millimetres?");
-  EXPECT_NE(ClassifyJson(warned).find(",\"warning\":\"the cloud spans 1.7e+03 m: millimetres?\"}"), std::string::npos);
+  EXPECT_NE(ClassifyJson(warned).find(",\"warning\":\"the cloud spans 1.7e+03 m: millimetres?\","), std::string::npos);
+}
+
+// "None of these": the winner stays the closest known category, shown beside the word unknown.
+TEST(Render, UnknownAnswersNameTheClosestCategory) {
+  ClassifyRow known = MakeRow("chair.ply");
+  known.response.set_novelty(0.93);
+  ClassifyRow unknown = MakeRow("bike.ply");
+  unknown.response.set_unknown(true);
+  unknown.response.set_novelty(2.456);
+  unknown.response.set_unknown_reason("novelty 2.46 above 1.80");
+  EXPECT_EQ(ClassifyTable({known, unknown}),
+            "FILE       WINNER                          human  chair  NOVELTY  POINTS  KEYPOINTS  MS\n"
+            "chair.ply  chair                           0.125  0.875  0.93     900     12         4.2\n"
+            "bike.ply   unknown (closest: chair 0.875)  0.125  0.875  2.46     900     12         4.2\n");
+  EXPECT_NE(ClassifyJson(unknown).find(",\"unknown\":true,\"novelty\":2.456,\"unknown_reason\":\"novelty 2.46 above 1.80\"}"),
+            std::string::npos)
+      << ClassifyJson(unknown);
+  v1::Decision d = MakeDecision();
+  d.set_unknown(true);
+  d.set_novelty(2.5);
+  d.set_unknown_reason("novelty 2.50 above 2.00");
+  EXPECT_EQ(DecisionLine(d, 20),
+            "chunk 3/20 points 1234 keypoints 17 winner unknown (closest: chair 0.820) changes 1 settled no "
+            "confidence 0.41 novelty 2.50");
+  const std::string panel = DecisionPanel(d, 20, "chair", 10);
+  EXPECT_NE(panel.find("winner unknown (closest: chair 0.820)"), std::string::npos) << panel;
+  EXPECT_NE(panel.find("unknown: novelty 2.50 above 2.00"), std::string::npos) << panel;
+  EXPECT_NE(DecisionJson(d, 20).find(",\"unknown\":true,\"novelty\":2.5,\"unknown_reason\":\"novelty 2.50 above 2.00\"}"),
+            std::string::npos);
 }
 
 TEST(Render, ClassifyErrorJsonHasTheFileAndTheStatus) {
@@ -155,7 +184,8 @@ TEST(Render, DecisionJson) {
             "{\"chunk\":3,\"chunks\":20,\"points\":1234,\"keypoints\":17,\"winner\":\"chair\","
             "\"scores\":{\"human\":0.1,\"chair\":0.82,\"table\":0.3},\"raw_scores\":{\"human\":0.2,\"chair\":0.7,"
             "\"table\":0.1},\"final\":false,\"changes\":1,\"held\":2,\"settled\":false,"
-            "\"confidence\":0.41,\"model\":\"zoo\",\"version\":3,\"method\":\"fusion\",\"latency_ms\":12.5}");
+            "\"confidence\":0.41,\"model\":\"zoo\",\"version\":3,\"method\":\"fusion\",\"latency_ms\":12.5,"
+            "\"unknown\":false,\"novelty\":null,\"unknown_reason\":\"\"}");
 }
 
 TEST(Render, TrainingProgress) {
