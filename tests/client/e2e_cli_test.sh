@@ -172,7 +172,9 @@ run 0 classify "$PLAIN/tall/t1.off" --model boxes && out_has "^$PLAIN/tall/t1.of
 out_has "NOVELTY"
 run 0 classify "$PLAIN/tall/t1.off" --model boxes --known-acceptance 1 --json && out_has '"novelty":[0-9.e+]+'
 run 2 classify "$BOX" --model boxes --known-acceptance 1.5
-run 0 classify "$PLAIN/tall/t1.off" --model boxes --up y --unit mm --view 2 && out_has "^$PLAIN/tall/t1.off +tall "
+# (the winner is right; a model of 6 boxes may still find this view novel: the closest category then)
+run 0 classify "$PLAIN/tall/t1.off" --model boxes --up y --unit mm --view 2 &&
+  out_has "^$PLAIN/tall/t1.off +(tall|unknown \(closest: tall [0-9.]+\)) "
 [[ -s "$ERR" ]] && fail "classify in the right unit warned"
 run 0 classify "$PLAIN/tall/t1.off" --model boxes --unit mm --whole --json && out_has '"warning":""'
 run 2 classify "$BOX" --model boxes --view 2 --whole
@@ -180,7 +182,7 @@ GLIMPSE_MODEL=folder run 0 classify "$BLOB" && out_has "folder:1"
 
 # ---- stream ----
 run 0 stream --zoo chair --model tiny:1 --chunks 5 --rate 50 && out_lines 6 && out_has "^final points "
-out_has "^chunk 1/5 points [0-9]+ (keypoints [0-9]+ )?winner " && out_has "^chunk 5/5 .* settled (yes|no) confidence [0-9.]+$"
+out_has "^chunk 1/5 points [0-9]+ (keypoints [0-9]+ )?winner " && out_has "^chunk 5/5 .* settled (yes|no) confidence [0-9.]+( novelty [0-9.]+)?$"
 run 0 stream "$BOX" --model tiny --chunk-points 1000 --order random --rate 0 --json && out_has '"chunk":1,' && out_has '"final":true' && out_has '"model":"tiny","version":2,"method":"(bok|esf)"'
 run 0 stream "$DATA/blob/s1.xyz" --model folder --chunks 3 --order sweep --rate 0 && out_lines 4
 # A cloud without a sensor streams as it is: all of its 1800 points (a view is cut only when asked).
