@@ -85,12 +85,6 @@ class ProgressView {
   int decile_ = -1;
 };
 
-std::string JoinNames(const std::vector<std::string>& names) {
-  std::string out;
-  for (const std::string& n : names) out += (out.empty() ? "" : ", ") + n;
-  return out;
-}
-
 }  // namespace
 
 int RunTrain(const ConnectionOptions& conn, const TrainOptions& o) {
@@ -121,7 +115,7 @@ int RunTrain(const ConnectionOptions& conn, const TrainOptions& o) {
         }
       if (zoo_extra.empty()) {
         PrintError(what, "--zoo adds objects of the folder's categories, and the zoo has none of them (it has " +
-                             JoinNames(glimpse::zoo_categories()) + ")");
+                             Joined(glimpse::zoo_categories(), ", ") + ")");
         return kExitUsage;
       }
       folder.applied.push_back("also the procedural zoo: " + std::to_string(o.per_category) +
