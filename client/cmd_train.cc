@@ -3,6 +3,7 @@
 #include <atomic>
 #include <cstdio>
 #include <functional>
+#include <set>
 #include <thread>
 
 #include "client/cloud_convert.h"
@@ -11,6 +12,7 @@
 #include "client/parse.h"
 #include "client/render.h"
 #include "glimpse/evaluation.h"
+#include "glimpse/zoo.h"
 
 namespace glimpse::client {
 namespace {
@@ -44,9 +46,11 @@ Status EmitDir(const TrainOptions& o, const Folder& folder, const Emit& emit) {
   return {};
 }
 
-// The procedural zoo's objects (upright, real-life size), viewed as glimpse-lab views them.
-Status EmitZoo(const TrainOptions& o, const Emit& emit) {
+// The procedural zoo's objects (upright, real-life size), viewed as glimpse-lab views them; only
+// those of `categories` when given (a folder's, which the zoo adds to).
+Status EmitZoo(const TrainOptions& o, const std::set<std::string>& categories, const Emit& emit) {
   for (const EvalObject& object : zoo_objects(o.per_category, o.protocol.seed)) {
+    if (!categories.empty() && !categories.count(object.category)) continue;
     const std::string key = object.category + "/" + object.id;
     if (!EmitViews(object.category, key, ViewsOfMesh(object.mesh, key, object.any_pose, o.protocol), emit)) return {};
   }
@@ -84,7 +88,7 @@ class ProgressView {
 }  // namespace
 
 int RunTrain(const ConnectionOptions& conn, const TrainOptions& o) {
-  const std::string what = "train " + (o.zoo ? std::string("--zoo") : o.dir);
+  const std::string what = "train " + (o.dir.empty() ? std::string("--zoo") : o.dir);
   auto methods = ParseMethodList(o.methods);
   if (!methods) {
     PrintError(what, methods.error().message);
@@ -92,13 +96,31 @@ int RunTrain(const ConnectionOptions& conn, const TrainOptions& o) {
   }
   // The folder's listing and manifest first: a bad manifest row fails before anything is sent.
   Folder folder;
-  if (!o.zoo) {
+  std::set<std::string> zoo_extra;  // with a folder: the zoo adds objects of its categories only
+  if (!o.dir.empty()) {
     auto scanned = ScanFolder(o.dir, o.placement);
     if (!scanned) {
       PrintError(what, scanned.error().message);
       return kExitError;
     }
     folder = std::move(*scanned);
+    if (o.zoo) {
+      std::set<std::string> in_folder(folder.dataset.categories.begin(), folder.dataset.categories.end());
+      for (const TrainFile& f : folder.clouds) in_folder.insert(f.category);
+      std::string names;
+      for (const std::string& c : glimpse::zoo_categories())
+        if (in_folder.count(c)) {
+          zoo_extra.insert(c);
+          names += (names.empty() ? "" : ", ") + c;
+        }
+      if (zoo_extra.empty()) {
+        PrintError(what, "--zoo adds objects of the folder's categories, and the zoo has none of them (it has " +
+                             Joined(glimpse::zoo_categories(), ", ") + ")");
+        return kExitUsage;
+      }
+      folder.applied.push_back("also the procedural zoo: " + std::to_string(o.per_category) +
+                               " objects per category of " + names + ", upright, real-life size");
+    }
   } else {
     folder.applied = {"the procedural zoo: " + std::to_string(o.per_category) + " objects per category, upright, real-life size"};
   }
@@ -146,7 +168,9 @@ int RunTrain(const ConnectionOptions& conn, const TrainOptions& o) {
     open = stream->Write(request);
     return open;
   };
-  const Status loaded = open ? (o.zoo ? EmitZoo(o, emit) : EmitDir(o, folder, emit)) : Status{};
+  Status loaded;
+  if (open && !o.dir.empty()) loaded = EmitDir(o, folder, emit);
+  if (open && loaded.ok() && o.zoo) loaded = EmitZoo(o, zoo_extra, emit);
   if (!loaded.ok()) context.TryCancel();  // a failed call stores nothing
   if (open && loaded.ok()) stream->WritesDone();
   reader.join();

@@ -25,7 +25,7 @@ int RunModelsSetDefault(const ConnectionOptions& conn, const std::string& ref);
 
 struct TrainOptions {
   std::string dir;             // DIR/<category>/<files>; empty with zoo
-  bool zoo = false;            // the core's procedural shape zoo instead of files
+  bool zoo = false;            // the core's procedural shape zoo: alone, or added to DIR (its categories)
   size_t per_category = 4;     // zoo objects per category
   std::string name;
   std::string methods;         // "bok,bog"; empty: the server's default set

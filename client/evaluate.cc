@@ -12,25 +12,6 @@
 namespace glimpse::client {
 namespace {
 
-std::string Fixed(double v, int decimals) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
-  return buf;
-}
-
-std::string JsonNumber(double v) {
-  if (!std::isfinite(v)) return "null";
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
-}
-
-std::string Joined(const std::vector<std::string>& items, std::string_view sep) {
-  std::string out;
-  for (const std::string& s : items) out += (out.empty() ? "" : std::string(sep)) + s;
-  return out;
-}
-
 // The views decided wrongly (or not at all) at `stage`, grouped by object in report order.
 std::map<int, std::vector<const StageDecision*>> Misclassified(const EvaluationReport& r, const std::string& stage) {
   std::map<int, std::vector<const StageDecision*>> out;

@@ -129,11 +129,11 @@ int Main(int argc, char** argv) {
                                             "DIR/up_axis.csv and DIR/sizes.csv; without them +z up and metres (--up, --unit,\n"
                                             "--height); each cut into the protocol's single views. Cloud files go as they are.");
   TrainOptions t;
-  auto* dir = train->add_option("DIR", t.dir, "folder of category folders of .off .obj .ply .stl meshes or .pcd .xyz clouds")
+  train->add_option("DIR", t.dir, "folder of category folders of .off .obj .ply .stl meshes or .pcd .xyz clouds")
                   ->check(CLI::ExistingDirectory);
-  auto* zoo = train->add_flag("--zoo", t.zoo, "train on the core's procedural shape zoo (" +
-                                                   std::to_string(glimpse::zoo_categories().size()) + " categories)");
-  dir->excludes(zoo);
+  train->add_flag("--zoo", t.zoo, "train on the core's procedural shape zoo (" + std::to_string(glimpse::zoo_categories().size()) +
+                                      " categories); with DIR, add its objects of DIR's categories (the recipe that "
+                                      "transfers best to other collections: README)");
   train->add_option("--per-category", t.per_category, "zoo objects per category")->capture_default_str()
       ->check(CLI::Range(size_t{1}, size_t{10000}));
   train->add_option("--name", t.name, "model name ([A-Za-z0-9._-], 1-128)")->required()

@@ -23,19 +23,6 @@ std::string Pad(std::string s, size_t width) {
   return s;
 }
 
-std::string Fixed(double v, int decimals) {
-  if (!std::isfinite(v)) return "nan";
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
-  return buf;
-}
-
-std::string JsonNumber(double v) {
-  if (!std::isfinite(v)) return "null";
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
-}
 
 template <class Scores>
 std::string JsonScores(const Scores& scores) {
@@ -90,6 +77,26 @@ std::string UnknownJson(const Answer& a) {
 }
 
 }  // namespace
+
+std::string Fixed(double v, int decimals) {
+  if (!std::isfinite(v)) return "nan";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+  return buf;
+}
+
+std::string JsonNumber(double v) {
+  if (!std::isfinite(v)) return "null";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+
+std::string Joined(const std::vector<std::string>& items, std::string_view separator) {
+  std::string out;
+  for (const std::string& s : items) out += (out.empty() ? "" : std::string(separator)) + s;
+  return out;
+}
 
 std::string Bar(double fraction, int width) {
   static const char* const kEighths[] = {"", "▏", "▎", "▍", "▌", "▋", "▊", "▉"};

@@ -19,6 +19,12 @@ std::string Bar(double fraction, int width);
 std::string Score(double score);
 // A JSON string literal (quotes, backslashes and control characters escaped).
 std::string JsonString(std::string_view text);
+// A JSON number with 6 significant digits; null for non-finite.
+std::string JsonNumber(double v);
+// "3.14" with `decimals` decimals; "nan" for non-finite.
+std::string Fixed(double v, int decimals);
+// The items with `separator` between them.
+std::string Joined(const std::vector<std::string>& items, std::string_view separator);
 // "2024-05-01 12:00:03Z" (UTC); "-" when unset.
 std::string FormatTimestamp(const google::protobuf::Timestamp& t);
 // "512 B", "1.2 KiB", "3.4 MiB".

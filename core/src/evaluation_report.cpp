@@ -419,10 +419,13 @@ void write_streams(std::ostringstream& o, const EvalResult& r) {
     for (size_t i = 0; i < r.settle_margins.size(); ++i)
       o << (i ? "," : "") << " " << fmt("%.3f", r.settle_margins[i]) << " (held out "
         << pct(100 * r.calibration_accuracy[i], 1) << " % right)";
-    o << ". The sweep below recomputes settling at fixed confidences from the recorded ones, for comparison only.\n\n";
+    o << ". The sweep below recomputes settling at fixed confidences from the recorded ones (without the session's "
+         "hold rule), for comparison only.\n\n";
     o << "| settled when | views settled | precision | mean visible % | median visible % |\n|---|---:|---:|---:|---:|\n";
   }
-  row("**session default** (calibrated margin, confidence >= " + fmt("%.2f", sp.settle_confidence) + ")", settle_summary(r.streams, -1));
+  row("**session default** (calibrated margin, confidence >= " + fmt("%.2f", sp.settle_confidence) + ", the winner held " +
+          std::to_string(sp.stability_window) + " chunks, the newest included)",
+      settle_summary(r.streams, -1));
   for (double t : r.params.settle_sweep) row("confidence >= " + fmt("%.2f", t), settle_summary(r.streams, t, min_kp));
   o << "\nPer category, the session's own flag:\n\n| category | views settled | precision | mean visible % |\n"
        "|---|---:|---:|---:|\n";

@@ -6,7 +6,9 @@
 // of each classify run against the PCL pipeline's median of the same process. PCL's pipeline is
 // single-threaded; OMP_NUM_THREADS=1 makes ours so too. Measured (2-core VM, medians of 5, after the
 // local-surface speedups of session 13): 2 threads BoK 0.32x, BoG 0.33x, fusion 1.34x; one thread
-// BoK 0.48x, BoG 0.46x, fusion 1.24x (PCL pipeline 38-41 ms).
+// BoK 0.48x, BoG 0.46x, fusion 1.24x (PCL pipeline 38-41 ms). Issue 17 (fusion = USH + VFH computing no
+// keypoints; machine shared with a compile job): fusion 0.27x, USH 0.24x, VFH 0.30x, BoK 0.71x, BoG
+// 0.27x (PCL pipeline 56.7 ms).
 //
 // Issue 16: a small dense object. A 10k-point view of a 17 cm machine part (the zoo's mechanic) must
 // cost at most 1.5x the same-size view of a 1.7 m human (the zoo's), with every method: every radius

@@ -123,6 +123,15 @@ run 0 train "$PLAIN" --name plain --methods ush,vfh,fusion --views 3 --mesh-poin
 err_has "^train: up: \+y for every mesh \(--up\)$" && err_has "^train: size: mesh units x 0.001 m \(--unit\)$"
 run 0 models show plain --json && out_has '"feature_version":[1-9]' && out_has '"max_extent_m":1\.[0-9]'
 out_has '"bok_codebook_size":60'  # the parameters used (a default nobody asked for), not an echo of the request
+# A folder plus the zoo (the recipe): the zoo adds objects of the folder's categories only.
+MIX="$GLIMPSE_TEST_TMP/mix"
+mkdir -p "$MIX/chair" "$MIX/table"
+box 0.45 0.45 0.95 >"$MIX/chair/c1.off"; box 1.2 0.8 0.75 >"$MIX/table/t1.off"
+run 0 train "$MIX" --zoo --per-category 1 --name mix --methods ush --views 2 --mesh-points 1500 -q &&
+  out_has "^trained mix:1 \(default\): 2 categories, 8 clouds"
+run 0 train "$MIX" --zoo --per-category 1 --name mix --methods ush --views 2 --mesh-points 1500 &&
+  err_has "^train: also the procedural zoo: 1 objects per category of chair, table, upright, real-life size$"
+run 2 train "$PLAIN" --zoo --name bad && err_has "the zoo has none of them"
 run 2 train "$PLAIN" --name bad --up sideways
 run 2 train "$PLAIN" --name bad --unit furlong
 run 2 train "$PLAIN" --name bad --unit mm --height 2
@@ -198,7 +207,7 @@ run 1 stream --zoo human --model nope --rate 0 && err_has "^glimpse: stream --zo
 run 1 stream "$GLIMPSE_TEST_TMP/nothing.off" --model tiny && err_has "nothing\.off"
 
 # ---- models ----
-run 0 models list && out_lines 6 && out_has "^tiny +2 +\* " && out_has "^folder +1 +\* "
+run 0 models list && out_lines 8 && out_has "^tiny +2 +\* " && out_has "^folder +1 +\* "
 run 0 models show tiny && out_has "^version: +2 \(default\)" && out_has "^description: +second one"
 run 0 models set-default tiny:1 && out_has "version 1"
 run 0 models show tiny --json && out_has '"version":1' && out_has '"is_default":true'

@@ -589,9 +589,10 @@ TEST(RunEvaluation, ReducedProtocolOnShrec) {
   EXPECT_GE(accuracy(r->decisions, "20%", MethodId::kFusion).percent(), 93.0);   // measured 96.0
   EXPECT_GE(accuracy(r->decisions, "full", MethodId::kBoK).percent(), 48.0);     // measured 50.7
   const SettleRow settled = settle_summary(r->streams, -1);
+  // Settling needs the winner to hold a whole window, the newest chunk included: later, righter.
   EXPECT_GE(settled.settled_percent(), 83.0);    // measured 86.7 (130 of 150 views)
-  EXPECT_GE(settled.precision_percent(), 94.0);  // measured 96.9
-  EXPECT_LE(settled.mean_visible_percent, 10.0); // measured 7.4
+  EXPECT_GE(settled.precision_percent(), 96.0);  // measured 97.7 (96.9 when two chunks could settle)
+  EXPECT_LE(settled.mean_visible_percent, 11.0); // measured 10.2 (7.4 when two chunks could settle)
   std::cout << "shrec reduced: full fusion " << accuracy(r->decisions, "full", MethodId::kFusion).percent()
             << " %, 20 % fusion " << accuracy(r->decisions, "20%", MethodId::kFusion).percent() << " %, full BoK "
             << accuracy(r->decisions, "full", MethodId::kBoK).percent() << " %; streams settled "
@@ -639,8 +640,8 @@ TEST(RunEvaluation, ReducedCrossSourceShrecToPsb) {
   EXPECT_GE(p10, 90.0);   // measured 93.0
   EXPECT_GE(p20, 89.0);   // measured 92.1
   EXPECT_GT(full, size + 15);  // shape adds to what a ruler gets right
-  EXPECT_GE(settled.settled_percent(), 97.0);    // measured 100
-  EXPECT_GE(settled.precision_percent(), 92.0);  // measured 94.7
+  EXPECT_GE(settled.settled_percent(), 96.0);    // measured 98.2 (100 when two chunks could settle)
+  EXPECT_GE(settled.precision_percent(), 95.5);  // measured 97.3 (94.7 when two chunks could settle)
 }
 
 }  // namespace

@@ -451,6 +451,29 @@ TEST(DecisionTrack, UnknownSettlesLikeACategory) {
   EXPECT_FALSE(plain.decision.unknown);
 }
 
+TEST(DecisionTrack, SettlingNeedsTheWholeWindowAndTheNewestChunkToAgree) {
+  SessionParams p;
+  p.smoothing = 0.5;
+  p.stability_window = 4;
+  p.full_margin = 0.1;
+  p.settle_confidence = 0.5;
+  DecisionTrack t;
+  auto step = [&](std::vector<double> s) {
+    track_decision(t, s, 0, false, p);
+    return t.decision;
+  };
+  EXPECT_FALSE(step({0.9, 0.1}).settled);
+  StreamDecision d = step({0.9, 0.1});
+  EXPECT_NEAR(d.confidence, 0.5, 1e-12);  // full margin x held 2 of 4: confident enough, not steady enough
+  EXPECT_FALSE(d.settled);
+  EXPECT_FALSE(step({0.9, 0.1}).settled);
+  d = step({0.4, 0.6});  // the newest chunk alone prefers 1; the smoothed winner is still 0
+  EXPECT_EQ(d.winner, 0);
+  EXPECT_GE(d.confidence, 0.5);
+  EXPECT_FALSE(d.settled) << "the newest chunk disagrees";
+  EXPECT_TRUE(step({0.9, 0.1}).settled);
+}
+
 TEST(DecisionTrack, SmoothingDampsASingleOutlier) {
   SessionParams p;
   p.smoothing = 0.3;

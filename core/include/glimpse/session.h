@@ -35,7 +35,9 @@ struct SessionParams {
   // so its decisions settle where they were found right, unless use_model_calibration is false.
   double full_margin = 0.3;
   bool use_model_calibration = true;
-  double settle_confidence = 0.5;    // settled at or above this
+  // Settled at or above this, once the winner has won each of the last stability_window decisions,
+  // the newest chunk's own raw scores included (a single lucky chunk never settles).
+  double settle_confidence = 0.5;
   // A settled decision stays settled while its winner holds and its confidence stays within this of
   // settle_confidence: more of the object narrows the margin a little (the top of a human and of a
   // four-legged animal look alike less than their whole), which must not make the answer flicker.
