@@ -143,10 +143,12 @@ Expected<StreamDecision> Session::finish() {
   last_.scores = last_.raw_scores;
   const int classify_winner = static_cast<int>(
       std::max_element(last_.raw_scores.begin(), last_.raw_scores.end()) - last_.raw_scores.begin());
-  if (classify_winner != last_.winner) {
+  if (classify_winner != last_.winner) {  // the running average had not caught up: not settled on it
     ++last_.category_changes;
     last_.winner_held_chunks = 1;
     last_.winner = classify_winner;
+    last_.settled = false;
+    last_.confidence = 0;
   }
   last_.final = true;
   return last_;
