@@ -55,14 +55,13 @@ Expected<Cloud> StreamView(const StreamOptions& o) {
   }
   auto file = LoadFile(o.file);
   if (!file) return file.error();
+  if (Status s = ApplySensor(*file, o.sensor, o.file); !s.ok()) return s.error();
   if (file->is_mesh) {
-    if (o.sensor) return invalid_argument(o.file + ": --sensor is for cloud files; a mesh's view has its own sensor");
     ProtocolOptions protocol = o.protocol;
     protocol.seed = o.seed;
     return MeshFileView(o.file, o.placement, protocol, o.viewpoint.value_or(0));
   }
   RemoveNonFinite(file->cloud);
-  if (o.sensor) file->cloud.sensor = *o.sensor;
   // A cloud file is the scan: it streams as it is, with its sensor if it has one (wherever that is),
   // and is cut into a new view only when asked.
   if (!o.viewpoint) return std::move(file->cloud);

@@ -56,6 +56,13 @@ void AddConnectionOptions(CLI::App& app, ConnectionOptions& conn) {
 }
 
 // How a mesh without a manifest (or against it) is stood up and sized.
+CLI::Option* AddSensorOption(CLI::App& cmd, std::optional<glimpse::Vec3>& sensor) {
+  return cmd.add_option_function<std::string>("--sensor", [&sensor](const std::string& t) { sensor = *ParseSensor(t); },
+                                              "cloud files: where the sensor was, X,Y,Z in the cloud's frame (replaces "
+                                              "the file's; a PCD's default VIEWPOINT 0 0 0 1 0 0 0 reads as no sensor)")
+      ->check(kSensor);
+}
+
 void AddPlacementOptions(CLI::App& cmd, Placement& placement) {
   cmd.add_option_function<std::string>("--up", [&placement](const std::string& t) { placement.up = *glimpse::parse_up(t); },
                                        "the mesh axis that points up: +z, -y, x, ... or \"x y z\" (overrides up_axis.csv)")
@@ -159,10 +166,7 @@ int Main(int argc, char** argv) {
   auto* view = classify->add_option("--view", c.view, "meshes: which of the paper's 6 viewpoints (azimuth 60*N deg) sees the object")
                    ->capture_default_str()->check(CLI::Range(0, 5))->group("Meshes");
   classify->add_flag("--whole", c.whole, "meshes: the whole sampled cloud instead of a single view")->excludes(view)->group("Meshes");
-  classify->add_option_function<std::string>("--sensor", [&c](const std::string& t) { c.sensor = *ParseSensor(t); },
-                                              "clouds: where the sensor was, X,Y,Z in the cloud's frame (replaces the "
-                                              "file's; a PCD's default VIEWPOINT 0 0 0 1 0 0 0 reads as no sensor)")
-      ->check(kSensor);
+  AddSensorOption(*classify, c.sensor);
   AddProtocolOptions(*classify, c.protocol, false);
   AddPlacementOptions(*classify, c.placement);
   classify->callback([&] { run = [&] { return RunClassify(conn, c); }; });
@@ -189,10 +193,7 @@ int Main(int argc, char** argv) {
                                    "which of the paper's 6 viewpoints (azimuth 60*N deg) sees the object: meshes and zoo "
                                    "shapes [0]; a cloud file streams as it is unless given")
       ->check(CLI::Range(0, 5));
-  stream->add_option_function<std::string>("--sensor", [&s](const std::string& t) { s.sensor = *ParseSensor(t); },
-                                            "cloud files: where the sensor was, X,Y,Z in the cloud's frame (replaces "
-                                            "the file's; a PCD's default VIEWPOINT reads as no sensor)")
-      ->check(kSensor)->excludes(stream_view);
+  AddSensorOption(*stream, s.sensor)->excludes(stream_view);
   stream->add_flag("--json", s.json, "one JSON object per decision");
   stream->add_option("--mesh-points", s.protocol.points, "points sampled on a mesh's surface")
       ->capture_default_str()->check(CLI::Range(size_t{0}, size_t{5'000'000}))->group("Meshes");
