@@ -17,13 +17,12 @@ extern "C" {
 #include <libqhull_r/qhull_ra.h>
 }
 
+#include "random.h"
+
 namespace glimpse {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-
-// Uniform in [0, 1) from the top 53 bits: the same on every standard library.
-double uniform01(std::mt19937_64& rng) { return double(rng() >> 11) * 0x1.0p-53; }
 
 double triangle_area(const Vec3& a, const Vec3& b, const Vec3& c) {
   return 0.5 * (b - a).cast<double>().cross((c - a).cast<double>()).norm();
