@@ -17,91 +17,14 @@
 #include "glimpse/neighbourhoods.h"
 #include "glimpse/surface_fit.h"
 #include "glimpse/views.h"
-#include "model_impl.h"
+#include "evaluation_internal.h"
 #include "parallel.h"
 
 namespace glimpse {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
-
-bool contains(const std::vector<MethodId>& v, MethodId m) { return std::find(v.begin(), v.end(), m) != v.end(); }
-
-// The base methods whose features the evaluated methods need (fusion brings its components).
-std::vector<MethodId> feature_methods(const TrainParams& tp) {
-  std::vector<MethodId> base;
-  auto add = [&](MethodId m) {
-    if (m != MethodId::kFusion && !contains(base, m)) base.push_back(m);
-  };
-  for (MethodId m : tp.methods) add(m);
-  if (contains(tp.methods, MethodId::kFusion))
-    for (MethodId m : tp.fusion_of) add(m);
-  return base;
-}
-
-// body(i) for i in [0, n) on `threads` threads; progress is reported from thread 0 only.
-template <class Body>
-void parallel_for(size_t n, int threads, const std::string& phase, const EvalProgressFn& progress, Body&& body) {
-  std::atomic<size_t> done{0};
-  if (progress) progress({phase, 0, n});
-#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
-  for (int64_t i = 0; i < static_cast<int64_t>(n); ++i) {
-    body(static_cast<size_t>(i));
-    const size_t d = ++done;
-    if (progress && omp_get_thread_num() == 0) progress({phase, d, n});
-  }
-  if (progress) progress({phase, n, n});
-}
-
-struct View {
-  int object = 0;
-  int view = 0;  // index among the object's evaluated viewpoints
-  Cloud cloud;   // as the sensor saw it: what is tested
-  Cloud learnt;  // as training learns it (training_view: tilted); empty when that is `cloud` itself
-};
-
-// The features of one top-down prefix of one view (count == view size: the full view), cut from the
-// view as seen or from its learnt (tilted) copy.
-struct FeatureSlot {
-  size_t view = 0;
-  size_t count = 0;
-  bool learnt = false;
-  bool ok = false;
-  CloudFeatures features;
-  std::string error;
-  double seconds = 0;
-};
-
-// What the phases share.
-struct Protocol {
-  const std::vector<EvalObject>& objects;
-  const EvalParams& params;
-  const EvalProgressFn& progress;
-  int threads = 1;
-  TrainParams tp;
-  std::vector<MethodId> base;
-  int folds = 1;                 // models trained: the CV folds, or 1 for a cross-source evaluation
-  std::vector<Points> full;      // full 3D cloud per object (sec. 3.4)
-  std::vector<View> views;
-  std::vector<FeatureSlot> slots;  // [0, views.size()): the full views; then the distinct prefixes
-  std::vector<float> margin;       // keypoint cut margin per view
-  std::vector<Stage> stages;       // the main stages, then the exploration grid's
-  std::vector<std::vector<int>> stage_slot;   // [view][stage] -> slot, -1 none
-  std::vector<std::vector<int>> train_slots;  // [view] -> slots trained on: the full view, then prefixes
-  std::vector<std::shared_ptr<const Model>> fold_models;
-  std::vector<std::vector<int>> fold_to_ours;  // per fold: model category index -> report category index
-  EvalResult r;
-
-  bool tested(size_t v) const { return r.object_fold[static_cast<size_t>(views[v].object)] >= 0; }
-  bool learnt(size_t v) const { return objects[static_cast<size_t>(views[v].object)].role != EvalRole::kTestOnly; }
-  size_t full_points(size_t v) const { return std::max<size_t>(1, full[static_cast<size_t>(views[v].object)].size()); }
-  const Cloud& learnt_cloud(size_t v) const { return views[v].learnt.points.empty() ? views[v].cloud : views[v].learnt; }
-  bool tilted(size_t v) const { return !views[v].learnt.points.empty(); }
-  uint64_t object_seed(size_t o) const { return glimpse::object_seed(params.seed, objects[o].category + "/" + objects[o].id); }
-};
+using namespace eval_internal;
 
 Status validate(const std::vector<EvalObject>& objects, const EvalParams& p) {
   if (objects.empty()) return invalid_argument("no objects to evaluate");
@@ -203,7 +126,45 @@ void make_views(Protocol& P) {
                              (posed ? ", " + std::to_string(posed) + " objects without an up in random poses" : "")});
 }
 
-void compute_slot(Protocol& P, FeatureSlot& slot, const Cloud& cloud) {
+// ---- 2b. the density each model learns (median relative density of its training views), and the
+// test views of a non-ideal condition: the sensor's view, through the filters at that density ----
+void trained_densities(Protocol& P) {
+  std::vector<double> density(P.views.size(), 0.0);
+  parallel_for(P.views.size(), P.threads, "training density", P.progress, [&](size_t v) {
+    if (P.learnt(v)) density[v] = relative_density(P.learnt_cloud(v).points);
+  });
+  for (int fold = 0; fold < P.folds; ++fold) {
+    std::vector<double> d;
+    for (size_t v = 0; v < P.views.size(); ++v)
+      if (P.learnt(v) && P.r.object_fold[size_t(P.views[v].object)] != fold && density[v] > 0) d.push_back(density[v]);
+    std::sort(d.begin(), d.end());
+    P.r.trained_density.push_back(d.empty() ? 0.0 : d[d.size() / 2]);
+  }
+}
+
+void sensor_test_views(Protocol& P) {
+  const ScanCondition& condition = P.params.test_condition;
+  if (condition.is_ideal()) return;
+  const auto t0 = Clock::now();
+  const size_t n = std::clamp<size_t>(P.params.views_per_object, 1, 6);
+  parallel_for(P.views.size(), P.threads, "sensor views", P.progress, [&](size_t v) {
+    if (!P.tested(v)) return;
+    View& view = P.views[v];
+    const size_t o = size_t(view.object);
+    if (view.learnt.points.empty()) view.learnt = view.cloud;  // training keeps the ideal view
+    view.ideal_points = std::max<size_t>(1, view.cloud.points.size());
+    ScanFilterParams fp = P.params.filters;
+    fp.relative_density = P.r.trained_density[size_t(P.r.object_fold[o])];
+    view.cloud = filter_scan(condition_view(P.objects[o], P.full[o], size_t(view.view), n, P.object_seed(o), condition,
+                                            P.params.points_per_object, P.params.hpr_radius_factor),
+                             fp);
+  });
+  P.r.timings.push_back({"sensor views", seconds_since(t0), describe(condition) + ", filtered"});
+}
+
+}  // namespace
+
+void eval_internal::compute_slot(Protocol& P, FeatureSlot& slot, const Cloud& cloud) {
   const auto c0 = Clock::now();
   auto f = cloud_features(cloud, P.tp, P.base, 1);
   slot.seconds = seconds_since(c0);
@@ -211,6 +172,8 @@ void compute_slot(Protocol& P, FeatureSlot& slot, const Cloud& cloud) {
   if (f.ok()) slot.features = std::move(*f);
   else slot.error = f.error().message;
 }
+
+namespace {
 
 // ---- 3. full-view features (and the keypoint cut margin) ----
 void full_view_features(Protocol& P) {
@@ -566,12 +529,15 @@ Expected<EvalResult> run_evaluation(const std::vector<EvalObject>& objects, cons
   assign_folds(P);
   make_object_clouds(P);
   make_views(P);
+  trained_densities(P);
+  sensor_test_views(P);
   full_view_features(P);
   prefix_features(P);
   stage_statistics(P);
   if (Status s = train_and_classify(P); !s.ok()) return s.error();
   exploration_changes(P);
   stream_views(P);
+  robustness_matrix(P);
   flag_problems(P);
   P.r.total_seconds = seconds_since(t_start);
   return std::move(P.r);

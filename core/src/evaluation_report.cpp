@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "glimpse/evaluation.h"
+#include "evaluation_internal.h"
 #include "model_impl.h"
 
 namespace glimpse {
@@ -477,6 +478,7 @@ std::string markdown_report(const EvalResult& r) {
   write_protocol(o, r);
   write_accuracy(o, r);
   write_size(o, r);
+  o << eval_internal::robustness_section(r);
   write_keypoints(o, r);
   o << "## Confusion tables\n\n";
   write_confusions(o, r);

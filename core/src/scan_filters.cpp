@@ -73,8 +73,21 @@ Cloud remove_ground_plane(const Cloud& cloud, const ScanFilterParams& params, si
     const float d = abcd.head<3>().dot(cloud.points[i]) + abcd.w();
     above += d > params.ground_distance_m, below += d < -3 * params.ground_distance_m;
   }
-  if (double(above) < params.min_ground_fraction * double(finite.size()) || double(below) > 0.01 * double(finite.size()))
+  if (double(above) < std::max(30.0, 0.01 * double(finite.size())) || double(below) > 0.01 * double(finite.size()))
     return cloud;  // nothing stands on it, or something is under it: part of the object
+  // A floor reaches out beyond what stands on it (in front and to both sides, seen from a sensor); a base
+  // plate or a flange of the object does not, or on fewer sides.
+  Eigen::Vector2f glo(INFINITY, INFINITY), ghi(-INFINITY, -INFINITY), olo = glo, ohi = ghi;
+  for (uint32_t i : finite) {
+    const Vec3& p = cloud.points[i];
+    const bool g = abcd.head<3>().dot(p) + abcd.w() <= params.ground_distance_m;
+    (g ? glo : olo) = (g ? glo : olo).cwiseMin(p.head<2>());
+    (g ? ghi : ohi) = (g ? ghi : ohi).cwiseMax(p.head<2>());
+  }
+  const float margin = std::max(0.05f, 0.1f * (ohi - olo).maxCoeff());
+  const int sides = (glo.x() < olo.x() - margin) + (glo.y() < olo.y() - margin) + (ghi.x() > ohi.x() + margin) +
+                    (ghi.y() > ohi.y() + margin);
+  if (sides < params.ground_min_sides) return cloud;
   Cloud out;
   out.sensor = cloud.sensor;
   out.points.reserve(cloud.points.size());
@@ -147,10 +160,12 @@ double relative_density(const Points& points) {
 Cloud filter_scan(const Cloud& cloud, const ScanFilterParams& params, ScanFilterReport* report) {
   ScanFilterReport r;
   r.input = cloud.points.size();
-  Cloud c = params.remove_ground ? remove_ground_plane(cloud, params, &r.ground) : cloud;
-  if (params.remove_outliers)
-    c = remove_isolated_points(c, params.outlier_radius_spacings, params.outlier_min_neighbours, &r.outliers);
-  if (params.relative_density > 0 && relative_density(c.points) > 1.25 * params.relative_density) {
+  // Stray points first: one under the floor would otherwise define the lowest band.
+  Cloud c = params.remove_outliers
+                ? remove_isolated_points(cloud, params.outlier_radius_spacings, params.outlier_min_neighbours, &r.outliers)
+                : cloud;
+  if (params.remove_ground) c = remove_ground_plane(c, params, &r.ground);
+  if (params.relative_density > 0 && relative_density(c.points) > 2 * params.relative_density) {
     const float leaf = bounds(c.points).extent().maxCoeff() / float(std::sqrt(params.relative_density));
     c = voxel_downsample(c, leaf);
     r.voxel_m = leaf;

@@ -45,6 +45,14 @@ struct EvalOptions {
   float cut_margin = 1.5f;
   std::string stages = "full,10kp,25kp,55kp,10%,20%";
   double stream_chunk = 0.02;
+  std::string sensor = "ideal";
+  float distance = 2.f;
+  float elevation = 30.f;
+  float scan_tilt = 0.f;
+  bool floor = false;
+  double outliers = 0;
+  std::string matrix = "small";
+  size_t matrix_views = 2;
 };
 
 // A progress bar on stderr; plain lines (every 10 %) when stderr is not a terminal.
@@ -157,9 +165,25 @@ Expected<EvalParams> params_from(const EvalOptions& o) {
   if (!(o.stream_chunk >= 0 && o.stream_chunk < 1)) return invalid_argument("--stream-chunk must be in [0, 1)");
   p.stream_chunk_fraction = o.stream_chunk;
   p.cut_margin_supports = o.cut_margin;
+  auto sensor = parse_sensor(o.sensor);
+  if (!sensor.ok()) return Error{sensor.error().code, "--sensor: " + sensor.error().message};
+  ScanCondition& c = p.test_condition;
+  c.sensor = *sensor;
+  if (c.sensor != SensorKind::kIdeal) c.distance_m = o.distance, c.elevation_deg = o.elevation;
+  if (!(o.distance > 0)) return invalid_argument("--distance must be positive metres");
+  if (!(o.elevation >= -90 && o.elevation <= 90)) return invalid_argument("--elevation must be in [-90, 90] degrees");
+  if (!(o.scan_tilt >= 0 && o.scan_tilt <= 90)) return invalid_argument("--tilt must be in [0, 90] degrees");
+  if (!(o.outliers >= 0 && o.outliers <= 1)) return invalid_argument("--outliers must be a fraction in [0, 1]");
+  if (o.floor && c.sensor == SensorKind::kIdeal) return invalid_argument("--floor needs a sensor (--sensor depth|lidar)");
+  c.tilt_deg = o.scan_tilt, c.floor = o.floor, c.outliers = o.outliers;
+  if (o.matrix != "none" && o.matrix != "small" && o.matrix != "full")
+    return invalid_argument("--matrix must be none, small or full, not '" + o.matrix + "'");
+  p.matrix = robustness_conditions(o.matrix);
+  p.matrix_views_per_object = o.matrix_views;
   if (o.quick) {  // CI: 3 views per object, a coarser exploration grid
     p.views_per_object = std::min<size_t>(p.views_per_object, 3);
     p.explore_step = std::max<size_t>(p.explore_step, 10);
+    p.matrix_views_per_object = 1;
   }
   return p;
 }
@@ -210,6 +234,7 @@ Status size_blind_ablation(EvalResult& result, const std::vector<EvalObject>& ob
   if (p.methods.empty()) return {};
   p.stream_chunk_fraction = 0;
   p.explore_max_keypoints = 0;
+  p.matrix.clear();
   const bool keypoints = std::any_of(p.methods.begin(), p.methods.end(), [](MethodId m) {
     return m == MethodId::kBoK || m == MethodId::kBoG || m == MethodId::kKGH;
   });
@@ -358,6 +383,20 @@ void add_eval_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--stream-chunk", o->stream_chunk,
                   "stream every test view in chunks of this fraction of the full cloud (0: no streaming)")
+      ->capture_default_str();
+  cmd->add_option("--sensor", o->sensor,
+                  "test views from: ideal (HPR on samples, the paper's), depth (Kinect-class camera) or lidar "
+                  "(16 beams), cast against the mesh; training views stay ideal")
+      ->capture_default_str();
+  cmd->add_option("--distance", o->distance, "depth/lidar: metres from the sensor to the object's centre")
+      ->capture_default_str();
+  cmd->add_option("--elevation", o->elevation, "depth/lidar: degrees above the horizon")->capture_default_str();
+  cmd->add_option("--tilt", o->scan_tilt, "test views' up off by up to DEG degrees (random direction)")
+      ->capture_default_str();
+  cmd->add_flag("--floor", o->floor, "depth/lidar: a floor patch under the object, removed by the ground filter");
+  cmd->add_option("--outliers", o->outliers, "stray points added to each test view, x its size")->capture_default_str();
+  cmd->add_option("--matrix", o->matrix, "robustness matrix: none, small (default run) or full")->capture_default_str();
+  cmd->add_option("--matrix-views", o->matrix_views, "views per tested object in the robustness matrix")
       ->capture_default_str();
   cmd->add_option("--cut-margin", o->cut_margin, "keypoint stage cut below the k-th keypoint, in support radii")
       ->capture_default_str();

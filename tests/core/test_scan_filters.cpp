@@ -78,6 +78,31 @@ TEST(GroundPlane, NoFloorNothingRemovedEvenUnderALargeTableTop) {
   EXPECT_LE(removed, floor.size() + 4 * 4);  // at most the legs' lowest 3 cm (z = 0, 1, 2, 3 cm)
 }
 
+TEST(GroundPlane, ABasePlateOfTheObjectIsNotAFloor) {
+  // A post on a base plate (a part's flange): horizontal, lowest, carries the object, but reaches only
+  // 2 cm beyond the post's footprint (the margin is 5 cm): it stays.
+  Points part = grid_plane(0.07f, 0.005f, 0.01f);  // 0.14 m plate, 1 cm thick
+  for (int k = 0; k < 400; ++k)                      // a 0.1 m post, 0.4 m tall
+    for (int a = 0; a < 12; ++a)
+      part.emplace_back(0.05f * std::cos(float(a) * 0.5236f), 0.05f * std::sin(float(a) * 0.5236f), 0.01f + float(k) * 0.001f);
+  size_t removed = 1;
+  remove_ground_plane(concat(part, {}), {}, &removed);
+  EXPECT_EQ(removed, 0u);
+}
+
+TEST(FilterScan, StrayPointsUnderTheFloorDoNotHideIt) {
+  Points floor = grid_plane(1.f, 0.02f);
+  const Points ball = sphere_points(0.3f, {0, 0, 0.35f}, 3000);
+  Points stray = {{0.5f, 0.5f, -0.6f}, {-0.4f, 0.2f, -0.9f}, {0.1f, -0.7f, -0.4f}};
+  Cloud scene = concat(floor, ball);
+  scene.points.insert(scene.points.end(), stray.begin(), stray.end());
+  ScanFilterReport r;
+  const Cloud out = filter_scan(scene, {}, &r);
+  EXPECT_EQ(r.outliers, stray.size());
+  EXPECT_EQ(r.ground, floor.size());
+  EXPECT_EQ(out.points, ball);
+}
+
 TEST(IsolatedPoints, StrayPointsGoTheSurfaceStays) {
   const Points surface = sphere_points(0.5f, {0, 0, 1}, 5000);
   Points stray;

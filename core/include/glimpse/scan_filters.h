@@ -14,14 +14,18 @@ namespace glimpse {
 struct ScanFilterParams {
   // The ground: the largest plane within max_tilt_deg of horizontal among the points in the lowest
   // ground_band_m of the cloud. It is the ground only when it holds at least min_ground_fraction of the
-  // cloud, at least min_ground_fraction of the cloud stands above it and next to nothing (1 %) lies
-  // below it: a table top seen alone (the first points of a top-down scan) is the object, not a floor.
-  // Every point within ground_distance_m of it, or under it, goes.
+  // cloud, something stands on it (1 % of the cloud, at least 30 points: a small part on a large floor)
+  // and next to nothing (1 %) lies below it: a table top seen alone (the first points of a top-down scan) is the object, not a floor.
+  // And it must reach beyond what stands on it on at least ground_min_sides of the 4 horizontal sides
+  // (by 5 cm or a tenth of the object): a sensor sees floor in front and to both sides, while a base
+  // plate or flange of the object lies within its footprint. Every point within ground_distance_m of
+  // it, or under it, goes.
   bool remove_ground = true;
   float ground_distance_m = 0.03f;  // RANSAC inlier distance: a depth camera's sigma is 14 mm at 3 m
   float max_tilt_deg = 10.f;
   float ground_band_m = 0.25f;
   double min_ground_fraction = 0.05;
+  int ground_min_sides = 3;
   // Stray returns: a point with fewer than outlier_min_neighbours others within outlier_radius_spacings
   // x the cloud's median spacing. (PCL's StatisticalOutlierRemoval, k = 16 and 2.5 sigma, took 7.6 % of
   // a noisy 1 m plane: its whole border, whose mean neighbour distance is 20 % above the interior's;
@@ -30,7 +34,8 @@ struct ScanFilterParams {
   float outlier_radius_spacings = 4.f;
   int outlier_min_neighbours = 4;
   // Voxel grid down to this relative density (see relative_density; 0 = no downsampling) when the
-  // cloud is more than 1.25 x denser: leaf = largest extent / sqrt(target). A sparser cloud is left alone.
+  // cloud is more than 2 x denser (views of one model differ by less): leaf = largest extent /
+  // sqrt(target). A sparser cloud is left alone.
   double relative_density = 0;
 };
 
@@ -45,7 +50,7 @@ Cloud remove_ground_plane(const Cloud& cloud, const ScanFilterParams& params, si
 Cloud remove_isolated_points(const Cloud& cloud, float radius_spacings, int min_neighbours, size_t* removed = nullptr);
 Cloud voxel_downsample(const Cloud& cloud, float leaf_m);
 
-// Ground, then outliers, then density. Deterministic.
+// Isolated points, then the ground, then density. Deterministic.
 Cloud filter_scan(const Cloud& cloud, const ScanFilterParams& params, ScanFilterReport* report = nullptr);
 
 // Points per square of the cloud's largest bounding-box extent: the surface density k / (pi r_k^2)
