@@ -44,7 +44,7 @@ Cloud concat(const Points& a, const Points& b) {
 
 TEST(GroundPlane, TheFloorGoesAndTheObjectStays) {
   const Points floor = grid_plane(1.f, 0.02f);  // 101 x 101
-  const Points ball = sphere_points(0.3f, {0, 0, 0.35f}, 3000);
+  const Points ball = sphere_points(0.3f, {0, 0, 0.35f}, 3000);  // 5 cm above the floor
   size_t removed = 0;
   const Cloud out = remove_ground_plane(concat(floor, ball), {}, &removed);
   EXPECT_EQ(removed, floor.size());
@@ -75,7 +75,7 @@ TEST(GroundPlane, NoFloorNothingRemovedEvenUnderALargeTableTop) {
   const Points floor = grid_plane(1.f, 0.02f);
   remove_ground_plane(concat(floor, table), {}, &removed);
   EXPECT_GE(removed, floor.size());
-  EXPECT_LE(removed, floor.size() + 4 * 4);  // at most the legs' lowest 3 cm (z = 0, 1, 2, 3 cm)
+  EXPECT_LE(removed, floor.size() + 4 * 5);  // at most the legs' lowest 4 cm (z = 0, 1, 2, 3, 4 cm)
 }
 
 TEST(GroundPlane, ABasePlateOfTheObjectIsNotAFloor) {
@@ -88,6 +88,26 @@ TEST(GroundPlane, ABasePlateOfTheObjectIsNotAFloor) {
   size_t removed = 1;
   remove_ground_plane(concat(part, {}), {}, &removed);
   EXPECT_EQ(removed, 0u);
+}
+
+TEST(GroundPlane, AStarBaseIsNotAFloor) {
+  // An office chair: five 3 cm bars radiating 0.35 m from a column under a 0.45 m seat.
+  Points chair = grid_plane(0.225f, 0.01f, 0.45f);
+  for (int bar = 0; bar < 5; ++bar) {
+    const float a = float(bar) * 1.2566f;
+    for (float r = 0; r <= 0.35f; r += 0.01f)
+      for (float w = -0.015f; w <= 0.015f; w += 0.01f)
+        chair.emplace_back(r * std::cos(a) - w * std::sin(a), r * std::sin(a) + w * std::cos(a), 0.02f);
+  }
+  for (float z = 0.03f; z < 0.45f; z += 0.005f)
+    for (int k = 0; k < 8; ++k) chair.emplace_back(0.03f * std::cos(float(k) * 0.785f), 0.03f * std::sin(float(k) * 0.785f), z);
+  size_t removed = 1;
+  remove_ground_plane(concat(chair, {}), {}, &removed);
+  EXPECT_EQ(removed, 0u);
+  // On a floor, the floor goes (and the bars with it: they lie within its inlier distance).
+  const Points floor = grid_plane(1.f, 0.02f);
+  remove_ground_plane(concat(floor, chair), {}, &removed);
+  EXPECT_GE(removed, floor.size());
 }
 
 TEST(FilterScan, StrayPointsUnderTheFloorDoNotHideIt) {

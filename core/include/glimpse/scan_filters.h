@@ -1,5 +1,5 @@
-// What a real scan needs before anything is measured on it, with PCL's own filters: the floor it stood
-// on removed (RANSAC plane, PCL SACSegmentation), stray returns dropped (PCL RadiusOutlierRemoval)
+// What a real scan needs before anything is measured on it: the floor it stood on removed (RANSAC
+// plane, PCL SACSegmentation), stray returns dropped (RadiusOutlierRemoval's test on a nanoflann tree)
 // and the density brought to the one the model learnt (PCL VoxelGrid). Ideal views pass through nearly
 // unchanged, so the same steps run on training views and on what is classified.
 #pragma once
@@ -14,18 +14,19 @@ namespace glimpse {
 struct ScanFilterParams {
   // The ground: the largest plane within max_tilt_deg of horizontal among the points in the lowest
   // ground_band_m of the cloud. It is the ground only when it holds at least min_ground_fraction of the
-  // cloud, something stands on it (1 % of the cloud, at least 30 points: a small part on a large floor)
+  // cloud, something stands on it (0.2 % of the cloud, at least 30 points: a small part on a large floor)
   // and next to nothing (1 %) lies below it: a table top seen alone (the first points of a top-down scan) is the object, not a floor.
-  // And it must reach beyond what stands on it on at least ground_min_sides of the 4 horizontal sides
-  // (by 5 cm or a tenth of the object): a sensor sees floor in front and to both sides, while a base
-  // plate or flange of the object lies within its footprint. Every point within ground_distance_m of
-  // it, or under it, goes.
+  // And it must reach beyond the footprint of what rises above it (by 2.5 inlier distances) on at least
+  // ground_min_sides of the 4 horizontal sides (by 5 cm or a tenth of the object): a sensor sees floor in front and to both sides, while a base
+  // plate or flange of the object lies within its footprint; and it must be a surface, not a few bars
+  // (min_ground_fill). Every point within ground_distance_m of it, or under it, goes.
   bool remove_ground = true;
-  float ground_distance_m = 0.03f;  // RANSAC inlier distance: a depth camera's sigma is 14 mm at 3 m
+  float ground_distance_m = 0.04f;  // RANSAC inlier distance: 2.5 sigma of a depth camera at 3.2 m
   float max_tilt_deg = 10.f;
   float ground_band_m = 0.25f;
   double min_ground_fraction = 0.05;
   int ground_min_sides = 3;
+  double min_ground_fill = 0.3;  // share of its bounding rectangle's cells (2 cm or 1/50) it covers
   // Stray returns: a point with fewer than outlier_min_neighbours others within outlier_radius_spacings
   // x the cloud's median spacing. (PCL's StatisticalOutlierRemoval, k = 16 and 2.5 sigma, took 7.6 % of
   // a noisy 1 m plane: its whole border, whose mean neighbour distance is 20 % above the interior's;
@@ -34,7 +35,7 @@ struct ScanFilterParams {
   float outlier_radius_spacings = 4.f;
   int outlier_min_neighbours = 4;
   // Voxel grid down to this relative density (see relative_density; 0 = no downsampling) when the
-  // cloud is more than 2 x denser (views of one model differ by less): leaf = largest extent /
+  // cloud is more than 2 x denser (views of one model differ by less): leaf = robust extent /
   // sqrt(target). A sparser cloud is left alone.
   double relative_density = 0;
 };
@@ -53,7 +54,11 @@ Cloud voxel_downsample(const Cloud& cloud, float leaf_m);
 // Isolated points, then the ground, then density. Deterministic.
 Cloud filter_scan(const Cloud& cloud, const ScanFilterParams& params, ScanFilterReport* report = nullptr);
 
-// Points per square of the cloud's largest bounding-box extent: the surface density k / (pi r_k^2)
+// The largest extent along x, y or z between the 1st and 99th percentiles: a bounding box that a few
+// stray points do not blow up.
+float robust_extent(const Points& points);
+
+// Points per square of the cloud's robust extent: the surface density k / (pi r_k^2)
 // (r_k the median distance to the k = 12th neighbour, which random samples and a sensor's pixel grid
 // give alike) times extent^2. Independent of the object's size, so one figure says how densely the
 // training views sampled objects of every size. 0 for fewer than 13 points.
