@@ -328,7 +328,9 @@ Status train_and_classify(Protocol& P) {
         if (P.slots[s].ok) samples.push_back({object.category, id, P.slots[s].features});
     }
     train_samples += samples.size();
-    auto trained = train_on_features(std::move(samples), P.tp);
+    TrainParams tp = P.tp;  // the model records the density its training views had (scan filters)
+    tp.filters.relative_density = r.trained_density[size_t(fold)];
+    auto trained = train_on_features(std::move(samples), tp);
     if (!trained.ok()) return Error{trained.error().code, tag + ": training failed: " + trained.error().message};
     const auto model = std::make_shared<const Model>(std::move(*trained));
     P.fold_models.push_back(model);

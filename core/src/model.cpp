@@ -253,7 +253,19 @@ Expected<Model> train(const std::vector<TrainingCloud>& data, const TrainParams&
     samples.push_back({d.category, d.object_id, std::move(*feats[j])});
   }
   feats.clear();
-  auto model = train_on_features(std::move(samples), params, progress, cancel);
+  // The density clouds are classified at: the median relative density of the training clouds as given.
+  TrainParams learnt_params = params;
+  if (params.filter_scans && params.filters.relative_density <= 0) {
+    std::vector<double> density(data.size(), 0.0);
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 4)
+    for (int64_t i = 0; i < static_cast<int64_t>(data.size()); ++i) density[i] = relative_density(data[i].cloud.points);
+    std::erase(density, 0.0);
+    if (!density.empty()) {
+      std::nth_element(density.begin(), density.begin() + std::ptrdiff_t(density.size() / 2), density.end());
+      learnt_params.filters.relative_density = density[density.size() / 2];
+    }
+  }
+  auto model = train_on_features(std::move(samples), learnt_params, progress, cancel);
   if (model.ok()) {
     // Statistics count the clouds given, not the prefixes made of them.
     model->stats.clouds = data.size();
@@ -436,7 +448,10 @@ Expected<Classification> classify(const Model& model, const Cloud& cloud, std::o
     return failed_precondition(std::string("the model was not trained for method '") + method_name(m) + "'");
   const ModelImpl& impl = *model.impl;
   const auto t0 = std::chrono::steady_clock::now();
-  auto f = cloud_features(cloud, impl.params, component_methods(impl, m), impl.params.threads, cancel);
+  ScanFilterReport filtered;
+  const Cloud scan = impl.params.filter_scans ? filter_scan(cloud, impl.params.filters, &filtered) : Cloud{};
+  auto f = cloud_features(impl.params.filter_scans ? scan : cloud, impl.params, component_methods(impl, m),
+                          impl.params.threads, cancel);
   if (!f.ok()) return f.error();
   if (cancel && cancel()) return cancelled("classification cancelled");
   Classification c;
@@ -451,6 +466,7 @@ Expected<Classification> classify(const Model& model, const Cloud& cloud, std::o
   c.points = f->points;
   c.keypoints = f->positions.size();
   c.warning = size_warning(model.stats, cloud);
+  c.filters = filtered;
   return c;
 }
 

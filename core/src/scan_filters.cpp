@@ -97,6 +97,9 @@ Cloud remove_ground_plane(const Cloud& cloud, const ScanFilterParams& params, si
     if (d <= params.ground_distance_m) glo = glo.cwiseMin(p.head<2>()), ghi = ghi.cwiseMax(p.head<2>());
     else if (d > 2.5f * params.ground_distance_m) olo = olo.cwiseMin(p.head<2>()), ohi = ohi.cwiseMax(p.head<2>());
   }
+  // A floor in a scan spans more than any small object's face: a part lying flat has a plane at its
+  // bottom too, and no floor.
+  if ((ghi - glo).maxCoeff() < params.min_ground_extent_m) return cloud;
   if (olo.allFinite()) {  // else only something low lies on it (a small part): nothing to compare
     const float margin = std::max(0.05f, 0.1f * (ohi - olo).maxCoeff());
     const int sides = (glo.x() < olo.x() - margin) + (glo.y() < olo.y() - margin) + (ghi.x() > ohi.x() + margin) +

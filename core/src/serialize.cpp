@@ -172,6 +172,19 @@ void visit_params(TrainParams& p, F&& f) {
   f("settle_precision", p.settle_precision);
   f("tilt_deg", p.tilt_deg);
   f("seed", p.seed);
+  f("filters.enabled", p.filter_scans);
+  f("filters.remove_ground", p.filters.remove_ground);
+  f("filters.ground_distance_m", p.filters.ground_distance_m);
+  f("filters.max_tilt_deg", p.filters.max_tilt_deg);
+  f("filters.ground_band_m", p.filters.ground_band_m);
+  f("filters.min_ground_fraction", p.filters.min_ground_fraction);
+  f("filters.ground_min_sides", p.filters.ground_min_sides);
+  f("filters.min_ground_fill", p.filters.min_ground_fill);
+  f("filters.min_ground_extent_m", p.filters.min_ground_extent_m);
+  f("filters.remove_outliers", p.filters.remove_outliers);
+  f("filters.outlier_radius_spacings", p.filters.outlier_radius_spacings);
+  f("filters.outlier_min_neighbours", p.filters.outlier_min_neighbours);
+  f("filters.relative_density", p.filters.relative_density);
 }
 
 template <class T>
@@ -414,6 +427,9 @@ Expected<Model> deserialize(std::span<const uint8_t> bytes) {
       if (auto it = values.find(name); it != values.end() && !from_double(v, it->second))
         r.fail(std::string("parameter ") + name + " has an impossible value");
     });
+    // A model from before the scan filters classifies as it did: unfiltered.
+    if (!values.count("filters.enabled")) p.filter_scans = false;
+    if (!(p.filters.relative_density >= 0 && p.filters.relative_density < 1e12)) r.fail("filters.relative_density out of range");
     p.methods = read_methods(r);
     p.default_method = static_cast<MethodId>(r.u8("default method"));
     p.fusion_of = read_methods(r);

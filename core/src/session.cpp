@@ -136,9 +136,30 @@ Expected<StreamDecision> Session::add(const Cloud& chunk) {
 
 Expected<StreamDecision> Session::finish() {
   if (!features_.ready()) return last_;
-  if (!update_method_features(true) && !have_features_) return last_;
-  last_.keypoints = method_features_.positions.size();
-  decide();
+  // The model filters what it classifies (floor, strays, density): the final decision is Classify's of
+  // the accumulated scan, filtered as a whole (a floor is only recognisable once it is all there). When
+  // the filtered scan cannot be decided on (a line, nothing left), the scan as it grew decides, if it can.
+  Expected<Classification> c = failed_precondition("the model does not filter scans");
+  if (impl_.params.filter_scans) {
+    Cloud whole = features_.state().cloud;
+    whole.sensor = features_.sensor();
+    c = classify(*model_, whole, method_);
+  }
+  if (c.ok()) {
+    last_.points = c->points;
+    last_.keypoints = c->keypoints;
+    last_.raw_scores = c->scores;
+    track_.decision.chunk_index = last_.chunk_index;
+    track_decision(track_, last_.raw_scores, c->keypoints,
+                   std::any_of(components_.begin(), components_.end(), uses_keypoints), params_);
+    const StreamDecision& d = track_.decision;
+    last_.winner = d.winner, last_.category_changes = d.category_changes, last_.winner_held_chunks = d.winner_held_chunks;
+    last_.confidence = d.confidence, last_.settled = d.settled;
+  } else {
+    if (!update_method_features(true) && !have_features_) return last_;
+    last_.keypoints = method_features_.positions.size();
+    decide();
+  }
   // The scan is over: the answer is Classify's of the whole scan, not the running average.
   last_.scores = last_.raw_scores;
   const int classify_winner = static_cast<int>(

@@ -257,6 +257,30 @@ TEST(Classify, WarnsWhenTheCloudIsFarOutsideTheSizesLearnt) {
   EXPECT_TRUE(size_warning(TrainingSummary{}, mm).empty());  // a model that knows no sizes says nothing
 }
 
+TEST(Classify, FiltersTheFloorAndStrayPointsAsTheModelRecorded) {
+  // A test view standing on a 1.5 m floor patch (5 mm grid) with stray points around: Classify removes
+  // the floor and the strays first (the model's scan filters) and decides as on the view alone.
+  const Trained& t = trained();
+  size_t same = 0, n = 0;
+  for (size_t i = 0; i < t.test.size(); i += 3, ++n) {
+    const Cloud& view = t.test[i].cloud;
+    Cloud scene = view;
+    const Bounds b = bounds(view.points);
+    const Vec3 c = b.centre();
+    for (float x = -0.75f; x <= 0.75f; x += 0.005f)
+      for (float y = -0.75f; y <= 0.75f; y += 0.005f) scene.points.emplace_back(c.x() + x, c.y() + y, b.min.z() - 0.005f);
+    const std::vector<Vec3> strays = {c + Vec3(0.6f, 0.6f, 0.5f), c + Vec3(-0.5f, 0.3f, 0.9f), c + Vec3(0.2f, -0.6f, -0.4f)};
+    scene.points.insert(scene.points.end(), strays.begin(), strays.end());
+    auto alone = classify(t.model, view);
+    auto filtered = classify(t.model, scene);
+    ASSERT_TRUE(alone.ok() && filtered.ok());
+    EXPECT_GE(filtered->filters.outliers, strays.size());
+    EXPECT_GT(filtered->filters.ground, 90000u) << t.test[i].category;  // 301 x 301 floor points
+    same += filtered->winner == alone->winner;
+  }
+  EXPECT_GE(same, n - 1) << "of " << n;  // the floor's residue (the view's own lowest 4 cm go too) may tip one
+}
+
 TEST(Classify, RefusesAModelOfAnotherFeaturePipelineVersion) {
   Model old = trained().model;
   old.feature_version = kFeaturePipelineVersion - 1;

@@ -132,7 +132,7 @@ TEST(IsolatedPoints, StrayPointsGoTheSurfaceStays) {
     stray.push_back(Vec3(0, 0, 1) + (0.9f + 0.02f * float(i)) * d);  // 0.4-0.9 m off the surface
   }
   size_t removed = 0;
-  const Cloud out = remove_isolated_points(concat(surface, stray), 4.f, 4, &removed);
+  const Cloud out = remove_isolated_points(concat(surface, stray), 5.f, 2, &removed);
   EXPECT_EQ(removed, stray.size());
   for (const Vec3& p : out.points) EXPECT_NEAR((p - Vec3(0, 0, 1)).norm(), 0.5f, 1e-4f);
 }

@@ -13,6 +13,7 @@
 
 #include "glimpse/cloud.h"
 #include "glimpse/expected.h"
+#include "glimpse/scan_filters.h"
 
 namespace glimpse {
 
@@ -94,6 +95,7 @@ struct Classification {
   double feature_ms = 0;
   double decision_ms = 0;
   std::string warning;  // for a person: e.g. the cloud is far larger than anything the model learnt
+  ScanFilterReport filters;  // what the scan filters took (all zero when the model does not filter)
 };
 
 // A warning when the cloud's largest extent is more than 4x outside the extents the model learnt

@@ -9,6 +9,7 @@
 #include "glimpse/features.h"
 #include "glimpse/global_descriptors.h"
 #include "glimpse/model.h"
+#include "glimpse/scan_filters.h"
 #include "glimpse/upright_histogram.h"
 
 namespace glimpse {
@@ -60,6 +61,13 @@ struct TrainParams {
   // (seeded): a scanner knows up to a few degrees, and on a flat top a tilt of 2 degrees makes the first
   // points seen a strip along one edge instead of the whole top. 0: as given.
   float tilt_deg = 5.f;
+
+  // Every cloud classified (Classify, ClassifyBatch, a stream's final decision) first goes through the
+  // scan filters: isolated points, a ground plane, a voxel grid down to filters.relative_density, which
+  // train() sets to the median relative density of its training clouds. Training clouds are learnt as
+  // given. Models written before the filters existed read with filter_scans false and classify as before.
+  bool filter_scans = true;
+  ScanFilterParams filters;
 
   DecisionParams decision;
   // Calibration on held-out folds of the training objects (inner cross-validation by object): the
