@@ -1,5 +1,5 @@
 // What a real scan needs before anything is measured on it: the floor it stood on removed (RANSAC
-// plane, PCL SACSegmentation), stray returns dropped (RadiusOutlierRemoval's test on a nanoflann tree)
+// plane, PCL SACSegmentation), stray returns dropped (RadiusOutlierRemoval's test on a cell grid)
 // and the density brought to the one the model learnt (PCL VoxelGrid). Ideal views pass through nearly
 // unchanged, so the same steps run on training views and on what is classified.
 #pragma once
