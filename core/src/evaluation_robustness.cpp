@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <set>
 
+#include "evaluation_format.h"
 #include "evaluation_internal.h"
 #include "glimpse/views.h"
 
@@ -216,12 +217,7 @@ namespace glimpse::eval_internal {
 
 namespace {
 
-std::string cell(double v) {
-  if (std::isnan(v)) return "–";
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.1f", v);
-  return buf;
-}
+std::string cell(double v) { return pct(v, 1); }
 
 }  // namespace
 
