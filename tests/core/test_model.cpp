@@ -2,6 +2,8 @@
 // the model's byte format.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <fstream>
 #include <iterator>
 #include <map>
@@ -279,6 +281,35 @@ TEST(Classify, FiltersTheFloorAndStrayPointsAsTheModelRecorded) {
     same += filtered->winner == alone->winner;
   }
   EXPECT_GE(same, n - 1) << "of " << n;  // the floor's residue (the view's own lowest 4 cm go too) may tip one
+}
+
+// A model written before the scan filters has no "filters.enabled" parameter: it classifies as it did.
+// Made from today's bytes with that name changed (an unknown name is ignored) and the CRC-32 redone.
+TEST(Serialize, AModelFromBeforeTheScanFiltersReadsUnfiltered) {
+  std::vector<uint8_t> bytes = serialize(trained().model);
+  const std::string name = "filters.enabled";
+  auto at = std::search(bytes.begin(), bytes.end(), name.begin(), name.end());
+  ASSERT_NE(at, bytes.end());
+  at[name.size() - 1] = 'x';
+  const size_t header = 8 + 4 + 8, payload = bytes.size() - header - 4;
+  uint32_t crc = 0xFFFFFFFFu;  // CRC-32 (IEEE), as the format's trailer
+  for (size_t i = header; i < header + payload; ++i) {
+    crc ^= bytes[i];
+    for (int k = 0; k < 8; ++k) crc = (crc & 1) ? 0xEDB88320u ^ (crc >> 1) : crc >> 1;
+  }
+  crc ^= 0xFFFFFFFFu;
+  for (int k = 0; k < 4; ++k) bytes[header + payload + size_t(k)] = uint8_t(crc >> (8 * k));
+  auto old = deserialize(bytes);
+  ASSERT_TRUE(old.ok()) << old.error().message;
+  // A view with three stray points: today's model drops them, the old one keeps every point.
+  Cloud view = trained().test[0].cloud;
+  const Vec3 c = bounds(view.points).centre();
+  for (const Vec3& d : {Vec3(0.6f, 0.6f, 0.5f), Vec3(-0.5f, 0.3f, 0.9f), Vec3(0.2f, -0.6f, -0.4f)}) view.points.push_back(c + d);
+  auto now = classify(trained().model, view), before = classify(*old, view);
+  ASSERT_TRUE(now.ok() && before.ok());
+  EXPECT_GE(now->filters.outliers, 3u);
+  EXPECT_EQ(before->filters.input, 0u);  // no filter ran
+  EXPECT_EQ(before->points, now->points + now->filters.outliers);
 }
 
 TEST(Classify, RefusesAModelOfAnotherFeaturePipelineVersion) {
