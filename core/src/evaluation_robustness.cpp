@@ -215,12 +215,6 @@ void robustness_matrix(Protocol& P) {
 
 namespace glimpse::eval_internal {
 
-namespace {
-
-std::string cell(double v) { return pct(v, 1); }
-
-}  // namespace
-
 std::string robustness_section(const EvalResult& r) {
   std::string o;
   const ScanCondition& test = r.params.test_condition;
@@ -239,7 +233,7 @@ std::string robustness_section(const EvalResult& r) {
        " tested views (" + std::to_string(r.params.matrix_views_per_object) +
        " per object) taken under each condition, after the filters every scan goes through: RANSAC ground plane, "
        "isolated points, voxel grid down to the training views' density (median relative density ";
-  for (size_t i = 0; i < r.trained_density.size(); ++i) o += (i ? ", " : "") + cell(r.trained_density[i]);
+  for (size_t i = 0; i < r.trained_density.size(); ++i) o += (i ? ", " : "") + pct(r.trained_density[i], 1);
   o += " points per extent^2). Depth camera: 640x480, 57x43 deg, 0.5-4.5 m, sigma(z) = 1.2 mm + 1.9 mm (z - 0.4)^2, "
        "1/8 px disparity steps, returns thinning beyond 70 deg incidence; it aims at the object's centre, so a large "
        "object near it is cut by the field of view. LiDAR: 16 beams over +-15 deg, 0.2 deg steps, 1.5 cm range noise. "
@@ -261,12 +255,12 @@ std::string robustness_section(const EvalResult& r) {
     const std::vector<double> acc = main_values(row.accuracy), bal = main_values(row.balanced);
     o += "| " + describe(row.condition) + " | " + std::to_string(std::llround(row.median_points_raw)) + " | " +
          std::to_string(std::llround(row.median_points)) + " | " + std::to_string(row.ground_views) + " |";
-    for (double a : acc) o += " " + cell(a) + " |";
+    for (double a : acc) o += " " + pct(a, 1) + " |";
     for (size_t s = 0; s < acc.size(); ++s) {
       const double d = acc[s] - base_acc[s];
-      o += " " + (&row == &base ? std::string("–") : (d >= 0 ? "+" : "") + cell(d)) + " |";
+      o += " " + (&row == &base ? std::string("–") : (d >= 0 ? "+" : "") + pct(d, 1)) + " |";
     }
-    o += " " + cell(bal.empty() ? NAN : bal.front()) + " | " + std::to_string(row.failed) + " | " + cell(row.seconds) + " |\n";
+    o += " " + pct(bal.empty() ? NAN : bal.front(), 1) + " | " + std::to_string(row.failed) + " | " + pct(row.seconds, 1) + " |\n";
   }
   o += "\nPoints are medians per view (full view). \"no decision\": full views left with too few points to decide "
        "(counted as wrong).\n\n";

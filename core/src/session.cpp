@@ -39,6 +39,8 @@ class Session final : public ScanSession {
   Status check(const Cloud& chunk) const;
   bool update_method_features(bool whole_cloud_too);
   void decide();
+  // Tracks `raw_scores` (the newest decision's own) through the stability window into last_.
+  void track(std::vector<double> raw_scores, size_t keypoints);
 
   std::shared_ptr<const Model> model_;
   const ModelImpl& impl_;
@@ -97,9 +99,13 @@ bool Session::update_method_features(bool whole_cloud_too) {
 
 void Session::decide() {
   const Eigen::VectorXd scores = method_scores(impl_, method_, method_features_);
-  last_.raw_scores.assign(scores.data(), scores.data() + scores.size());
+  track({scores.data(), scores.data() + scores.size()}, method_features_.positions.size());
+}
+
+void Session::track(std::vector<double> raw_scores, size_t keypoints) {
+  last_.raw_scores = std::move(raw_scores);
   track_.decision.chunk_index = last_.chunk_index;
-  track_decision(track_, last_.raw_scores, method_features_.positions.size(),
+  track_decision(track_, last_.raw_scores, keypoints,
                  std::any_of(components_.begin(), components_.end(), uses_keypoints), params_);
   const StreamDecision& d = track_.decision;
   last_.scores = d.scores;
@@ -148,13 +154,7 @@ Expected<StreamDecision> Session::finish() {
   if (c.ok()) {
     last_.points = c->points;
     last_.keypoints = c->keypoints;
-    last_.raw_scores = c->scores;
-    track_.decision.chunk_index = last_.chunk_index;
-    track_decision(track_, last_.raw_scores, c->keypoints,
-                   std::any_of(components_.begin(), components_.end(), uses_keypoints), params_);
-    const StreamDecision& d = track_.decision;
-    last_.winner = d.winner, last_.category_changes = d.category_changes, last_.winner_held_chunks = d.winner_held_chunks;
-    last_.confidence = d.confidence, last_.settled = d.settled;
+    track(c->scores, c->keypoints);
   } else {
     if (!update_method_features(true) && !have_features_) return last_;
     last_.keypoints = method_features_.positions.size();

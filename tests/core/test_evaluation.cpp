@@ -423,7 +423,6 @@ TEST(ConditionView, IdealIsTheProtocolsViewAndSensorsSeeTheSameObjectFromTheSame
     ASSERT_GT(d.points.size(), 100u) << o.category;  // a 0.1 m part at 2.5 m: a few hundred pixels
     ASSERT_TRUE(d.sensor && ideal.sensor);
     // Same azimuth (120 deg for view 1 of 3) and elevation: the sensors sit on one ray from the object.
-    const Bounds b = bounds(ideal.points);
     const Vec3 to_ideal = (*ideal.sensor - bounds(full).centre()).normalized();
     const Vec3 to_depth = (*d.sensor - bounds(o.any_pose ? d.points : full).centre()).normalized();
     if (!o.any_pose) EXPECT_GT(to_ideal.dot(to_depth), 0.99f) << o.category;
@@ -434,7 +433,6 @@ TEST(ConditionView, IdealIsTheProtocolsViewAndSensorsSeeTheSameObjectFromTheSame
         EXPECT_TRUE((p.array() >= m.min.array() - 0.05f).all() && (p.array() <= m.max.array() + 0.05f).all());
         if (!((p.array() >= m.min.array() - 0.05f).all())) break;
       }
-    (void)b;
   }
 }
 
