@@ -102,6 +102,7 @@ bool ScanFeatures::ready() const { return impl_->index != nullptr; }
 const FeatureState& ScanFeatures::state() const { return impl_->st; }
 size_t ScanFeatures::points() const { return impl_->st.cloud.points.size(); }
 const std::optional<Vec3>& ScanFeatures::sensor() const { return impl_->sensor; }
+const std::vector<std::optional<Vec3>>& ScanFeatures::viewpoints() const { return impl_->viewpoint; }
 
 Expected<size_t> ScanFeatures::add(const Cloud& chunk, const CancelFn& cancel) {
   Impl& m = *impl_;
@@ -161,6 +162,38 @@ Expected<size_t> ScanFeatures::add(const Cloud& chunk, const CancelFn& cancel) {
     find_keypoints_and_descriptors(*m.index, st, m.params, m.params.keypoints.exclude_boundary ? &m.memo : nullptr,
                                    &m.cache);
   return added.size();
+}
+
+bool one_sensor(const std::vector<std::optional<Vec3>>& point_sensors) {
+  return std::all_of(point_sensors.begin(), point_sensors.end(),
+                     [&](const std::optional<Vec3>& s) { return s == point_sensors.front(); });
+}
+
+Expected<FeatureState> extract_fused(const Cloud& cloud, const std::vector<std::optional<Vec3>>& point_sensors,
+                                     const FeatureParams& params, const CancelFn& cancel) {
+  if (point_sensors.size() != cloud.points.size())
+    return invalid_argument("a fused scan needs one sensor per point (" + std::to_string(point_sensors.size()) +
+                            " for " + std::to_string(cloud.points.size()) + " points)");
+  if (one_sensor(point_sensors)) {
+    Cloud one = cloud;
+    if (!point_sensors.empty()) one.sensor = point_sensors.front();
+    return extract(one, params, cancel);
+  }
+  std::vector<Cloud> groups;
+  for (size_t i = 0; i < cloud.points.size(); ++i) {
+    auto g = std::find_if(groups.begin(), groups.end(), [&](const Cloud& c) { return c.sensor == point_sensors[i]; });
+    if (g == groups.end()) g = groups.insert(groups.end(), Cloud{{}, point_sensors[i]});
+    g->points.push_back(cloud.points[i]);
+  }
+  ScanFeatures scan(params);
+  for (const Cloud& group : groups)
+    if (auto kept = scan.add(group, cancel); !kept.ok()) return kept.error();
+  if (!scan.ready())
+    return invalid_argument("too few usable points: " + std::to_string(scan.points()) + " after cleaning, at least " +
+                            std::to_string(params.min_points) + " needed");
+  FeatureState state = scan.state();
+  state.cloud.sensor = cloud.sensor ? cloud.sensor : state.cloud.sensor;
+  return state;
 }
 
 }  // namespace glimpse

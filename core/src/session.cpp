@@ -143,14 +143,11 @@ Expected<StreamDecision> Session::add(const Cloud& chunk) {
 Expected<StreamDecision> Session::finish() {
   if (!features_.ready()) return last_;
   // The model filters what it classifies (floor, strays, density): the final decision is Classify's of
-  // the accumulated scan, filtered as a whole (a floor is only recognisable once it is all there). When
-  // the filtered scan cannot be decided on (a line, nothing left), the scan as it grew decides, if it can.
+  // the accumulated scan, filtered as a whole (a floor is only recognisable once it is all there), each
+  // point facing the sensor of its chunk. When the filtered scan cannot be decided on (a line, nothing
+  // left), the scan as it grew decides, if it can.
   Expected<Classification> c = failed_precondition("the model does not filter scans");
-  if (impl_.params.filter_scans) {
-    Cloud whole = features_.state().cloud;
-    whole.sensor = features_.sensor();
-    c = classify(*model_, whole, method_);
-  }
+  if (impl_.params.filter_scans) c = classify_fused(*model_, features_.state().cloud, features_.viewpoints(), method_);
   if (c.ok()) {
     last_.points = c->points;
     last_.keypoints = c->keypoints;

@@ -121,6 +121,14 @@ Expected<Classification> classify(const Model& model, const Cloud& cloud,
                                   std::optional<MethodId> method = std::nullopt,
                                   const CancelFn& cancel = {});
 
+// A scan fused from several sensor positions (a stream's chunks): point_sensors names, per point, the
+// sensor that saw it (empty: cloud.sensor for all). The model's filters see the whole scan; each point
+// kept then faces its own sensor (a voxel centroid the sensor of the nearest point it came from), as a
+// stream's chunks do. With one sensor for every point this is classify() of the cloud with that sensor.
+Expected<Classification> classify_fused(const Model& model, const Cloud& cloud,
+                                        const std::vector<std::optional<Vec3>>& point_sensors,
+                                        std::optional<MethodId> method = std::nullopt, const CancelFn& cancel = {});
+
 // Versioned, little-endian byte format with a checksum; deserialize rejects truncated or corrupt input.
 std::vector<uint8_t> serialize(const Model& model);
 Expected<Model> deserialize(std::span<const uint8_t> bytes);
