@@ -52,6 +52,7 @@ void parallel_for(size_t n, int threads, const std::string& phase, const EvalPro
 struct View {
   int object = 0;
   int view = 0;  // index among the object's evaluated viewpoints
+  bool train_only = false;  // a training view from another elevation (train_elevations_deg): never tested
   Cloud cloud;   // as the sensor saw it: what is tested
   Cloud learnt;  // as training learns it (training_view: tilted); empty when that is `cloud` itself
   // The ideal view's size when `cloud` was taken by another sensor (0: `cloud` is the ideal view): the
@@ -91,7 +92,7 @@ struct Protocol {
   std::vector<std::vector<int>> fold_to_ours;  // per fold: model category index -> report category index
   EvalResult r;
 
-  bool tested(size_t v) const { return r.object_fold[static_cast<size_t>(views[v].object)] >= 0; }
+  bool tested(size_t v) const { return !views[v].train_only && r.object_fold[static_cast<size_t>(views[v].object)] >= 0; }
   bool learnt(size_t v) const { return objects[static_cast<size_t>(views[v].object)].role != EvalRole::kTestOnly; }
   // The full 3D cloud's size the view's visible fractions refer to, scaled to a sensor view's density.
   size_t full_points(size_t v) const {

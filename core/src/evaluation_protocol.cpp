@@ -110,12 +110,23 @@ void make_views(Protocol& P) {
   const auto t0 = Clock::now();
   const size_t n = std::clamp<size_t>(P.params.views_per_object, 1, 6);
   P.views.assign(P.objects.size() * n, {});
+  // Training-only views from other elevations follow the tested ones (learnt objects only).
+  std::vector<float> elevation(P.views.size(), kPaperElevationDeg);
+  for (float e : P.params.train_elevations_deg)
+    for (size_t o = 0; o < P.objects.size(); ++o)
+      if (P.objects[o].role != EvalRole::kTestOnly && e != kPaperElevationDeg)
+        for (size_t v = 0; v < n; ++v) {
+          P.views.push_back({});
+          P.views.back().object = static_cast<int>(o), P.views.back().view = static_cast<int>(v);
+          P.views.back().train_only = true;
+          elevation.push_back(e);
+        }
   parallel_for(P.views.size(), P.threads, "HPR views", P.progress, [&](size_t j) {
-    const size_t o = j / n, v = j % n;
+    if (j < P.objects.size() * n) P.views[j].object = static_cast<int>(j / n), P.views[j].view = static_cast<int>(j % n);
+    const size_t o = size_t(P.views[j].object), v = size_t(P.views[j].view);
     const EvalObject& object = P.objects[o];
-    P.views[j].object = static_cast<int>(o);
-    P.views[j].view = static_cast<int>(v);
-    P.views[j].cloud = object_view(P.full[o], v, n, object.any_pose, P.object_seed(o), P.params.hpr_radius_factor);
+    P.views[j].cloud =
+        object_view(P.full[o], v, n, object.any_pose, P.object_seed(o), P.params.hpr_radius_factor, elevation[j]);
     if (object.role != EvalRole::kTestOnly && P.tp.tilt_deg > 0)
       P.views[j].learnt = training_view(P.views[j].cloud, P.tp, P.object_seed(o) + v);
   });
@@ -123,6 +134,9 @@ void make_views(Protocol& P) {
   for (const EvalObject& o : P.objects) posed += o.any_pose;
   P.r.timings.push_back({"HPR views", seconds_since(t0),
                          std::to_string(P.views.size()) + " views" +
+                             (P.views.size() > P.objects.size() * n
+                                  ? " (" + std::to_string(P.views.size() - P.objects.size() * n) + " for training only)"
+                                  : std::string()) +
                              (posed ? ", " + std::to_string(posed) + " objects without an up in random poses" : "")});
 }
 
@@ -318,7 +332,7 @@ Status train_and_classify(Protocol& P) {
     for (size_t v = 0; v < P.views.size(); ++v) {
       const int o = P.views[v].object;
       if (r.object_fold[static_cast<size_t>(o)] == fold) {
-        test_views.push_back(v);
+        if (!P.views[v].train_only) test_views.push_back(v);
         continue;
       }
       if (!P.learnt(v)) continue;

@@ -31,6 +31,7 @@ struct EvalOptions {
   std::string methods = "bok,bog,kgh,vfh,esf,ush,size,fusion";
   std::string train_on = "partial";
   std::string train_prefixes = "0.15,0.25,0.35,0.5,0.7";
+  std::string train_elevations;  // extra training-only views, degrees above the horizon
   std::string decision = "nearest";
   std::string fusion_of;
   int neighbours = 0;
@@ -105,6 +106,16 @@ Expected<EvalParams> params_from(const EvalOptions& o) {
     p.points_per_object = static_cast<size_t>(n);
   }
   p.views_per_object = o.views;
+  {
+    std::stringstream list(o.train_elevations);
+    for (std::string item; std::getline(list, item, ',');) {
+      char* end = nullptr;
+      const double e = std::strtod(item.c_str(), &end);
+      if (item.empty() || *end || !(e >= -90 && e <= 90))
+        return invalid_argument("--train-elevations takes degrees in [-90, 90], not '" + item + "'");
+      p.train_elevations_deg.push_back(float(e));
+    }
+  }
   p.folds = o.folds;
   p.methods.clear();
   std::stringstream list(o.methods);
@@ -359,6 +370,10 @@ void add_eval_command(CLI::App& app) {
                   "bounding radius sees about the same number of points whatever the object's size)")
       ->capture_default_str();
   cmd->add_option("--views", o->views, "views per object (1-6, evenly spaced of the paper's 6)")->capture_default_str();
+  cmd->add_option("--train-elevations", o->train_elevations,
+                  "training-only views besides the tested ones: the same azimuths from these elevations, degrees "
+                  "above the horizon, comma-separated (tested views stay at the paper's 30; e.g. 0,15 for cameras "
+                  "mounted low)");
   cmd->add_option("--folds", o->folds, "cross-validation folds (by object, stratified)")->capture_default_str();
   cmd->add_option("--methods", o->methods, "comma-separated: bok,bog,kgh,vfh,esf,ush,size,fusion")->capture_default_str();
   cmd->add_option("--train-on", o->train_on,

@@ -537,6 +537,39 @@ TEST(RunEvaluation, CrossSourceTrainsOneModelOnOneSourceAndTestsOnlyTheOther) {
   EXPECT_FALSE(run_evaluation(only_train, p, "no test").ok());
 }
 
+// Training views from other elevations are learnt, never tested: the same decisions are taken, each
+// model trains on the extra views (and their prefixes) too.
+TEST(RunEvaluation, TrainingElevationsAddTrainingViewsAndNoTestedOnes) {
+  const std::vector<EvalObject> objects = zoo_objects(2, 3);
+  EvalParams p = reduced_params();
+  p.methods = {MethodId::kUSH};
+  p.stages = {{StageKind::kFull, 0}, {StageKind::kFraction, 0.2}};
+  p.explore_max_keypoints = 0;
+  p.stream_chunk_fraction = 0;
+  p.matrix.clear();
+  auto samples = [](const EvalResult& r) {
+    for (const PhaseTiming& t : r.timings)
+      if (t.phase == "train (all folds)") return std::stoul(t.detail);
+    return 0ul;
+  };
+  auto plain = run_evaluation(objects, p, "zoo");
+  p.train_elevations_deg = {0.f, 60.f};
+  auto raised = run_evaluation(objects, p, "zoo");
+  ASSERT_TRUE(plain.ok() && raised.ok());
+  ASSERT_EQ(raised->decisions.size(), plain->decisions.size());
+  for (size_t i = 0; i < plain->decisions.size(); ++i) {
+    EXPECT_EQ(raised->decisions[i].object, plain->decisions[i].object);
+    EXPECT_EQ(raised->decisions[i].view, plain->decisions[i].view);
+    EXPECT_EQ(raised->decisions[i].points, plain->decisions[i].points);  // the tested views are the same
+  }
+  const std::string views = std::find_if(raised->timings.begin(), raised->timings.end(), [](const PhaseTiming& t) {
+                              return t.phase == "HPR views";
+                            })->detail;
+  const size_t extra = 2 * objects.size() * p.views_per_object;
+  EXPECT_NE(views.find("(" + std::to_string(extra) + " for training only)"), std::string::npos) << views;
+  EXPECT_GT(samples(*raised), 2 * samples(*plain));  // three elevations' views and prefixes, a few too small
+}
+
 TEST(Metrics, BalancedAccuracyWeighsEveryCategoryTheSame) {
   std::vector<StageDecision> d;
   auto add = [&](int truth, int winner) {

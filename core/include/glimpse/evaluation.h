@@ -229,6 +229,9 @@ SettleRow settle_summary(const std::vector<StreamTrace>& traces, double threshol
 struct EvalParams {
   size_t points_per_object = 6000;  // 0: mesh vertices as points (the paper); else area-weighted samples
   size_t views_per_object = 6;      // the first n of paper_viewpoints (azimuth 0, 60, ..., 300 deg)
+  // Training-only views besides the tested ones: the same azimuths from these elevations (deg above the
+  // horizon; the tested views stay at the paper's 30), so a model learns cameras mounted low or high.
+  std::vector<float> train_elevations_deg;
   double hpr_radius_factor = 100;
   std::vector<Stage> stages = paper_stages();
   float cut_margin_supports = 1.5f;  // keypoint cut margin in support radii (see keypoint_prefix)
