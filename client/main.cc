@@ -172,7 +172,8 @@ int Main(int argc, char** argv) {
   classify->callback([&] { run = [&] { return RunClassify(conn, c); }; });
 
   // stream
-  auto* stream = app.add_subcommand("stream", "simulate a scanner: reveal one view in chunks over StreamClassify");
+  auto* stream = app.add_subcommand("stream", "simulate a scanner: reveal one view in chunks over StreamClassify, or "
+                                              "stream a folder of frames from several sensor positions (--frames)");
   StreamOptions s;
   auto* file = stream->add_option("FILE", s.file, "cloud or mesh file");
   auto* zoo_shape = stream->add_option("--zoo", s.zoo_category, "a zoo shape of this category instead of a file")
@@ -194,6 +195,14 @@ int Main(int argc, char** argv) {
                                    "shapes [0]; a cloud file streams as it is unless given")
       ->check(CLI::Range(0, 5));
   AddSensorOption(*stream, s.sensor)->excludes(stream_view);
+  auto* frames = stream->add_option("--frames", s.frames_dir,
+                                    "a folder of frames (.pcd/.ply/...), each from its own sensor position (its file's "
+                                    "VIEWPOINT or glimpse_sensor comment, or DIR/poses.csv: file,x,y,z for points in the "
+                                    "common frame, file,x,y,z,qw,qx,qy,qz for points in the sensor's frame), streamed in "
+                                    "natural name order, one chunk per frame (--chunk-points cuts a frame into several)")
+                     ->check(CLI::ExistingDirectory);
+  frames->excludes(file)->excludes(zoo_shape)->excludes(stream_view)->excludes(chunks)->excludes("--order")
+      ->excludes("--sensor");
   stream->add_flag("--json", s.json, "one JSON object per decision");
   stream->add_option("--mesh-points", s.protocol.points, "points sampled on a mesh's surface")
       ->capture_default_str()->check(CLI::Range(size_t{0}, size_t{5'000'000}))->group("Meshes");
@@ -224,8 +233,8 @@ int Main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
     if (train->parsed() && t.dir.empty() && !t.zoo) throw CLI::RequiredError("train needs DIR or --zoo");
-    if (stream->parsed() && s.file.empty() && s.zoo_category.empty())
-      throw CLI::RequiredError("stream needs FILE or --zoo CATEGORY");
+    if (stream->parsed() && s.file.empty() && s.zoo_category.empty() && s.frames_dir.empty())
+      throw CLI::RequiredError("stream needs FILE, --zoo CATEGORY or --frames DIR");
   } catch (const CLI::ParseError& e) {
     const int code = app.exit(e);  // prints help/version (code 0) or the error
     return code == 0 ? kExitOk : kExitUsage;

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "glimpse/features.h"
+#include "glimpse/preprocess.h"
 #include "model_impl.h"
 
 namespace glimpse {
@@ -17,7 +18,8 @@ class Session final : public ScanSession {
  public:
   Session(std::shared_ptr<const Model> model, const SessionParams& params, MethodId method)
       : model_(std::move(model)), impl_(*model_->impl), params_(params), method_(method),
-        components_(component_methods(impl_, method)), features_(feature_params()) {
+        components_(component_methods(impl_, method)), features_(feature_params()),
+        duplicates_(impl_.params.features.duplicate_tolerance_m) {
     if (const Calibration& c = impl_.calibration;
         params_.use_model_calibration && c.method == method_ && c.settle_margin > 0 && params_.settle_confidence > 0)
       params_.full_margin = c.settle_margin / params_.settle_confidence;
@@ -37,6 +39,15 @@ class Session final : public ScanSession {
     return fp;
   }
   Status check(const Cloud& chunk) const;
+  // A model that filters its scans (floor, strays, density) decides every chunk on the scan so far,
+  // filtered as a whole: a floor, a stray or the density is a property of the whole scan, not of the
+  // newest chunk (a top-down scan's last chunk is all floor). Its features are Classify's of the
+  // accumulated points, each facing its chunk's sensor; a model without filters grows ScanFeatures.
+  bool filtered() const { return impl_.params.filter_scans; }
+  size_t points() const { return filtered() ? raw_.points.size() : features_.points(); }
+  void add_raw(const Cloud& chunk);
+  // Classify's of the accumulated points (the last one again when nothing was added since).
+  const Expected<Classification>& classify_so_far();
   bool update_method_features(bool whole_cloud_too);
   void decide();
   // Tracks `raw_scores` (the newest decision's own) through the stability window into last_.
@@ -48,6 +59,11 @@ class Session final : public ScanSession {
   MethodId method_;
   std::vector<MethodId> components_;
   ScanFeatures features_;
+  DuplicateFilter duplicates_;                      // filtered(): clean()'s rule on the raw points
+  Cloud raw_;                                       // filtered(): the points as sent, cleaned
+  std::vector<std::optional<Vec3>> raw_sensors_;    // per raw point: its chunk's sensor
+  Expected<Classification> classified_ = failed_precondition("nothing classified yet");
+  size_t classified_points_ = 0;
   CloudFeatures method_features_;
   bool have_features_ = false;
   size_t global_at_points_ = 0;
@@ -62,8 +78,8 @@ Status Session::check(const Cloud& chunk) const {
   if (chunk.points.size() > params_.max_chunk_points)
     return resource_exhausted("a chunk of " + std::to_string(chunk.points.size()) + " points exceeds the limit of " +
                               std::to_string(params_.max_chunk_points));
-  if (features_.points() >= params_.max_points)
-    return resource_exhausted("the session holds " + std::to_string(features_.points()) + " points, its limit is " +
+  if (points() >= params_.max_points)
+    return resource_exhausted("the session holds " + std::to_string(points()) + " points, its limit is " +
                               std::to_string(params_.max_points));
   return check_cloud(chunk, "chunk " + std::to_string(chunks_));
 }
@@ -121,13 +137,22 @@ Expected<StreamDecision> Session::add(const Cloud& chunk) {
   last_.chunk_index = chunks_++;
   last_.final = false;
   // Points beyond the session's limit are not kept (the next chunk is refused).
-  const size_t room = params_.max_points - features_.points();
+  const size_t room = params_.max_points - points();
   Cloud part;
   const Cloud* take = &chunk;
   if (chunk.points.size() > room) {
     part.sensor = chunk.sensor;
     part.points.assign(chunk.points.begin(), chunk.points.begin() + static_cast<std::ptrdiff_t>(room));
     take = &part;
+  }
+  if (filtered()) {
+    add_raw(*take);
+    last_.points = raw_.points.size();
+    const Expected<Classification>& c = classify_so_far();
+    if (!c.ok()) return last_;  // undecided: too few points, nothing but floor, a line
+    last_.keypoints = c->keypoints;
+    track(c->scores, c->keypoints);
+    return last_;
   }
   auto kept = features_.add(*take);
   if (!kept.ok()) return kept.error();
@@ -140,19 +165,31 @@ Expected<StreamDecision> Session::add(const Cloud& chunk) {
   return last_;
 }
 
+void Session::add_raw(const Cloud& chunk) {
+  for (const Vec3& p : chunk.points)
+    if (p.allFinite() && duplicates_.keep(p)) raw_.points.push_back(p), raw_sensors_.push_back(chunk.sensor);
+  if (chunk.sensor) raw_.sensor = chunk.sensor;
+}
+
+const Expected<Classification>& Session::classify_so_far() {
+  if (raw_.points.size() != classified_points_ || !classified_.ok()) {
+    classified_ = classify_fused(*model_, raw_, raw_sensors_, method_);
+    classified_points_ = raw_.points.size();
+  }
+  return classified_;
+}
+
 Expected<StreamDecision> Session::finish() {
-  if (!features_.ready()) return last_;
-  // The model filters what it classifies (floor, strays, density): the final decision is Classify's of
-  // the accumulated scan, filtered as a whole (a floor is only recognisable once it is all there), each
-  // point facing the sensor of its chunk. When the filtered scan cannot be decided on (a line, nothing
-  // left), the scan as it grew decides, if it can.
-  Expected<Classification> c = failed_precondition("the model does not filter scans");
-  if (impl_.params.filter_scans) c = classify_fused(*model_, features_.state().cloud, features_.viewpoints(), method_);
-  if (c.ok()) {
+  if (filtered()) {
+    // The final decision is Classify's of the accumulated scan (filtered as a whole, each point facing
+    // its chunk's sensor): the last chunk's, tracked once more.
+    const Expected<Classification>& c = classify_so_far();
+    if (!c.ok()) return last_;
     last_.points = c->points;
     last_.keypoints = c->keypoints;
     track(c->scores, c->keypoints);
   } else {
+    if (!features_.ready()) return last_;
     if (!update_method_features(true) && !have_features_) return last_;
     last_.keypoints = method_features_.positions.size();
     decide();

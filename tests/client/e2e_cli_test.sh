@@ -195,6 +195,15 @@ run 0 stream "$DATA/blob/s3.xyz" --model folder --chunks 3 --rate 0 --sensor 0,0
 run 2 stream "$DATA/blob/s3.xyz" --model folder --sensor 0,0 && err_has "X,Y,Z"
 run 2 stream "$DATA/blob/s3.xyz" --model folder --sensor 0,0,0 --view 1
 run 1 stream "$BOX" --model tiny --sensor 0,0,0 --rate 0 && err_has "sensor is for cloud files"
+# A folder of frames, each from its own sensor (here from poses.csv): one chunk per frame, then the final.
+FRAMES="$GLIMPSE_TEST_TMP/frames"
+mkdir -p "$FRAMES" && cp "$DATA/blob/s1.xyz" "$FRAMES/f10.xyz" && cp "$DATA/blob/s3.xyz" "$FRAMES/f9.xyz"
+run 1 stream --frames "$FRAMES" --model folder --rate 0 && err_has "f9\.xyz: a frame needs its sensor position"
+printf 'f9.xyz,0,-3,1\nf10.xyz,0,3,1\n' >"$FRAMES/poses.csv"
+run 0 stream --frames "$FRAMES" --model folder --rate 0 && out_lines 3 && out_has "^chunk 2/2 " && out_has "^final points "
+run 0 stream --frames "$FRAMES" --model folder --rate 0 --chunk-points 1000 --json && out_has '"chunk":4,' && out_has '"final":true'
+run 2 stream --frames "$FRAMES" "$DATA/blob/s1.xyz" --model folder
+run 2 stream --frames "$FRAMES" --order random --model folder
 run 1 stream --zoo human --model nope --rate 0 && err_has "^glimpse: stream --zoo human: NOT_FOUND"
 run 1 stream "$GLIMPSE_TEST_TMP/nothing.off" --model tiny && err_has "nothing\.off"
 

@@ -135,5 +135,44 @@ TEST(ScanSession, TheFinalDecisionOfChunksFromSeveralSensorsFacesEachChunksSenso
   }
 }
 
+// A model that filters its scans decides every chunk on the scan so far, filtered as a whole: each
+// chunk's raw scores are classify_fused's of the points sent so far with their chunks' sensors.
+TEST(ScanSession, AFilteringModelDecidesEveryChunkOnTheWholeScanSoFar) {
+  TrainParams p;
+  p.methods = {MethodId::kUSH, MethodId::kVFH, MethodId::kFusion};
+  auto model = train(test::synthetic_views(3, 2, 5), p);
+  ASSERT_TRUE(model.ok()) << model.error().message;
+  ASSERT_TRUE(model->impl);
+  const auto shared = std::make_shared<const Model>(std::move(*model));
+  const TwoSidedScan s = sphere_from_both_sides();
+  auto session = ScanSession::create(shared, {});
+  ASSERT_TRUE(session.ok());
+  Cloud so_far;
+  std::vector<std::optional<Vec3>> sensors;
+  size_t decided = 0;
+  for (const Cloud* half : {&s.front, &s.back})
+    for (size_t begin = 0; begin < half->points.size(); begin += 700) {
+      Cloud chunk;
+      chunk.sensor = half->sensor;
+      for (size_t i = begin; i < std::min(begin + 700, half->points.size()); ++i) {
+        chunk.points.push_back(half->points[i]);
+        so_far.points.push_back(half->points[i]);
+        sensors.push_back(half->sensor);
+      }
+      so_far.sensor = half->sensor;
+      auto d = (*session)->add(chunk);
+      ASSERT_TRUE(d.ok()) << d.error().message;
+      auto c = classify_fused(*shared, so_far, sensors);
+      if (!c.ok()) {
+        EXPECT_EQ(d->winner, -1);  // undecided while Classify cannot decide either
+        continue;
+      }
+      ++decided;
+      EXPECT_EQ(d->raw_scores, c->scores) << "after " << so_far.points.size() << " points";
+      EXPECT_EQ(d->points, so_far.points.size());
+    }
+  EXPECT_GE(decided, 7u);
+}
+
 }  // namespace
 }  // namespace glimpse
