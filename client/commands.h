@@ -33,6 +33,7 @@ struct TrainOptions {
   Placement placement;         // --up, --unit, --height (override the folder's manifest)
   ProtocolOptions protocol;    // views, samples, seed (glimpse-lab's defaults)
   std::optional<uint64_t> train_seed;  // TrainParameters.seed
+  bool no_scan_filters = false;        // TrainParameters.filter_scans = false
   bool json = false;           // print the stored ModelInfo as JSON instead of a summary
   bool quiet = false;          // no progress
 };

@@ -152,6 +152,14 @@ int Main(int argc, char** argv) {
   AddPlacementOptions(*train, t.placement);
   train->add_option_function<uint64_t>("--train-seed", [&t](const uint64_t& s) { t.train_seed = s; },
                                        "k-means and sampling seed of training (default: the server's)");
+  train->add_option("--elevations", t.protocol.train_elevations_deg,
+                    "more training views of each mesh from these elevations (degrees above the horizon, besides the "
+                    "paper's 30), as glimpse-lab's --train-elevations: for cameras mounted low or high (0,15 "
+                    "measured in the README; training takes several times longer)")
+      ->delimiter(',')->check(CLI::Range(-90.f, 90.f))->group("Meshes");
+  train->add_flag("--no-scan-filters", t.no_scan_filters,
+                  "the model classifies every point sent as it is (default: it removes stray returns and a floor and "
+                  "thins dense scans to its training density)");
   train->add_flag("--json", t.json, "print the stored model as JSON");
   train->add_flag("-q,--quiet", t.quiet, "no progress on stderr");
   train->callback([&] { run = [&] { return RunTrain(conn, t); }; });

@@ -123,6 +123,13 @@ run 0 train "$PLAIN" --name plain --methods ush,vfh,fusion --views 3 --mesh-poin
 err_has "^train: up: \+y for every mesh \(--up\)$" && err_has "^train: size: mesh units x 0.001 m \(--unit\)$"
 run 0 models show plain --json && out_has '"feature_version":[1-9]' && out_has '"max_extent_m":1\.[0-9]'
 out_has '"bok_codebook_size":60'  # the parameters used (a default nobody asked for), not an echo of the request
+out_has '"filter_scans":true'
+# More training views from other elevations (as glimpse-lab --train-elevations): 3 elevations x 3 views;
+# a model that classifies what it is sent as it is.
+run 0 train "$PLAIN" --name plain-low --methods ush --views 3 --mesh-points 1500 --up y --unit mm --elevations 0,15 \
+  --no-scan-filters && out_has "^trained plain-low:1 \(default\): 2 categories, 36 clouds"
+run 0 models show plain-low --json && out_has '"filter_scans":false'
+run 2 train "$PLAIN" --name bad --elevations 95
 # A folder plus the zoo (the recipe): the zoo adds objects of the folder's categories only.
 MIX="$GLIMPSE_TEST_TMP/mix"
 mkdir -p "$MIX/chair" "$MIX/table"
@@ -208,7 +215,7 @@ run 1 stream --zoo human --model nope --rate 0 && err_has "^glimpse: stream --zo
 run 1 stream "$GLIMPSE_TEST_TMP/nothing.off" --model tiny && err_has "nothing\.off"
 
 # ---- models ----
-run 0 models list && out_lines 8 && out_has "^tiny +2 +\* " && out_has "^folder +1 +\* "
+run 0 models list && out_lines 9 && out_has "^tiny +2 +\* " && out_has "^folder +1 +\* "
 run 0 models show tiny && out_has "^version: +2 \(default\)" && out_has "^description: +second one"
 run 0 models set-default tiny:1 && out_has "version 1"
 run 0 models show tiny --json && out_has '"version":1' && out_has '"is_default":true'
