@@ -80,19 +80,35 @@ Expected<Classification> classify_fused(const Model& model, const Cloud& cloud,
     return invalid_argument("point_sensors must name one sensor per point");
   const ModelImpl& impl = *model.impl;
   const auto t0 = std::chrono::steady_clock::now();
-  ScanFilterReport filtered;
-  const Cloud scan = impl.params.filter_scans ? filter_scan(cloud, impl.params.filters, &filtered) : Cloud{};
-  const Cloud& points = impl.params.filter_scans ? scan : cloud;
+  if (!impl.params.filter_scans) return classify_filtered(model, cloud, point_sensors, nullptr, {}, m, t0, cancel);
+  ScanFilterReport report;
+  const Cloud filtered = filter_scan(cloud, impl.params.filters, &report);
+  return classify_filtered(model, cloud, point_sensors, &filtered, report, m, t0, cancel);
+}
+
+Expected<Classification> classify_filtered(const Model& model, const Cloud& cloud,
+                                           const std::vector<std::optional<Vec3>>& point_sensors,
+                                           const Cloud* filtered, const ScanFilterReport& report, MethodId m,
+                                           std::chrono::steady_clock::time_point t0, const CancelFn& cancel) {
+  const ModelImpl& impl = *model.impl;
+  const Cloud& points = filtered ? *filtered : cloud;
   const std::vector<MethodId> methods = component_methods(impl, m);
   Expected<CloudFeatures> f = failed_precondition("no features");
   if (point_sensors.empty() || one_sensor(point_sensors)) {
-    f = cloud_features(points, impl.params, methods, impl.params.threads, cancel);
+    Cloud one;
+    const Cloud* in = &points;
+    if (!point_sensors.empty() && point_sensors.front() != points.sensor) {
+      one = points;
+      one.sensor = point_sensors.front();
+      in = &one;
+    }
+    f = cloud_features(*in, impl.params, methods, impl.params.threads, cancel);
   } else {
     FeatureParams fp = impl.params.features;
     fp.surface.threads = impl.params.threads;
     fp.find_keypoints = std::any_of(methods.begin(), methods.end(), uses_keypoints);
-    auto state = extract_fused(
-        points, impl.params.filter_scans ? sensors_after_filters(points, cloud, point_sensors) : point_sensors, fp, cancel);
+    auto state =
+        extract_fused(points, filtered ? sensors_after_filters(points, cloud, point_sensors) : point_sensors, fp, cancel);
     if (!state.ok()) return state.error();
     f = method_features(*state, impl.params, methods, impl.params.threads);
   }
@@ -110,7 +126,7 @@ Expected<Classification> classify_fused(const Model& model, const Cloud& cloud,
   c.points = f->points;
   c.keypoints = f->positions.size();
   c.warning = size_warning(model.stats, cloud);
-  c.filters = filtered;
+  c.filters = report;
   return c;
 }
 

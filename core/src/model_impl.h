@@ -3,6 +3,7 @@
 #pragma once
 
 #include <array>
+#include <chrono>
 #include <optional>
 
 #include "glimpse/classifiers.h"
@@ -51,6 +52,14 @@ Expected<CloudFeatures> method_features(const FeatureState& state, const TrainPa
 Expected<CloudFeatures> cloud_features(const Cloud& cloud, const TrainParams& params,
                                        const std::vector<MethodId>& methods, int threads,
                                        const CancelFn& cancel = {});
+
+// classify_fused's decision once the model's filters ran: `filtered` is filter_scan(cloud) with `report`
+// (nullptr: the model does not filter), each kept point facing the sensor of its nearest raw point.
+// The session calls it with the filter it ran to see whether anything would be filtered.
+Expected<Classification> classify_filtered(const Model& model, const Cloud& cloud,
+                                           const std::vector<std::optional<Vec3>>& point_sensors,
+                                           const Cloud* filtered, const ScanFilterReport& report, MethodId method,
+                                           std::chrono::steady_clock::time_point started, const CancelFn& cancel = {});
 
 // The global histogram of one base method (every method but fusion).
 Eigen::VectorXd method_histogram(const ModelImpl& impl, MethodId method, const CloudFeatures& f);

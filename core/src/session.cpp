@@ -3,11 +3,13 @@
 #include "glimpse/session.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <string>
 
 #include "glimpse/features.h"
 #include "glimpse/preprocess.h"
+#include "glimpse/scan_filters.h"
 #include "model_impl.h"
 
 namespace glimpse {
@@ -41,11 +43,15 @@ class Session final : public ScanSession {
   Status check(const Cloud& chunk) const;
   // A model that filters its scans (floor, strays, density) decides every chunk on the scan so far,
   // filtered as a whole: a floor, a stray or the density is a property of the whole scan, not of the
-  // newest chunk (a top-down scan's last chunk is all floor). Its features are Classify's of the
-  // accumulated points, each facing its chunk's sensor; a model without filters grows ScanFeatures.
+  // newest chunk (a top-down scan's last chunk is all floor). When the filters would take something
+  // from the accumulated points, the chunk's features are Classify's of the filtered scan (each point
+  // facing its chunk's sensor); when they would take nothing (an ideal view, most chunks of a
+  // top-down scan), ScanFeatures grown chunk by chunk hold the same points at a chunk's cost.
   bool filtered() const { return impl_.params.filter_scans; }
   size_t points() const { return filtered() ? raw_.points.size() : features_.points(); }
   void add_raw(const Cloud& chunk);
+  // ScanFeatures catch up with the raw points (in their chunks' sensor runs); false on an error.
+  Expected<size_t> feed_features();
   // Classify's of the accumulated points (the last one again when nothing was added since).
   const Expected<Classification>& classify_so_far();
   bool update_method_features(bool whole_cloud_too);
@@ -62,6 +68,9 @@ class Session final : public ScanSession {
   DuplicateFilter duplicates_;                      // filtered(): clean()'s rule on the raw points
   Cloud raw_;                                       // filtered(): the points as sent, cleaned
   std::vector<std::optional<Vec3>> raw_sensors_;    // per raw point: its chunk's sensor
+  size_t fed_ = 0;                                  // raw points added to features_
+  size_t filters_at_ = 0;                           // raw points when the filters last ran
+  bool filters_change_ = false;                     // ... and whether they changed the scan
   Expected<Classification> classified_ = failed_precondition("nothing classified yet");
   size_t classified_points_ = 0;
   CloudFeatures method_features_;
@@ -145,16 +154,38 @@ Expected<StreamDecision> Session::add(const Cloud& chunk) {
     part.points.assign(chunk.points.begin(), chunk.points.begin() + static_cast<std::ptrdiff_t>(room));
     take = &part;
   }
+  Expected<size_t> kept = size_t{0};
   if (filtered()) {
     add_raw(*take);
     last_.points = raw_.points.size();
-    const Expected<Classification>& c = classify_so_far();
-    if (!c.ok()) return last_;  // undecided: too few points, nothing but floor, a line
-    last_.keypoints = c->keypoints;
-    track(c->scores, c->keypoints);
-    return last_;
+    // The filters cost what the scan holds: they run again once it grew by global_refresh_growth (as
+    // VFH does); in between, a filtered scan's chunks repeat its last decision, an unfiltered one's grow
+    // ScanFeatures.
+    const size_t n = raw_.points.size();
+    if (!filters_at_ || double(n) >= (1.0 + params_.global_refresh_growth) * double(filters_at_)) {
+      const auto t0 = std::chrono::steady_clock::now();
+      ScanFilterReport report;
+      const Cloud scan = filter_scan(raw_, impl_.params.filters, &report);
+      filters_at_ = n;
+      // A floor or a thinned density changes what every method sees; a few stray points (1 % at most:
+      // a sparse top-down prefix's edge) do not, and the chunk-by-chunk features keep them until
+      // finish(), which is Classify's of the filtered scan.
+      filters_change_ = report.ground > 0 || report.voxel_m > 0 || double(report.outliers) > 0.01 * double(report.input);
+      if (filters_change_) {  // Classify's of the filtered scan
+        classified_ = classify_filtered(*model_, raw_, raw_sensors_, &scan, report, method_, t0);
+        classified_points_ = n;
+        if (!classified_.ok()) return last_;  // undecided: too few points, nothing but floor, a line
+        last_.keypoints = classified_->keypoints;
+        track(classified_->scores, classified_->keypoints);
+        return last_;
+      }
+    } else if (filters_change_) {
+      return last_;  // the last decision stands until the scan has grown enough to filter it again
+    }
+    kept = feed_features();
+  } else {
+    kept = features_.add(*take);
   }
-  auto kept = features_.add(*take);
   if (!kept.ok()) return kept.error();
   last_.points = features_.points();
   if (!features_.ready()) return last_;  // nothing to decide on yet
@@ -169,6 +200,19 @@ void Session::add_raw(const Cloud& chunk) {
   for (const Vec3& p : chunk.points)
     if (p.allFinite() && duplicates_.keep(p)) raw_.points.push_back(p), raw_sensors_.push_back(chunk.sensor);
   if (chunk.sensor) raw_.sensor = chunk.sensor;
+}
+
+Expected<size_t> Session::feed_features() {
+  size_t added = 0;
+  while (fed_ < raw_.points.size()) {
+    Cloud run;
+    run.sensor = raw_sensors_[fed_];
+    for (; fed_ < raw_.points.size() && raw_sensors_[fed_] == run.sensor; ++fed_) run.points.push_back(raw_.points[fed_]);
+    auto kept = features_.add(run);
+    if (!kept.ok()) return kept.error();
+    added += *kept;
+  }
+  return added;
 }
 
 const Expected<Classification>& Session::classify_so_far() {

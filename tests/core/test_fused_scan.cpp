@@ -136,25 +136,33 @@ TEST(ScanSession, TheFinalDecisionOfChunksFromSeveralSensorsFacesEachChunksSenso
 }
 
 // A model that filters its scans decides every chunk on the scan so far, filtered as a whole: each
-// chunk's raw scores are classify_fused's of the points sent so far with their chunks' sensors.
+// chunk's raw scores are classify_fused's of the points sent so far with their chunks' sensors, whether
+// the filters take nothing (ScanFeatures grown chunk by chunk) or a floor that came last (Classify's of
+// the filtered scan). USH is recomputed every chunk, so the two agree bit for bit.
 TEST(ScanSession, AFilteringModelDecidesEveryChunkOnTheWholeScanSoFar) {
   TrainParams p;
-  p.methods = {MethodId::kUSH, MethodId::kVFH, MethodId::kFusion};
+  p.methods = {MethodId::kUSH};
+  p.default_method = MethodId::kUSH;
   auto model = train(test::synthetic_views(3, 2, 5), p);
   ASSERT_TRUE(model.ok()) << model.error().message;
   ASSERT_TRUE(model->impl);
   const auto shared = std::make_shared<const Model>(std::move(*model));
   const TwoSidedScan s = sphere_from_both_sides();
+  Cloud floor;  // 1.6 m square under the ball (z = 0.7), 1 cm grid, seen by the second sensor
+  floor.sensor = s.back.sensor;
+  for (int i = 0; i <= 160; ++i)
+    for (int j = 0; j <= 160; ++j) floor.points.emplace_back(-0.8f + 0.01f * float(i), -0.8f + 0.01f * float(j), 0.7f);
   auto session = ScanSession::create(shared, {});
   ASSERT_TRUE(session.ok());
   Cloud so_far;
   std::vector<std::optional<Vec3>> sensors;
   size_t decided = 0;
-  for (const Cloud* half : {&s.front, &s.back})
-    for (size_t begin = 0; begin < half->points.size(); begin += 700) {
+  size_t ground = 0, unfiltered = 0, filtered = 0;  // chunks the filters left alone / changed
+  for (const Cloud* half : std::initializer_list<const Cloud*>{&s.front, &s.back, &floor})
+    for (size_t begin = 0; begin < half->points.size(); begin += (half == &floor ? 30000 : 700)) {
       Cloud chunk;
       chunk.sensor = half->sensor;
-      for (size_t i = begin; i < std::min(begin + 700, half->points.size()); ++i) {
+      for (size_t i = begin; i < std::min(begin + (half == &floor ? 30000 : 700), half->points.size()); ++i) {
         chunk.points.push_back(half->points[i]);
         so_far.points.push_back(half->points[i]);
         sensors.push_back(half->sensor);
@@ -168,10 +176,18 @@ TEST(ScanSession, AFilteringModelDecidesEveryChunkOnTheWholeScanSoFar) {
         continue;
       }
       ++decided;
+      ground = c->filters.ground;
+      (c->filters.kept == c->filters.input && c->filters.voxel_m == 0 ? unfiltered : filtered) += 1;
       EXPECT_EQ(d->raw_scores, c->scores) << "after " << so_far.points.size() << " points";
       EXPECT_EQ(d->points, so_far.points.size());
     }
-  EXPECT_GE(decided, 7u);
+  EXPECT_GE(decided, 8u);
+  EXPECT_GE(unfiltered, 7u);  // the ball alone: ScanFeatures grown chunk by chunk
+  EXPECT_GE(filtered, 1u);    // the floor: Classify's of the filtered scan
+  // The last decision saw the floor and the filters took it, with the ball's cap within the inlier
+  // distance (4 cm: about 4 % of the ball's points).
+  EXPECT_GE(ground, floor.points.size());
+  EXPECT_LT(ground, floor.points.size() + (s.front.points.size() + s.back.points.size()) / 15);
 }
 
 }  // namespace
