@@ -101,7 +101,6 @@ ScanFeatures& ScanFeatures::operator=(ScanFeatures&&) noexcept = default;
 bool ScanFeatures::ready() const { return impl_->index != nullptr; }
 const FeatureState& ScanFeatures::state() const { return impl_->st; }
 size_t ScanFeatures::points() const { return impl_->st.cloud.points.size(); }
-const std::optional<Vec3>& ScanFeatures::sensor() const { return impl_->sensor; }
 const std::vector<std::optional<Vec3>>& ScanFeatures::viewpoints() const { return impl_->viewpoint; }
 
 Expected<size_t> ScanFeatures::add(const Cloud& chunk, const CancelFn& cancel) {

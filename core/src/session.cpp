@@ -41,16 +41,14 @@ class Session final : public ScanSession {
     return fp;
   }
   Status check(const Cloud& chunk) const;
-  // A model that filters its scans (floor, strays, density) decides every chunk on the scan so far,
-  // filtered as a whole: a floor, a stray or the density is a property of the whole scan, not of the
-  // newest chunk (a top-down scan's last chunk is all floor). When the filters would take something
-  // from the accumulated points, the chunk's features are Classify's of the filtered scan (each point
-  // facing its chunk's sensor); when they would take nothing (an ideal view, most chunks of a
-  // top-down scan), ScanFeatures grown chunk by chunk hold the same points at a chunk's cost.
+  // A model that filters its scans (floor, strays, density) judges them on the scan so far, filtered
+  // as a whole: a floor, a stray or the density is a property of the whole scan, not of the newest
+  // chunk (a top-down scan's last chunk is all floor). See SessionParams::global_refresh_growth for
+  // when the filters run and which features then decide a chunk.
   bool filtered() const { return impl_.params.filter_scans; }
   size_t points() const { return filtered() ? raw_.points.size() : features_.points(); }
   void add_raw(const Cloud& chunk);
-  // ScanFeatures catch up with the raw points (in their chunks' sensor runs); false on an error.
+  // ScanFeatures catch up with the raw points (in their chunks' sensor runs): the points they kept.
   Expected<size_t> feed_features();
   // Classify's of the accumulated points (the last one again when nothing was added since).
   const Expected<Classification>& classify_so_far();

@@ -90,8 +90,6 @@ class ScanFeatures {
   bool ready() const;
   const FeatureState& state() const;
   size_t points() const;  // kept so far
-  // The latest chunk's sensor (the viewpoint whole-cloud descriptors use), if any chunk had one.
-  const std::optional<Vec3>& sensor() const;
   // Per point kept (the state's cloud order): the sensor of the chunk it came in, if it had one.
   const std::vector<std::optional<Vec3>>& viewpoints() const;
 
