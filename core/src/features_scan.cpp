@@ -67,12 +67,28 @@ void ScanFeatures::Impl::refit_touched(const std::vector<uint32_t>& added) {
     st.surfaces[i] = local_surface(*index, i, r, viewpoint[i], params.surface.min_neighbours, near);
     // Its boundary status may have changed, and so may "touches a boundary" of its neighbours.
     if (params.keypoints.exclude_boundary) {
+      // Boundary status reads a point's normal and its neighbours within the boundary radius B: i's
+      // changed, and, when B > r, so may every point within B of i (an added point is among the touched).
+      // "Touches a boundary" reads the boundary status within the band: reset within B + band.
+      const KeypointParams& kp = params.keypoints;
+      const float boundary_reach = kp.boundary_radius_supports > 1 ? kp.boundary_radius_supports * r : 0.f;
       memo.boundary[i] = -1;
-      for (const Neighbour& q : near) memo.touches_boundary[q.index] = -1;
+      if (boundary_reach > 0) {
+        index->radius(st.cloud.points[i], boundary_reach, near);
+        for (const Neighbour& q : near) memo.boundary[q.index] = -1;
+      }
+      const float touch_reach = boundary_reach + kp.boundary_band_supports * r;
+      if (touch_reach > 0) {
+        if (boundary_reach > 0 || touch_reach != r) index->radius(st.cloud.points[i], touch_reach, near);
+        for (const Neighbour& q : near) memo.touches_boundary[q.index] = -1;
+      } else {
+        memo.touches_boundary[i] = -1;
+      }
     }
   }
-  // Descriptors read normals up to r away and the large window (R) around the keypoint.
-  const float reach = std::max(1.f, params.descriptor.large_window_supports) * r + r;
+  // Descriptors read normals within their neighbourhood (whose surfaces read r farther) and the large
+  // window around the keypoint.
+  const float reach = descriptor_reach(r, params.descriptor) + r;
   for (uint32_t i : added) {
     index->radius(st.cloud.points[i], reach, near);
     for (const Neighbour& q : near) cache[q.index].reset();

@@ -147,8 +147,13 @@ void visit_params(TrainParams& p, F&& f) {
   f("keypoints.exclude_boundary", p.features.keypoints.exclude_boundary);
   f("keypoints.boundary_gap_rad", p.features.keypoints.boundary_gap_rad);
   f("keypoints.max_keypoints", p.features.keypoints.max_keypoints);
+  f("keypoints.claim_min_supports", p.features.keypoints.claim_min_supports);
+  f("keypoints.boundary_band_supports", p.features.keypoints.boundary_band_supports);
+  f("keypoints.boundary_radius_supports", p.features.keypoints.boundary_radius_supports);
+  f("keypoints.response", p.features.keypoints.response);
   f("descriptor.large_window_supports", p.features.descriptor.large_window_supports);
   f("descriptor.max_pfh_points", p.features.descriptor.max_pfh_points);
+  f("descriptor.characteristic_scale_supports", p.features.descriptor.characteristic_scale_supports);
   f("global.normal_radius_m", p.global.normal_radius_m);
   f("global.fill_size_component", p.global.fill_size_component);
   f("ush.max_depth_m", p.ush.max_depth_m);
@@ -157,6 +162,7 @@ void visit_params(TrainParams& p, F&& f) {
   f("codebook_explained_variance", p.codebook_explained_variance);
   f("bok_clusters", p.bok_clusters);
   f("normalise_histograms", p.normalise_histograms);
+  f("normalise_up_to_keypoints", p.normalise_up_to_keypoints);
   f("bog_keypoint_clusters", p.bog_keypoint_clusters);
   f("bog_volume_clusters", p.bog_volume_clusters);
   f("bog_pca_dims", p.bog_pca_dims);
