@@ -205,9 +205,16 @@ Expected<DecisionStage> fit_decision(const Eigen::MatrixXd& histograms, const st
   st.kind = params.kind;
   st.categories = categories;
   st.neighbours = std::max(1, params.neighbours);
-  auto pca = fit_pca(histograms, params.pca_explained_variance, params.max_pca_dims);
-  if (!pca.ok()) return pca.error();
-  st.pca = std::move(*pca);
+  if (params.pca_explained_variance > 0) {
+    auto pca = fit_pca(histograms, params.pca_explained_variance, params.max_pca_dims);
+    if (!pca.ok()) return pca.error();
+    st.pca = std::move(*pca);
+  } else {  // no PCA: L1 on the histograms themselves (the identity projection)
+    const Eigen::Index d = histograms.cols();
+    st.pca.mean = Eigen::VectorXd::Zero(d);
+    st.pca.basis = Eigen::MatrixXd::Identity(d, d);
+    st.pca.explained = Eigen::VectorXd::Constant(d, 1.0 / static_cast<double>(std::max<Eigen::Index>(d, 1)));
+  }
   const Eigen::MatrixXd y = project(st.pca, histograms);
 
   std::vector<double> scale;

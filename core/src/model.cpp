@@ -108,15 +108,28 @@ Expected<CloudFeatures> cloud_features(const Cloud& cloud, const TrainParams& pa
 
 Eigen::VectorXd method_histogram(const ModelImpl& impl, MethodId method, const CloudFeatures& f) {
   const TrainParams& p = impl.params;
+  const int up_to = p.normalise_up_to_keypoints;
+  const bool normalise = p.normalise_histograms && up_to <= 0;
+  // sec. 4: counts divided by min(count, count at up_to keypoints).
+  auto early = [&](Eigen::VectorXd h, double count, double count_at_up_to) {
+    if (up_to > 0 && count > 0) h /= std::min(count, count_at_up_to);
+    return h;
+  };
+  const double n = static_cast<double>(up_to);
   switch (method) {
     case MethodId::kBoK:
-      return bag_of_keypoints(keypoint_words(impl.bok, f.descriptors), p.bok_clusters, p.normalise_histograms);
-    case MethodId::kBoG:
-      return bag_of_graphs(local_graphs(f.positions, keypoint_words(impl.bog, f.descriptors)), impl.graphs,
-                           p.normalise_histograms);
-    case MethodId::kKGH:
-      return keypoint_global_histogram(f.positions, keypoint_words(impl.kgh, f.descriptors), p.kgh_clusters,
-                                       p.kgh_distance_bins, impl.kgh_max_distance_m, p.normalise_histograms);
+      return early(bag_of_keypoints(keypoint_words(impl.bok, f.descriptors), p.bok_clusters, normalise),
+                   static_cast<double>(f.descriptors.size()), n);
+    case MethodId::kBoG: {
+      const auto graphs = local_graphs(f.positions, keypoint_words(impl.bog, f.descriptors));
+      return early(bag_of_graphs(graphs, impl.graphs, normalise), static_cast<double>(graphs.size()), n);
+    }
+    case MethodId::kKGH: {
+      const double k = static_cast<double>(f.positions.size());
+      return early(keypoint_global_histogram(f.positions, keypoint_words(impl.kgh, f.descriptors), p.kgh_clusters,
+                                             p.kgh_distance_bins, impl.kgh_max_distance_m, normalise),
+                   k * (k - 1), n * (n - 1));
+    }
     case MethodId::kVFH: return f.vfh ? Eigen::VectorXd(f.vfh->cast<double>()) : Eigen::VectorXd::Zero(kVfhSize);
     case MethodId::kESF: return f.esf ? Eigen::VectorXd(f.esf->cast<double>()) : Eigen::VectorXd::Zero(kEsfSize);
     case MethodId::kUSH:
@@ -366,7 +379,10 @@ Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainP
       h.row(static_cast<Eigen::Index>(i)) = row.transpose();
     }
     DecisionParams dp = params.decision;
-    if (m == MethodId::kBoG) dp.max_pca_dims = params.bog_pca_dims;
+    if (m == MethodId::kBoG) {  // 1032 graph types reduced to 65 dims (sec. 4), also without PCA elsewhere
+      dp.max_pca_dims = params.bog_pca_dims;
+      if (dp.pca_explained_variance <= 0) dp.pca_explained_variance = 1;
+    }
     auto stage = fit_decision(h, labels, static_cast<int>(model.categories.size()), dp,
                               params.seed + 10 + static_cast<uint64_t>(m), threads, object_of);
     if (!stage.ok()) return with_method(m, stage.error());

@@ -28,7 +28,8 @@ struct DecisionParams {
   DecisionRule kind = DecisionRule::kNearestReference;
   int centres_per_category = 3;     // for kCentres
   int neighbours = 5;               // for kNearestNeighbours
-  double pca_explained_variance = 0.98;  // PCA of the training histograms (sec. 3.3.2)
+  double pca_explained_variance = 0.98;  // PCA of the training histograms (sec. 3.3.2); <= 0: none, L1 on
+                                         // the histograms themselves (BoG still reduced to bog_pca_dims)
   int max_pca_dims = 65;
 };
 
@@ -42,6 +43,11 @@ struct TrainParams {
   double codebook_explained_variance = 0.95;  // PCA of standardised descriptors (sec. 3.2.5)
   int bok_clusters = 60;
   bool normalise_histograms = true;  // divide by keypoint count: partial views see fewer (sec. 4)
+  // The paper's rule (sec. 4): normalise early in the exploration, not later. > 0: a histogram is divided
+  // by its count while the view holds fewer than this many keypoints and by the count at this many after
+  // (graphs: as many; KGH pairs: N (N - 1)), so a view with many keypoints keeps how many it has.
+  // 0: normalise_histograms alone decides.
+  int normalise_up_to_keypoints = 0;
   int bog_keypoint_clusters = 6;
   int bog_volume_clusters = 5;
   int bog_pca_dims = 65;
