@@ -152,7 +152,36 @@ void write_protocol(std::ostringstream& o, const EvalResult& r) {
     << ") | VFH, KGH, BoK, BoG |\n";
   o << "| codebooks | BoK " << t.bok_clusters << ", BoG " << t.bog_keypoint_clusters << "x" << t.bog_volume_clusters
     << " -> " << t.bog_pca_dims << " dims, KGH " << t.kgh_clusters << "x" << t.kgh_distance_bins
-    << (t.normalise_histograms ? ", histograms normalised" : "") << " | BoK 60, BoG 6x5 -> 65, KGH 8x15 |\n";
+    << (t.normalise_up_to_keypoints > 0
+            ? ", histograms divided by their count up to " + std::to_string(t.normalise_up_to_keypoints) +
+                  " keypoints and by that many's after"
+            : t.normalise_histograms ? ", histograms normalised" : "")
+    << " | BoK 60, BoG 6x5 -> 65, KGH 8x15; normalised early in the exploration, not later |\n";
+  const KeypointParams& kp = t.features.keypoints;
+  const SurfaceParams& sp = t.features.surface;
+  o << "| keypoints | r = median distance to the " << sp.support_neighbours << "th nearest neighbour (surfaces need "
+    << sp.min_neighbours << " within r); "
+    << (kp.response == KeypointResponse::kHarris ? "ranked by the Harris response det - 0.04 tr^2 (window r/2), its "
+                                                   "local maxima within r"
+                                                 : "ranked by the smaller principal Harris curvature")
+    << "; rho1 "
+    << (kp.max_characteristic_radius_m > 0 ? "<= " + fmt("%g", double(kp.max_characteristic_radius_m)) + " m"
+        : kp.max_radius_supports > 0       ? "<= " + fmt("%g", double(kp.max_radius_supports)) + " r"
+                                           : std::string("uncapped"))
+    << "; each claims " << (kp.claim_min_supports > 0 ? "max(rho1, " + fmt("%g", double(kp.claim_min_supports)) + " r)" : std::string("rho1"))
+    << "; "
+    << (kp.exclude_boundary ? "no keypoint " + (kp.boundary_band_supports > 0 ? "within " + fmt("%g", double(kp.boundary_band_supports)) +
+                                                                                    " r of a boundary point"
+                                                                              : std::string("on a boundary point")) +
+                                  " (angular gap > " + fmt("%g", std::round(kp.boundary_gap_rad * 180 / 3.14159265358979)) +
+                                  " deg among the neighbours within " + fmt("%g", double(kp.boundary_radius_supports)) + " r)"
+                            : std::string("boundary kept"))
+    << "; descriptors over "
+    << (t.features.descriptor.characteristic_scale_supports > 0
+            ? "rho1 clamped to [r, " + fmt("%g", double(t.features.descriptor.characteristic_scale_supports)) + " r]"
+            : std::string("r"))
+    << " | r as small as the density allows; rho1 = 2 / sqrt(lambda1) claims its sphere; boundary points and their "
+       "neighbourhood excluded |\n";
   const char* kind = t.decision.kind == DecisionRule::kNearestCentre ? "nearest centre"
                      : t.decision.kind == DecisionRule::kCentres   ? "several centres per category"
                      : t.decision.kind == DecisionRule::kNearestReference
@@ -161,7 +190,11 @@ void write_protocol(std::ostringstream& o, const EvalResult& r) {
   o << "| decision | " << kind;
   if (t.decision.kind == DecisionRule::kNearestNeighbours) o << " (k = " << t.decision.neighbours << ")";
   if (t.decision.kind == DecisionRule::kCentres) o << " (" << t.decision.centres_per_category << " per category)";
-  o << ", L1 | one K-means centre per category, L1 |\n";
+  o << ", L1 " << (t.decision.pca_explained_variance > 0 ? "after PCA (" + pct(100 * t.decision.pca_explained_variance) +
+                                                                 " % of the variance, BoG <= " + std::to_string(t.bog_pca_dims) + " dims)"
+                                                           : "on the histograms (BoG reduced to " + std::to_string(t.bog_pca_dims) +
+                                                                 " dims)")
+    << " | one K-means centre per category, L1 |\n";
   o << "| exploration grid (category changes) | keypoint counts ";
   for (size_t i = 0; i < r.grid.size(); ++i) o << (i ? ", " : "") << r.grid[i];
   o << (p.explore_step > 1 ? " (coarser than the paper's every keypoint: changes between grid points are not seen)" : "")
@@ -230,7 +263,8 @@ void write_accuracy(std::ostringstream& o, const EvalResult& r) {
 
 void write_size(std::ostringstream& o, const EvalResult& r) {
   const bool size_method = std::find(r.params.methods.begin(), r.params.methods.end(), MethodId::kSize) != r.params.methods.end();
-  if (!size_method && r.ablations.empty()) return;
+  const bool size_rows = std::any_of(r.ablations.begin(), r.ablations.end(), [](const AblationRow& a) { return a.group == "size"; });
+  if (!size_method && !size_rows) return;
   const std::vector<std::string> stages = main_stage_names(r);
   o << "## How much is size\n\n";
   o << "Objects are scaled to real-life sizes, and the category ranges barely overlap (human 1.55-1.95 m tall, chair "
@@ -252,10 +286,52 @@ void write_size(std::ostringstream& o, const EvalResult& r) {
   };
   if (size_method) real_row(MethodId::kSize);
   for (const AblationRow& a : r.ablations) {
+    if (a.group != "size") continue;
     if (std::find(r.params.methods.begin(), r.params.methods.end(), a.method) != r.params.methods.end()) real_row(a.method);
     o << "| " << method_label(a.method) << ", " << a.label << " |";
     for (double v : a.accuracy) o << " " << (v < 0 ? "–" : pct(v, 1)) << " |";
     for (double v : a.balanced) o << " " << (v < 0 ? "–" : pct(v, 1)) << " |";
+    o << "\n";
+  }
+  o << "\n";
+}
+
+void write_keypoint_ablation(std::ostringstream& o, const EvalResult& r) {
+  if (std::none_of(r.ablations.begin(), r.ablations.end(), [](const AblationRow& a) { return a.group == "keypoints"; }))
+    return;
+  const std::vector<std::string> stages = main_stage_names(r);
+  o << "## Keypoint ablation\n\nThe keypoint methods re-run with one setting changed at a time from this run's (first rows), "
+       "everything else equal (same views, folds, seeds; no streams). Each setting says what its full views held: mean "
+       "keypoints, and the share of tested views with at least 25 (the paper's 25 kp stage is real only there).\n\n"
+       "| setting | method |";
+  for (const std::string& s : stages) o << " " << s << " |";
+  o << "\n|---|---|";
+  for (size_t i = 0; i < stages.size(); ++i) o << "---:|";
+  o << "\n";
+  std::string mine;  // this run's keypoints, as the ablation rows say theirs
+  {
+    size_t tested = 0;
+    for (const StageDecision& d : r.decisions) tested += d.stage == "full" && d.method == r.params.methods.front();
+    for (const StageStats& st : r.stage_stats) {
+      if (st.stage == "full") mine = "full views " + pct(st.mean_keypoints, 1) + " kp";
+      if (st.stage == "25kp" && tested)
+        mine += ", " + pct(100.0 * double(st.cut_views) / double(tested), 1) + " % >= 25";
+    }
+  }
+  bool first = true;
+  for (MethodId m : r.params.methods) {
+    if (!uses_keypoints(m)) continue;
+    o << "| " << (first ? "**this run** (" + mine + ")" : std::string()) << " | " << method_label(m) << " |";
+    first = false;
+    for (const std::string& s : stages) o << " " << pct(accuracy(r.decisions, s, m).percent(), 1) << " |";
+    o << "\n";
+  }
+  std::string last;
+  for (const AblationRow& a : r.ablations) {
+    if (a.group != "keypoints") continue;
+    o << "| " << (a.label == last ? std::string() : a.label) << " | " << method_label(a.method) << " |";
+    last = a.label;
+    for (double v : a.accuracy) o << " " << (v < 0 ? "–" : pct(v, 1)) << " |";
     o << "\n";
   }
   o << "\n";
@@ -281,10 +357,15 @@ void write_keypoints(std::ostringstream& o, const EvalResult& r) {
   }
   o << "\nKeypoint stage cuts, over the views whose full view has at least k keypoints (elsewhere the stage is the "
        "whole view): keypoints re-extraction finds on the prefix cut below the k-th highest full-view keypoint.\n\n"
-       "| stage | views with >= k keypoints | prefix keypoints mean (min-max) | visible % |\n|---|---:|---:|---:|\n";
+       "| stage | views with >= k keypoints | % of tested views | prefix keypoints mean (min-max) | visible % |\n"
+       "|---|---:|---:|---:|---:|\n";
+  size_t tested = 0;  // tested views: full-view decisions of one method
+  for (const StageDecision& d : r.decisions)
+    tested += d.stage == "full" && !r.params.methods.empty() && d.method == r.params.methods.front();
   for (const StageStats& st : r.stage_stats) {
     if (st.stage.size() < 3 || st.stage.substr(st.stage.size() - 2) != "kp") continue;
-    o << "| " << st.stage << " | " << st.cut_views << " | ";
+    o << "| " << st.stage << " | " << st.cut_views << " | "
+      << (tested ? pct(100.0 * double(st.cut_views) / double(tested), 1) : std::string("–")) << " | ";
     if (st.cut_views)
       o << pct(st.cut_mean_keypoints, 1) << " (" << st.cut_min_keypoints << "-" << st.cut_max_keypoints << ") | "
         << pct(st.cut_visible_percent, 1) << " |\n";
@@ -412,6 +493,7 @@ std::string markdown_report(const EvalResult& r) {
   write_size(o, r);
   o << eval_internal::robustness_section(r);
   write_keypoints(o, r);
+  write_keypoint_ablation(o, r);
   o << "## Confusion tables\n\n";
   write_confusions(o, r);
   write_changes(o, r);

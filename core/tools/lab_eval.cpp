@@ -9,9 +9,11 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <numbers>
 #include <sstream>
 
 #include "glimpse/evaluation.h"
+#include "lab_eval.h"
 
 namespace glimpse::lab {
 
@@ -53,47 +55,49 @@ struct EvalOptions {
   bool floor = false;
   double outliers = 0;
   std::string matrix = "small";
+  std::string preset;
+  // Keypoints (sec. 2.2, 3.2.1-3.2.2); negative: the recogniser's default.
+  int support_neighbours = -1;
+  int min_neighbours = -1;
+  float keypoint_cap = -1;     // rho1 cap in support radii, 0: none
+  float claim_min = -1;        // claim radius at least this x r, 0: rho1 alone
+  float boundary_band = -1;    // in support radii, 0: boundary points only
+  float boundary_gap = -1;     // degrees
+  float boundary_radius = -1;  // the boundary test's neighbourhood, in support radii
+  float descriptor_scale = -1; // descriptors over rho1 clamped to [r, this x r]; 0: over r
+  std::string keypoint_response;
+  int normalise_up_to = -1;
+  std::string default_method;
+  bool keypoint_ablation = false;
   size_t matrix_views = 0;  // 0: 1 per object for the small matrix (the default run stays within 5 minutes), 2 for full
 };
 
-// A progress bar on stderr; plain lines (every 10 %) when stderr is not a terminal.
-class ProgressBar {
- public:
-  ProgressBar() : tty_(isatty(STDERR_FILENO) != 0) {}
-  ~ProgressBar() { finish_line(); }
-
-  void operator()(const EvalProgress& p) {
-    if (p.phase != phase_) {
-      finish_line();
-      phase_ = p.phase;
-      last_decile_ = -1;
-      start_ = std::chrono::steady_clock::now();
-    }
-    const double frac = p.total ? double(p.done) / double(p.total) : 1.0;
-    const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-    if (tty_) {
-      const int width = 30, filled = static_cast<int>(frac * width);
-      std::fprintf(stderr, "\r%-28s [%s%s] %zu/%zu %5.1fs", phase_.c_str(), std::string(filled, '#').c_str(),
-                   std::string(width - filled, '.').c_str(), p.done, p.total, secs);
-      open_ = true;
-    } else if (int decile = static_cast<int>(frac * 10); decile > last_decile_) {
-      last_decile_ = decile;
-      std::fprintf(stderr, "%s: %zu/%zu (%.1fs)\n", phase_.c_str(), p.done, p.total, secs);
-    }
-    std::fflush(stderr);
-  }
-
- private:
-  void finish_line() {
-    if (open_) std::fputc('\n', stderr);
-    open_ = false;
-  }
-  bool tty_;
-  bool open_ = false;
-  std::string phase_;
-  int last_decile_ = -1;
-  std::chrono::steady_clock::time_point start_;
-};
+// --preset paper: the paper's settings (sec. 3.2-4) for every flag not given on the command line.
+Status apply_preset(EvalOptions& o, const CLI::App& cmd) {
+  if (o.preset.empty()) return {};
+  if (o.preset != "paper") return invalid_argument("--preset must be 'paper', not '" + o.preset + "'");
+  auto unset = [&](const char* flag) { return cmd.get_option(flag)->count() == 0; };
+  if (unset("--points")) o.points = "vertices";                  // sec. 3.4: the meshes' vertices
+  if (unset("--methods")) o.methods = "bok,bog,kgh,vfh";          // sec. 3.1, 3.2.6
+  if (unset("--default-method")) o.default_method = "bok";        // the category-change figures are BoK's
+  if (unset("--train-on")) o.train_on = "full";                   // trained on whole views
+  if (unset("--train-tilt")) o.tilt = 0;                          // as given
+  if (unset("--decision")) o.decision = "nearest-centre";         // sec. 4: one centre per category, L1
+  if (unset("--pca-variance")) o.pca_variance = -1;               // ... on the histograms (BoG: 65 dims)
+  if (unset("--normalise-up-to")) o.normalise_up_to = 25;         // sec. 4: normalise early, not later
+  // Keypoints (sec. 2.2, 3.2.1-3.2.2); the choices the text leaves open settled by the keypoint ablation.
+  if (unset("--support-neighbours")) o.support_neighbours = 6;    // sec. 3.2.1: r as small as the density
+  if (unset("--min-neighbours")) o.min_neighbours = 6;            //   allows: a quadric needs 6 points
+  if (unset("--keypoint-cap")) o.keypoint_cap = 0;                // sec. 2.2: no cap on rho1
+  if (unset("--claim-min")) o.claim_min = 0;                      // each keypoint claims rho1 (eq. 3)
+  if (unset("--boundary-radius")) o.boundary_radius = 2;          // vertex spacing is irregular: test over 2 r
+  if (unset("--boundary-band")) o.boundary_band = 0.25f;          // sec. 3.2.2: "in a given radius"
+  if (unset("--descriptor-scale")) o.descriptor_scale = 8;        // described at rho1 (up to 8 r), not at r
+  if (unset("--stream-chunk")) o.stream_chunk = 0;                // no streams in the paper
+  if (unset("--matrix")) o.matrix = "none";
+  if (unset("--size-blind")) o.size_blind = "none";
+  return {};
+}
 
 Expected<EvalParams> params_from(const EvalOptions& o) {
   EvalParams p;
@@ -191,6 +195,40 @@ Expected<EvalParams> params_from(const EvalOptions& o) {
     return invalid_argument("--matrix must be none, small or full, not '" + o.matrix + "'");
   p.matrix = robustness_conditions(o.matrix);
   p.matrix_views_per_object = o.matrix_views ? o.matrix_views : o.matrix == "full" ? 2 : 1;
+  FeatureParams& fp = p.train.features;
+  if (o.support_neighbours >= 0) {
+    if (o.support_neighbours < 3) return invalid_argument("--support-neighbours must be at least 3");
+    fp.surface.support_neighbours = o.support_neighbours;
+  }
+  if (o.min_neighbours >= 0) {
+    if (o.min_neighbours < 6) return invalid_argument("--min-neighbours must be at least 6 (a quadric has 6 coefficients)");
+    fp.surface.min_neighbours = o.min_neighbours;
+  }
+  if (o.keypoint_cap >= 0) fp.keypoints.max_radius_supports = o.keypoint_cap;
+  if (o.claim_min >= 0) fp.keypoints.claim_min_supports = o.claim_min;
+  if (o.boundary_band >= 0) fp.keypoints.boundary_band_supports = o.boundary_band;
+  if (o.descriptor_scale >= 0) fp.descriptor.characteristic_scale_supports = o.descriptor_scale;
+  if (o.boundary_radius >= 0) {
+    if (!(o.boundary_radius > 0)) return invalid_argument("--boundary-radius must be positive (support radii)");
+    fp.keypoints.boundary_radius_supports = o.boundary_radius;
+  }
+  if (o.boundary_gap >= 0) {
+    if (!(o.boundary_gap > 0 && o.boundary_gap < 360)) return invalid_argument("--boundary-gap must be in (0, 360) degrees");
+    fp.keypoints.boundary_gap_rad = o.boundary_gap * std::numbers::pi_v<float> / 180;
+  }
+  if (o.keypoint_response == "lambda-min") fp.keypoints.response = KeypointResponse::kLambdaMin;
+  else if (o.keypoint_response == "harris") fp.keypoints.response = KeypointResponse::kHarris;
+  else if (!o.keypoint_response.empty())
+    return invalid_argument("--keypoint-response must be lambda-min or harris, not '" + o.keypoint_response + "'");
+  if (o.normalise_up_to >= 0) p.train.normalise_up_to_keypoints = o.normalise_up_to;
+  if (o.pca_variance < 0) p.train.decision.pca_explained_variance = 0;  // none: L1 on the histograms
+  if (!o.default_method.empty()) {
+    auto m = parse_method(o.default_method);
+    if (!m.ok()) return Error{m.error().code, "--default-method: " + m.error().message};
+    if (std::find(p.methods.begin(), p.methods.end(), *m) == p.methods.end())
+      return invalid_argument("--default-method " + o.default_method + " is not among --methods");
+    p.train.default_method = *m;
+  }
   if (o.quick) {  // CI: 3 views per object, a coarser exploration grid
     p.views_per_object = std::min<size_t>(p.views_per_object, 3);
     p.explore_step = std::max<size_t>(p.explore_step, 10);
@@ -199,13 +237,6 @@ Expected<EvalParams> params_from(const EvalOptions& o) {
   return p;
 }
 
-std::vector<std::string> split_list(const std::string& text) {
-  std::vector<std::string> out;
-  std::stringstream list(text);
-  for (std::string item; std::getline(list, item, ',');)
-    if (!item.empty()) out.push_back(item);
-  return out;
-}
 
 // The objects of every folder in `dirs`, each given `role`.
 Expected<std::vector<EvalObject>> load_sources(const std::vector<std::string>& dirs, EvalRole role, uint64_t seed,
@@ -229,36 +260,6 @@ Expected<std::vector<EvalObject>> load_sources(const std::vector<std::string>& d
     }
   }
   return all;
-}
-
-// The size-blind ablation (every object 1 m tall, train and test) of `methods`: the same protocol
-// without streams or the keypoint exploration, its accuracies added to `result` beside the real ones.
-Status size_blind_ablation(EvalResult& result, const std::vector<EvalObject>& objects, const EvalParams& params,
-                           const std::string& methods, ProgressBar& bar) {
-  EvalParams p = params;
-  p.methods.clear();
-  for (const std::string& name : split_list(methods)) {
-    auto m = parse_method(name);
-    if (!m.ok()) return m.error();
-    p.methods.push_back(*m);
-  }
-  if (p.methods.empty()) return {};
-  p.stream_chunk_fraction = 0;
-  p.explore_max_keypoints = 0;
-  p.matrix.clear();
-  const bool keypoints = std::any_of(p.methods.begin(), p.methods.end(), [](MethodId m) {
-    return m == MethodId::kBoK || m == MethodId::kBoG || m == MethodId::kKGH;
-  });
-  if (!keypoints) std::erase_if(p.stages, [](const Stage& s) { return s.kind == StageKind::kKeypoints; });
-  const auto t0 = std::chrono::steady_clock::now();
-  auto blind = run_evaluation(common_height(objects, 1.0f), p, result.source + ", every object 1 m tall",
-                              [&bar](const EvalProgress& e) { bar({"size-blind: " + e.phase, e.done, e.total}); });
-  if (!blind.ok()) return blind.error();
-  add_ablation(result, *blind, "size-blind: every object 1 m tall, train and test");
-  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  result.timings.push_back({"size-blind ablation", secs, std::to_string(blind->decisions.size()) + " decisions"});
-  result.total_seconds += secs;
-  return {};
 }
 
 int run_eval(const EvalOptions& o) {
@@ -317,6 +318,11 @@ int run_eval(const EvalOptions& o) {
   if (o.size_blind != "none")
     if (Status s = size_blind_ablation(*result, objects, *params, o.size_blind, bar); !s.ok()) {
       std::fprintf(stderr, "glimpse-lab eval: --size-blind: %s\n", s.error().message.c_str());
+      return 2;
+    }
+  if (o.keypoint_ablation)
+    if (Status s = keypoint_ablation(*result, objects, *params, bar); !s.ok()) {
+      std::fprintf(stderr, "glimpse-lab eval: --keypoint-ablation: %s\n", s.error().message.c_str());
       return 2;
     }
   bar({"done", 1, 1});
@@ -385,7 +391,8 @@ void add_eval_command(CLI::App& app) {
   cmd->add_option("--decision", o->decision, "nearest-centre (the paper), centres, knn or nearest (every training vector a reference)")->capture_default_str();
   cmd->add_option("--fusion-of", o->fusion_of, "comma-separated components of fusion (default: the recogniser's)");
   cmd->add_option("--neighbours", o->neighbours, "k of the k-NN decision (0: the recogniser's default)");
-  cmd->add_option("--pca-variance", o->pca_variance, "explained variance the decision stage's PCA keeps (0: default)");
+  cmd->add_option("--pca-variance", o->pca_variance,
+                  "explained variance the decision stage's PCA keeps (0: default; negative: no PCA, L1 on the histograms)");
   cmd->add_option("--pca-dims", o->pca_dims, "at most this many PCA dimensions in the decision stage (0: default)");
   cmd->add_option("--threads", o->threads, "threads (0: all cores); results do not depend on it")->capture_default_str();
   cmd->add_option("--seed", o->seed, "seed of sizes, samples, folds, codebooks")->capture_default_str();
@@ -416,7 +423,37 @@ void add_eval_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--cut-margin", o->cut_margin, "keypoint stage cut below the k-th keypoint, in support radii")
       ->capture_default_str();
+  cmd->add_option("--preset", o->preset,
+                  "paper: the paper's settings for every flag not given (mesh vertices, full-view training, "
+                  "BoK/BoG/KGH/VFH, one centre per category with L1 on the histograms, r from 6 neighbours, no "
+                  "rho1 cap, claims of rho1, boundary test over 2 r with a band of r/4, descriptors at rho1 up to "
+                  "8 r, normalised up to 25 keypoints)");
+  cmd->add_option("--support-neighbours", o->support_neighbours,
+                  "support radius r = median distance to this nearest neighbour (default 30)");
+  cmd->add_option("--min-neighbours", o->min_neighbours, "fewer neighbours within r: no surface (default 8)");
+  cmd->add_option("--keypoint-cap", o->keypoint_cap, "keypoints need rho1 <= this x r; 0: no cap (default 8)");
+  cmd->add_option("--claim-min", o->claim_min, "a keypoint claims max(rho1, this x r); 0: rho1 (default 1)");
+  cmd->add_option("--boundary-band", o->boundary_band,
+                  "no keypoint within this x r of a view's boundary point; 0: boundary points only (default 1)");
+  cmd->add_option("--descriptor-scale", o->descriptor_scale,
+                  "describe each keypoint over its rho1 clamped to [r, this x r]; 0: over r (default)");
+  cmd->add_option("--boundary-radius", o->boundary_radius,
+                  "the boundary test looks at neighbours within this x r (default 1)");
+  cmd->add_option("--boundary-gap", o->boundary_gap, "boundary point: an angular gap wider than DEG (default 90)");
+  cmd->add_option("--keypoint-response", o->keypoint_response,
+                  "lambda-min (the paper: smaller principal Harris curvature) or harris (det - k tr^2, local maxima)");
+  cmd->add_option("--normalise-up-to", o->normalise_up_to,
+                  "keypoint histograms divided by their count up to N keypoints and by N's after (sec. 4); 0: always");
+  cmd->add_option("--default-method", o->default_method,
+                  "the method of the category changes and streams (default: the recogniser's, fusion)");
+  cmd->add_flag("--keypoint-ablation", o->keypoint_ablation,
+                "also re-run the keypoint methods with one keypoint or decision setting changed at a time (rho1 cap, "
+                "claim radius, boundary band, r, vertices/samples, response, normalisation, PCA, decision, prefixes)");
   cmd->callback([o, cmd] {
+    if (Status s = apply_preset(*o, *cmd); !s.ok()) {
+      std::fprintf(stderr, "glimpse-lab eval: %s\n", s.error().message.c_str());
+      throw CLI::RuntimeError(2);
+    }
     if (o->data.empty() && o->train.empty() && o->zoo == 0) {
       std::fprintf(stderr, "glimpse-lab eval: give --data DIR, --train DIR --test DIR, or --zoo N\n%s", cmd->help().c_str());
       throw CLI::RuntimeError(2);

@@ -293,8 +293,9 @@ struct RobustnessRow {
   double seconds = 0;
 };
 
-// Another evaluation's accuracy shown beside this one's (the size-blind ablation).
+// Another evaluation's accuracy shown beside this one's (the size-blind ablation, the keypoint ablation).
 struct AblationRow {
+  std::string group = "size";    // the report section: "size" (how much is size), "keypoints"
   std::string label;             // what was changed
   MethodId method = MethodId::kFusion;
   std::vector<double> accuracy;  // per main stage, %
@@ -333,7 +334,8 @@ struct EvalResult {
 };
 
 // The accuracy of each of `other`'s methods at `result`'s main stages, as ablation rows labelled `label`.
-void add_ablation(EvalResult& result, const EvalResult& other, const std::string& label);
+void add_ablation(EvalResult& result, const EvalResult& other, const std::string& label,
+                  const std::string& group = "size");
 
 struct EvalProgress {
   std::string phase;
