@@ -210,6 +210,7 @@ Expected<DecisionStage> fit_decision(const Eigen::MatrixXd& histograms, const st
     if (!pca.ok()) return pca.error();
     st.pca = std::move(*pca);
   } else {  // no PCA: L1 on the histograms themselves (the identity projection)
+    st.projected = false;
     const Eigen::Index d = histograms.cols();
     st.pca.mean = Eigen::VectorXd::Zero(d);
     st.pca.basis = Eigen::MatrixXd::Identity(d, d);
@@ -267,24 +268,46 @@ Expected<DecisionStage> fit_decision(const Eigen::MatrixXd& histograms, const st
   return st;
 }
 
-Eigen::VectorXd decide(const DecisionStage& st, const Eigen::VectorXd& histogram) {
-  const Eigen::VectorXd y = project_row(st.pca, histogram);
+bool is_identity_projection(const Pca& pca) {
+  return pca.basis.rows() == pca.basis.cols() && pca.mean.size() == pca.basis.rows() && pca.mean.isZero() &&
+         pca.basis.isIdentity();
+}
+
+Eigen::VectorXd decide(const DecisionStage& st, const Eigen::VectorXd& histogram, bool by_shape) {
   const Eigen::Index n = st.references.rows();
   std::vector<std::pair<double, Eigen::Index>> d(static_cast<size_t>(n));
-  for (Eigen::Index i = 0; i < n; ++i) d[static_cast<size_t>(i)] = {l1_rows(st.references, i, y), i};
+  double temperature = st.temperature;
+  if (by_shape && !st.projected) {
+    auto unit = [](const Eigen::VectorXd& v) {
+      const double mass = v.lpNorm<1>();
+      return mass > 0 ? Eigen::VectorXd(v / mass) : v;
+    };
+    const Eigen::VectorXd y = unit(histogram);
+    double mass = 0;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const Eigen::VectorXd ref = st.references.row(i).transpose();
+      mass += ref.lpNorm<1>();
+      d[static_cast<size_t>(i)] = {(unit(ref) - y).lpNorm<1>(), i};
+    }
+    // Distances between unit-mass histograms: the temperature in the same units.
+    if (mass > 0) temperature = st.temperature / (mass / static_cast<double>(n));
+  } else {
+    const Eigen::VectorXd y = project_row(st.pca, histogram);
+    for (Eigen::Index i = 0; i < n; ++i) d[static_cast<size_t>(i)] = {l1_rows(st.references, i, y), i};
+  }
   Eigen::VectorXd scores = Eigen::VectorXd::Zero(st.categories);
   if (st.kind == DecisionRule::kNearestNeighbours) {
     const size_t k = std::min<size_t>(static_cast<size_t>(st.neighbours), d.size());
     std::partial_sort(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(k), d.end());
     // Votes of the k nearest, each weighted by how close it is relative to the nearest.
     for (size_t i = 0; i < k; ++i)
-      scores[st.labels[static_cast<size_t>(d[i].second)]] += std::exp(-(d[i].first - d[0].first) / st.temperature);
+      scores[st.labels[static_cast<size_t>(d[i].second)]] += std::exp(-(d[i].first - d[0].first) / temperature);
   } else {
     // Softmin over each category's nearest centre (or, for kNearestReference, training vector).
     Eigen::VectorXd best = Eigen::VectorXd::Constant(st.categories, INFINITY);
     for (const auto& [dist, i] : d) best[st.labels[static_cast<size_t>(i)]] = std::min(best[st.labels[static_cast<size_t>(i)]], dist);
     const double lo = best.minCoeff();
-    for (int c = 0; c < st.categories; ++c) scores[c] = std::exp(-(best[c] - lo) / st.temperature);
+    for (int c = 0; c < st.categories; ++c) scores[c] = std::exp(-(best[c] - lo) / temperature);
   }
   // A small floor keeps every category possible (no hard zero), then scores sum to 1.
   scores.array() += 1e-3;

@@ -144,7 +144,12 @@ Eigen::VectorXd method_scores(const ModelImpl& impl, MethodId method, const Clou
   const std::vector<MethodId> parts = component_methods(impl, method);
   Eigen::VectorXd sum;
   for (MethodId m : parts) {
-    const Eigen::VectorXd s = decide(*impl.stages[static_cast<int>(m)], method_histogram(impl, m, f));
+    // sec. 4: early in the exploration (fewer than normalise_up_to_keypoints keypoints) the words'
+    // proportions are compared, the references' too; later the counts.
+    const int up_to = impl.params.normalise_up_to_keypoints;
+    const bool early = up_to > 0 && (m == MethodId::kBoK || m == MethodId::kKGH) &&
+                       f.descriptors.size() < static_cast<size_t>(up_to);
+    const Eigen::VectorXd s = decide(*impl.stages[static_cast<int>(m)], method_histogram(impl, m, f), early);
     sum = sum.size() ? Eigen::VectorXd(sum + s) : s;
   }
   return sum / static_cast<double>(std::max<size_t>(1, parts.size()));

@@ -308,6 +308,7 @@ DecisionStage read_stage(Reader& r, int categories, Eigen::Index histogram_size)
   }
   s.temperature = r.f64("decision temperature");
   if (r.failed()) return s;
+  s.projected = !is_identity_projection(s.pca);
   if (s.categories != categories || s.neighbours < 1 || s.references.rows() < 1 ||
       s.references.cols() != s.pca.basis.cols() || s.pca.mean.size() != histogram_size || !(s.temperature > 0))
     r.fail("inconsistent decision stage");

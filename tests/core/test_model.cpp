@@ -434,5 +434,32 @@ TEST(StreamDecision, NearestCentreAndNeighboursAgreeOnClearData) {
   EXPECT_FALSE(missing.ok());
 }
 
+// sec. 4's rule: early in an exploration a view's few keypoints are compared by their proportions.
+// Centres (21, 19, 0) (40 keypoints, words 0 and 1) and (0.5, 1.5, 10) (12 keypoints, word 2). A
+// normalised few-keypoint view of words 0 and 1, (0.5, 0.5, 0): L1 by counts 39 vs 11 (the small
+// category wins on mass alone); by shape, against (0.525, 0.475, 0) and (0.042, 0.125, 0.833): 0.05 vs 1.67.
+TEST(StreamDecision, ByShapeComparesProportionsWithoutPca) {
+  Eigen::MatrixXd h(4, 3);
+  h << 20, 20, 0, 22, 18, 0, 1, 1, 10, 0, 2, 10;
+  const std::vector<int> labels = {0, 0, 1, 1};
+  DecisionParams p;
+  p.kind = DecisionRule::kNearestCentre;
+  p.pca_explained_variance = 0;  // no PCA: L1 on the histograms
+  auto st = fit_decision(h, labels, 2, p, 1, 1);
+  ASSERT_TRUE(st.ok()) << st.error().message;
+  EXPECT_FALSE(st->projected);
+  EXPECT_TRUE(is_identity_projection(st->pca));
+  EXPECT_EQ(argmax(decide(*st, Eigen::Vector3d(21, 19, 0))), 0);
+  const Eigen::Vector3d few(0.5, 0.5, 0);
+  EXPECT_EQ(argmax(decide(*st, few)), 1);        // by counts: mass decides
+  EXPECT_EQ(argmax(decide(*st, few, true)), 0);  // by shape: proportions decide
+  // With PCA the flag changes nothing.
+  p.pca_explained_variance = 0.98;
+  auto projected = fit_decision(h, labels, 2, p, 1, 1);
+  ASSERT_TRUE(projected.ok());
+  EXPECT_TRUE(projected->projected);
+  EXPECT_EQ(decide(*projected, few, true), decide(*projected, few));
+}
+
 }  // namespace
 }  // namespace glimpse

@@ -85,7 +85,10 @@ struct DecisionStage {
   Eigen::MatrixXd references;  // centres or training vectors, in PCA space (rows)
   std::vector<int> labels;     // category of each reference
   double temperature = 1;      // L1 distance scale turning distances into scores (see fit_decision)
+  bool projected = true;       // false: no PCA (the identity), references are histograms
 };
+// True when the stage's PCA is the identity (fit_decision without PCA; checked once on a read model).
+bool is_identity_projection(const Pca& pca);
 
 // `labels` in [0, categories); every category must have at least one row. `groups` (optional, one per
 // row): the training object of each row. The score temperature is the median distance from a training
@@ -94,8 +97,10 @@ struct DecisionStage {
 Expected<DecisionStage> fit_decision(const Eigen::MatrixXd& histograms, const std::vector<int>& labels,
                                      int categories, const DecisionParams& params, uint64_t seed, int threads,
                                      const std::vector<int>& groups = {});
-// Scores per category in [0, 1], summing to 1 (L1 distances, sec. 4).
-Eigen::VectorXd decide(const DecisionStage& stage, const Eigen::VectorXd& histogram);
+// Scores per category in [0, 1], summing to 1 (L1 distances, sec. 4). `by_shape` (a stage without PCA
+// only): the histogram and every reference divided by their L1 mass first, so only the proportions of
+// the words count (the paper's early-exploration normalisation, sec. 4).
+Eigen::VectorXd decide(const DecisionStage& stage, const Eigen::VectorXd& histogram, bool by_shape = false);
 
 int argmax(const Eigen::VectorXd& scores);  // ties: the lowest index
 
