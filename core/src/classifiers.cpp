@@ -52,6 +52,29 @@ Eigen::VectorXd bag_of_keypoints(const std::vector<int>& words, int clusters, bo
   return h;
 }
 
+Eigen::VectorXd soft_bag_of_keypoints(const KeypointCodebook& cb, const std::vector<Descriptor>& descriptors, int spread,
+                                      bool normalise) {
+  const Eigen::Index k = cb.centres.rows();
+  Eigen::VectorXd h = Eigen::VectorXd::Zero(k);
+  if (descriptors.empty() || k == 0) return h;
+  const Eigen::MatrixXd z = project(cb.pca, standardise(cb.standardiser, descriptor_rows(descriptors)));
+  const size_t m = static_cast<size_t>(std::clamp<Eigen::Index>(spread, 1, k));
+  std::vector<std::pair<double, Eigen::Index>> d(static_cast<size_t>(k));
+  for (Eigen::Index i = 0; i < z.rows(); ++i) {
+    for (Eigen::Index c = 0; c < k; ++c) d[static_cast<size_t>(c)] = {(cb.centres.row(c) - z.row(i)).norm(), c};
+    std::partial_sort(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(m), d.end());
+    if (d[0].first <= 1e-12) {  // on a centre: all of it there
+      h[d[0].second] += 1;
+      continue;
+    }
+    double total = 0;
+    for (size_t j = 0; j < m; ++j) total += 1 / d[j].first;
+    for (size_t j = 0; j < m; ++j) h[d[j].second] += (1 / d[j].first) / total;
+  }
+  if (normalise) h /= static_cast<double>(z.rows());
+  return h;
+}
+
 // ---- Bag of Graphs --------------------------------------------------------------------------------
 
 double tetrahedron_volume(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {

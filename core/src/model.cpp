@@ -118,7 +118,9 @@ Eigen::VectorXd method_histogram(const ModelImpl& impl, MethodId method, const C
   const double n = static_cast<double>(up_to);
   switch (method) {
     case MethodId::kBoK:
-      return early(bag_of_keypoints(keypoint_words(impl.bok, f.descriptors), p.bok_clusters, normalise),
+      return early(p.bok_soft_words > 1
+                       ? soft_bag_of_keypoints(impl.bok, f.descriptors, p.bok_soft_words, normalise)
+                       : bag_of_keypoints(keypoint_words(impl.bok, f.descriptors), p.bok_clusters, normalise),
                    static_cast<double>(f.descriptors.size()), n);
     case MethodId::kBoG: {
       const auto graphs = local_graphs(f.positions, keypoint_words(impl.bog, f.descriptors));

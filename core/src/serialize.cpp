@@ -161,6 +161,7 @@ void visit_params(TrainParams& p, F&& f) {
   f("ush.flat_curvedness", p.ush.flat_curvedness);
   f("codebook_explained_variance", p.codebook_explained_variance);
   f("bok_clusters", p.bok_clusters);
+  f("bok_soft_words", p.bok_soft_words);
   f("normalise_histograms", p.normalise_histograms);
   f("normalise_up_to_keypoints", p.normalise_up_to_keypoints);
   f("bog_keypoint_clusters", p.bog_keypoint_clusters);

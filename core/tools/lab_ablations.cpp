@@ -121,6 +121,10 @@ std::vector<Variant> keypoint_variants(const EvalParams& params) {
                  }});
   if (t.normalise_up_to_keypoints != 25)
     v.push_back({"normalised up to 25 keypoints", [](EvalParams& p) { p.train.normalise_up_to_keypoints = 25; }});
+  if (t.bok_soft_words <= 1)
+    v.push_back({"BoK soft words (3 nearest)", [](EvalParams& p) { p.train.bok_soft_words = 3; }});
+  else
+    v.push_back({"BoK one word per keypoint", [](EvalParams& p) { p.train.bok_soft_words = 1; }});
   if (t.decision.pca_explained_variance > 0)
     v.push_back({"L1 on the histograms (no PCA)", [](EvalParams& p) { p.train.decision.pca_explained_variance = 0; }});
   else

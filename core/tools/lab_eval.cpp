@@ -69,6 +69,7 @@ struct EvalOptions {
   int normalise_up_to = -1;
   std::string default_method;
   bool keypoint_ablation = false;
+  int soft_words = 0;
   size_t matrix_views = 0;  // 0: 1 per object for the small matrix (the default run stays within 5 minutes), 2 for full
 };
 
@@ -221,6 +222,8 @@ Expected<EvalParams> params_from(const EvalOptions& o) {
   else if (!o.keypoint_response.empty())
     return invalid_argument("--keypoint-response must be lambda-min or harris, not '" + o.keypoint_response + "'");
   if (o.normalise_up_to >= 0) p.train.normalise_up_to_keypoints = o.normalise_up_to;
+  if (o.soft_words < 0) return invalid_argument("--soft-words must be 1 or more");
+  if (o.soft_words > 0) p.train.bok_soft_words = o.soft_words;
   if (o.pca_variance < 0) p.train.decision.pca_explained_variance = 0;  // none: L1 on the histograms
   if (!o.default_method.empty()) {
     auto m = parse_method(o.default_method);
@@ -444,6 +447,8 @@ void add_eval_command(CLI::App& app) {
                   "lambda-min (the paper: smaller principal Harris curvature) or harris (det - k tr^2, local maxima)");
   cmd->add_option("--normalise-up-to", o->normalise_up_to,
                   "keypoint histograms divided by their count up to N keypoints and by N's after (sec. 4); 0: always");
+  cmd->add_option("--soft-words", o->soft_words,
+                  "BoK: each keypoint shared among its N nearest words (default 1: one word, the paper)");
   cmd->add_option("--default-method", o->default_method,
                   "the method of the category changes and streams (default: the recogniser's, fusion)");
   cmd->add_flag("--keypoint-ablation", o->keypoint_ablation,

@@ -381,6 +381,30 @@ TEST(BagOfKeypoints, CountsAndNormalises) {
   EXPECT_EQ(bag_of_keypoints({}, 3, true), Eigen::Vector3d::Zero());
 }
 
+TEST(BagOfKeypoints, SoftWordsShareEachKeypointByInverseDistance) {
+  // A codebook that reads the first two descriptor fields as they are: centres (0,0), (1,0), (0,3).
+  KeypointCodebook cb;
+  cb.standardiser.mean = Eigen::VectorXd::Zero(kDescriptorSize);
+  cb.standardiser.scale = Eigen::VectorXd::Ones(kDescriptorSize);
+  cb.pca.mean = Eigen::VectorXd::Zero(kDescriptorSize);
+  cb.pca.basis = Eigen::MatrixXd::Zero(kDescriptorSize, 2);
+  cb.pca.basis(0, 0) = cb.pca.basis(1, 1) = 1;
+  cb.pca.explained = Eigen::Vector2d(0.5, 0.5);
+  cb.centres.resize(3, 2);
+  cb.centres << 0, 0, 1, 0, 0, 3;
+  Descriptor a = Descriptor::Zero(), b = Descriptor::Zero();
+  a[0] = 0.25f;  // 0.25 from centre 0, 0.75 from centre 1: weights 3/4 and 1/4 between them
+  b[0] = 1;      // on centre 1
+  const std::vector<Descriptor> ds = {a, b};
+  const Eigen::VectorXd hard = soft_bag_of_keypoints(cb, ds, 1, false);
+  EXPECT_EQ(hard, bag_of_keypoints(keypoint_words(cb, ds), 3, false));
+  const Eigen::VectorXd soft = soft_bag_of_keypoints(cb, ds, 2, false);
+  EXPECT_NEAR(soft[0], 0.75, 1e-6);
+  EXPECT_NEAR(soft[1], 0.25 + 1.0, 1e-6);
+  EXPECT_NEAR(soft[2], 0.0, 1e-12);
+  EXPECT_NEAR(soft_bag_of_keypoints(cb, ds, 3, true).sum(), 1.0, 1e-9);  // normalised: one count per keypoint
+}
+
 TEST(BagOfGraphs, GraphsOrderNeighboursByClusterAndMeasureVolume) {
   const std::vector<Vec3> pos = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1), Vec3(5, 5, 5)};
   const std::vector<int> words = {0, 2, 1, 0, 1};

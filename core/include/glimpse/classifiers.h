@@ -38,6 +38,11 @@ Eigen::MatrixXd descriptor_rows(const std::vector<Descriptor>& descriptors);
 
 // Histogram of keypoint words; divided by the keypoint count when `normalise` (sec. 4).
 Eigen::VectorXd bag_of_keypoints(const std::vector<int>& words, int clusters, bool normalise);
+// Soft words: each keypoint shares one count among its `spread` nearest codebook centres, in inverse
+// proportion to its distance to each (spread 1: bag_of_keypoints of the hard words). A view of few
+// keypoints then says more than which single cluster each fell in.
+Eigen::VectorXd soft_bag_of_keypoints(const KeypointCodebook& codebook, const std::vector<Descriptor>& descriptors,
+                                      int spread, bool normalise);
 
 // ---- Bag of Graphs (sec. 3.2.6, Fig. 2) -----------------------------------------------------------
 

@@ -42,6 +42,7 @@ struct TrainParams {
 
   double codebook_explained_variance = 0.95;  // PCA of standardised descriptors (sec. 3.2.5)
   int bok_clusters = 60;
+  int bok_soft_words = 1;  // 1: each keypoint one word (the paper); N: shared among its N nearest words
   bool normalise_histograms = true;  // divide by keypoint count: partial views see fewer (sec. 4)
   // The paper's rule (sec. 4): normalise early in the exploration, not later. > 0: a histogram is divided
   // by its count while the view holds fewer than this many keypoints and by the count at this many after
