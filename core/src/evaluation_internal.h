@@ -110,5 +110,9 @@ void compute_slot(Protocol& P, FeatureSlot& slot, const Cloud& cloud);
 void robustness_matrix(Protocol& P);
 // The report's sections on a sensor's test views and on the robustness matrix ("" when neither).
 std::string robustness_section(const EvalResult& r);
+// evaluation_report_ablations.cpp: "How much is size", keypoints per view, the keypoint ablation.
+std::string size_section(const EvalResult& r);
+std::string keypoints_section(const EvalResult& r);
+std::string keypoint_ablation_section(const EvalResult& r);
 
 }  // namespace glimpse::eval_internal
