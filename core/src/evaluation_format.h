@@ -58,6 +58,14 @@ inline std::string method_label(MethodId m) {
   return "?";
 }
 
+// Tested views: the full-view decisions of one method.
+inline size_t tested_views(const EvalResult& r) {
+  size_t n = 0;
+  if (r.params.methods.empty()) return n;
+  for (const StageDecision& d : r.decisions) n += d.stage == "full" && d.method == r.params.methods.front();
+  return n;
+}
+
 inline const StageStats* stats_of(const EvalResult& r, std::string_view stage) {
   for (const StageStats& s : r.stage_stats)
     if (s.stage == stage) return &s;

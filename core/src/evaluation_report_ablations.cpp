@@ -10,7 +10,21 @@
 #include "glimpse/evaluation.h"
 #include "model_impl.h"
 
-namespace glimpse::eval_internal {
+namespace glimpse {
+
+std::string keypoint_summary(const EvalResult& r) {
+  using eval_internal::pct;
+  const size_t tested = eval_internal::tested_views(r);
+  std::string out;
+  for (const StageStats& st : r.stage_stats) {
+    if (st.stage == "full") out = "full views " + pct(st.mean_keypoints, 1) + " kp";
+    if (st.stage == "25kp" && tested)
+      out += (out.empty() ? "" : ", ") + pct(100.0 * double(st.cut_views) / double(tested), 1) + " % >= 25";
+  }
+  return out;
+}
+
+namespace eval_internal {
 
 std::string size_section(const EvalResult& r) {
   std::ostringstream o;
@@ -62,16 +76,7 @@ std::string keypoint_ablation_section(const EvalResult& r) {
   o << "\n|---|---|";
   for (size_t i = 0; i < stages.size(); ++i) o << "---:|";
   o << "\n";
-  std::string mine;  // this run's keypoints, as the ablation rows say theirs
-  {
-    size_t tested = 0;
-    for (const StageDecision& d : r.decisions) tested += d.stage == "full" && d.method == r.params.methods.front();
-    for (const StageStats& st : r.stage_stats) {
-      if (st.stage == "full") mine = "full views " + pct(st.mean_keypoints, 1) + " kp";
-      if (st.stage == "25kp" && tested)
-        mine += ", " + pct(100.0 * double(st.cut_views) / double(tested), 1) + " % >= 25";
-    }
-  }
+  const std::string mine = keypoint_summary(r);
   bool first = true;
   for (MethodId m : r.params.methods) {
     if (!uses_keypoints(m)) continue;
@@ -115,9 +120,7 @@ std::string keypoints_section(const EvalResult& r) {
        "whole view): keypoints re-extraction finds on the prefix cut below the k-th highest full-view keypoint.\n\n"
        "| stage | views with >= k keypoints | % of tested views | prefix keypoints mean (min-max) | visible % |\n"
        "|---|---:|---:|---:|---:|\n";
-  size_t tested = 0;  // tested views: full-view decisions of one method
-  for (const StageDecision& d : r.decisions)
-    tested += d.stage == "full" && !r.params.methods.empty() && d.method == r.params.methods.front();
+  const size_t tested = tested_views(r);
   for (const StageStats& st : r.stage_stats) {
     if (st.stage.size() < 3 || st.stage.substr(st.stage.size() - 2) != "kp") continue;
     o << "| " << st.stage << " | " << st.cut_views << " | "
@@ -132,4 +135,5 @@ std::string keypoints_section(const EvalResult& r) {
   return o.str();
 }
 
-}  // namespace glimpse::eval_internal
+}  // namespace eval_internal
+}  // namespace glimpse

@@ -142,19 +142,6 @@ std::vector<Variant> keypoint_variants(const EvalParams& params) {
   return v;
 }
 
-// "full views 29.8 kp, 57.3 % >= 25": what a run's keypoints were.
-std::string keypoint_summary(const EvalResult& r) {
-  size_t tested = 0;
-  for (const StageDecision& d : r.decisions) tested += d.stage == "full" && d.method == r.params.methods.front();
-  std::string out;
-  for (const StageStats& st : r.stage_stats) {
-    if (st.stage == "full") out = "full views " + fmt_number(st.mean_keypoints) + " kp";
-    if (st.stage == "25kp" && tested)
-      out += (out.empty() ? "" : ", ") + fmt_number(100.0 * double(st.cut_views) / double(tested)) + " % >= 25";
-  }
-  return out;
-}
-
 }  // namespace
 
 Status keypoint_ablation(EvalResult& result, const std::vector<EvalObject>& objects, const EvalParams& params,

@@ -333,6 +333,10 @@ struct EvalResult {
   std::vector<double> trained_density;      // per model: median relative density of its training views
 };
 
+// What a run's views held: "full views 46.7 kp, 84.3 % >= 25" (mean keypoints of the full views and the
+// share of tested views with at least 25, when the 25 kp stage was run).
+std::string keypoint_summary(const EvalResult& r);
+
 // The accuracy of each of `other`'s methods at `result`'s main stages, as ablation rows labelled `label`.
 void add_ablation(EvalResult& result, const EvalResult& other, const std::string& label,
                   const std::string& group = "size");
