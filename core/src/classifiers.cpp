@@ -1,5 +1,7 @@
 #include "glimpse/classifiers.h"
 
+#include <omp.h>
+
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
@@ -198,6 +200,14 @@ double l1_rows(const Eigen::MatrixXd& m, Eigen::Index i, const Eigen::VectorXd& 
   return (m.row(i).transpose() - x).lpNorm<1>();
 }
 
+// L1 distances from x to every row of m, accumulated column by column: each column is contiguous in
+// Eigen's column-major storage, so this runs at memory speed where a row at a time strides across it.
+template <typename Vector>
+void l1_to_rows(const Eigen::MatrixXd& m, const Vector& x, Eigen::ArrayXd& out) {
+  out.setZero(m.rows());
+  for (Eigen::Index c = 0; c < m.cols(); ++c) out += (m.col(c).array() - x[c]).abs();
+}
+
 double median(std::vector<double> v) {
   if (v.empty()) return 0;
   std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
@@ -247,12 +257,25 @@ Expected<DecisionStage> fit_decision(const Eigen::MatrixXd& histograms, const st
     st.labels = labels;
     // Scale: the median distance from a training vector to its nearest one of another object (the
     // distance a new object is from the training set; another view of the same object is closer).
-    for (Eigen::Index i = 0; i < y.rows(); ++i) {
-      double best = INFINITY;
-      for (Eigen::Index j = 0; j < y.rows(); ++j)
-        if (j != i && !same_object(i, j)) best = std::min(best, l1_rows(y, j, y.row(i).transpose()));
-      if (std::isfinite(best)) scale.push_back(best);
+    // Quadratic in the training vectors (tens of thousands with several elevations and prefixes):
+    // each row's distances in one column-wise pass, rows shared among threads (each writes its own
+    // slot, so the result does not depend on the thread count).
+    std::vector<double> nearest(static_cast<size_t>(y.rows()), INFINITY);
+    const int workers = threads > 0 ? threads : std::max(1, omp_get_max_threads());
+#pragma omp parallel num_threads(workers)
+    {
+      Eigen::ArrayXd dist;
+#pragma omp for schedule(dynamic, 16)
+      for (Eigen::Index i = 0; i < y.rows(); ++i) {
+        l1_to_rows(y, y.row(i), dist);
+        double best = INFINITY;
+        for (Eigen::Index j = 0; j < y.rows(); ++j)
+          if (j != i && !same_object(i, j)) best = std::min(best, dist[j]);
+        nearest[static_cast<size_t>(i)] = best;
+      }
     }
+    for (double best : nearest)
+      if (std::isfinite(best)) scale.push_back(best);
   } else {
     // K-means centres of each category's training vectors (sec. 3.3.3); one per category = the paper.
     const int per = params.kind == DecisionRule::kNearestCentre ? 1 : std::max(1, params.centres_per_category);
@@ -316,7 +339,9 @@ Eigen::VectorXd decide(const DecisionStage& st, const Eigen::VectorXd& histogram
     if (mass > 0) temperature = st.temperature / (mass / static_cast<double>(n));
   } else {
     const Eigen::VectorXd y = project_row(st.pca, histogram);
-    for (Eigen::Index i = 0; i < n; ++i) d[static_cast<size_t>(i)] = {l1_rows(st.references, i, y), i};
+    Eigen::ArrayXd dist;
+    l1_to_rows(st.references, y, dist);
+    for (Eigen::Index i = 0; i < n; ++i) d[static_cast<size_t>(i)] = {dist[i], i};
   }
   Eigen::VectorXd scores = Eigen::VectorXd::Zero(st.categories);
   if (st.kind == DecisionRule::kNearestNeighbours) {

@@ -458,6 +458,29 @@ TEST(StreamDecision, NearestCentreAndNeighboursAgreeOnClearData) {
   EXPECT_FALSE(missing.ok());
 }
 
+// The nearest-reference temperature: the median L1 distance from each training vector to its nearest
+// vector of another object. Rows (0,0) (1,0) of object 0, (0,3) of object 1 (category 0), (5,5), (5,7)
+// of objects 2 and 3 (category 1): nearest of another object 3, 4, 3, 2, 2 -> median 3; counting the
+// same object's other view (no groups) 1, 1, 3, 2, 2 -> 2. The same on one thread or two.
+TEST(DecisionStage, NearestReferenceTemperatureIsTheMedianDistanceToAnotherObject) {
+  Eigen::MatrixXd h(5, 2);
+  h << 0, 0, 1, 0, 0, 3, 5, 5, 5, 7;
+  const std::vector<int> labels = {0, 0, 0, 1, 1}, groups = {0, 0, 1, 2, 3};
+  DecisionParams p;
+  p.kind = DecisionRule::kNearestReference;
+  p.pca_explained_variance = 0;
+  for (int threads : {1, 2}) {
+    auto st = fit_decision(h, labels, 2, p, 1, threads, groups);
+    ASSERT_TRUE(st.ok()) << st.error().message;
+    EXPECT_DOUBLE_EQ(st->temperature, 3.0) << threads << " threads";
+    EXPECT_EQ(argmax(decide(*st, Eigen::Vector2d(0.2, 0.5))), 0);
+    EXPECT_EQ(argmax(decide(*st, Eigen::Vector2d(4, 6))), 1);
+  }
+  auto ungrouped = fit_decision(h, labels, 2, p, 1, 2);
+  ASSERT_TRUE(ungrouped.ok());
+  EXPECT_DOUBLE_EQ(ungrouped->temperature, 2.0);
+}
+
 // sec. 4's rule: early in an exploration a view's few keypoints are compared by their proportions.
 // Centres (21, 19, 0) (40 keypoints, words 0 and 1) and (0.5, 1.5, 10) (12 keypoints, word 2). A
 // normalised few-keypoint view of words 0 and 1, (0.5, 0.5, 0): L1 by counts 39 vs 11 (the small
