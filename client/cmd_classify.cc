@@ -34,12 +34,10 @@ struct FileResult {
 Expected<Cloud> ReadInput(const std::string& file, const ClassifyOptions& o) {
   auto loaded = LoadFile(file);
   if (!loaded) return loaded.error();
-  if (loaded->is_mesh) {
-    if (o.sensor) return invalid_argument(file + ": --sensor is for cloud files; a mesh's view has its own sensor");
+  if (Status s = ApplySensor(*loaded, o.sensor, file); !s.ok()) return s.error();
+  if (loaded->is_mesh)
     return MeshFileView(file, o.placement, o.protocol, o.whole ? std::nullopt : std::optional<int>(o.view));
-  }
   RemoveNonFinite(loaded->cloud);
-  if (o.sensor) loaded->cloud.sensor = *o.sensor;
   return std::move(loaded->cloud);
 }
 

@@ -9,6 +9,7 @@
 
 #include "client/cloud_convert.h"
 #include "client/commands.h"
+#include "client/frames.h"
 #include "client/parse.h"
 #include "client/render.h"
 #include "client/scan.h"
@@ -55,43 +56,60 @@ Expected<Cloud> StreamView(const StreamOptions& o) {
   }
   auto file = LoadFile(o.file);
   if (!file) return file.error();
+  if (Status s = ApplySensor(*file, o.sensor, o.file); !s.ok()) return s.error();
   if (file->is_mesh) {
-    if (o.sensor) return invalid_argument(o.file + ": --sensor is for cloud files; a mesh's view has its own sensor");
     ProtocolOptions protocol = o.protocol;
     protocol.seed = o.seed;
     return MeshFileView(o.file, o.placement, protocol, o.viewpoint.value_or(0));
   }
   RemoveNonFinite(file->cloud);
-  if (o.sensor) file->cloud.sensor = *o.sensor;
   // A cloud file is the scan: it streams as it is, with its sensor if it has one (wherever that is),
   // and is cut into a new view only when asked.
   if (!o.viewpoint) return std::move(file->cloud);
   return SingleView(file->cloud, *o.viewpoint, o.protocol.hpr_radius_factor);
 }
 
-int RunStream(const ConnectionOptions& conn, const StreamOptions& o) {
-  const std::string what = "stream " + (o.zoo_category.empty() ? o.file : "--zoo " + o.zoo_category);
+Expected<std::vector<Cloud>> StreamChunks(const StreamOptions& o) {
+  if (!o.frames_dir.empty()) {
+    auto frames = LoadFrames(o.frames_dir);
+    if (!frames.ok()) return frames.error();
+    return FrameChunks(*frames, o.chunk_points);
+  }
   auto order = ParseRevealOrder(o.order);
-  if (!order) {
+  if (!order) return order.error();
+  auto view = StreamView(o);
+  if (!view) return view.error();
+  const Cloud scan = Reordered(*view, RevealSequence(*view, *order, o.seed));
+  const std::vector<size_t> ends = ChunkEnds(scan.points.size(), o.chunks, o.chunk_points);
+  if (ends.empty()) return invalid_argument("the view has no points");
+  std::vector<Cloud> chunks(ends.size());
+  for (size_t i = 0; i < ends.size(); ++i) {
+    chunks[i].sensor = scan.sensor;
+    chunks[i].points.assign(scan.points.begin() + std::ptrdiff_t(i ? ends[i - 1] : 0),
+                            scan.points.begin() + std::ptrdiff_t(ends[i]));
+  }
+  return chunks;
+}
+
+int RunStream(const ConnectionOptions& conn, const StreamOptions& o) {
+  const std::string what = "stream " + (!o.frames_dir.empty()     ? "--frames " + o.frames_dir
+                                        : o.zoo_category.empty() ? o.file
+                                                                 : "--zoo " + o.zoo_category);
+  if (auto order = ParseRevealOrder(o.order); !order) {
     PrintError(what, order.error().message);
     return kExitUsage;
   }
-  auto view = StreamView(o);
-  if (!view) {
-    PrintError(what, view.error().message);
+  auto chunks = StreamChunks(o);
+  if (!chunks) {
+    PrintError(what, chunks.error().message);
     return kExitError;
   }
-  const Cloud scan = Reordered(*view, RevealSequence(*view, *order, o.seed));
-  const std::vector<size_t> ends = ChunkEnds(scan.points.size(), o.chunks, o.chunk_points);
-  if (ends.empty()) {
-    PrintError(what, "the view has no points");
-    return kExitError;
-  }
+  const std::vector<Cloud>& scan = *chunks;
   auto stub = ConnectGlimpse(conn, what);
   if (!stub) return kExitError;
 
   grpc::ClientContext context;
-  const double scan_s = o.rate_hz > 0 ? static_cast<double>(ends.size()) / o.rate_hz : 0.0;
+  const double scan_s = o.rate_hz > 0 ? static_cast<double>(scan.size()) / o.rate_hz : 0.0;
   PrepareContext(context, conn, 120 + scan_s);
   auto stream = stub->StreamClassify(&context);
 
@@ -104,14 +122,14 @@ int RunStream(const ConnectionOptions& conn, const StreamOptions& o) {
     if (!o.model.empty()) *chunk.mutable_model() = *ParseModelRef(o.model);
     if (!o.method.empty()) chunk.set_method(*ParseMethod(o.method));
     chunk.set_known_acceptance(o.known_acceptance);
-    for (size_t i = 0; i < ends.size(); ++i) {
+    for (size_t i = 0; i < scan.size(); ++i) {
       if (o.rate_hz > 0 && i > 0) {
         const auto due = start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                      std::chrono::duration<double>(static_cast<double>(i) / o.rate_hz));
         std::unique_lock lock(mu);
         if (wake.wait_until(lock, stop, due, [] { return false; }), stop.stop_requested()) return;
       }
-      ToProto(scan, i == 0 ? 0 : ends[i - 1], ends[i], chunk.mutable_cloud());
+      ToProto(scan[i], chunk.mutable_cloud());
       if (!stream->Write(chunk)) return;  // the call ended; Finish tells why
       if (i == 0) {
         chunk.clear_model();
@@ -122,7 +140,7 @@ int RunStream(const ConnectionOptions& conn, const StreamOptions& o) {
     stream->WritesDone();
   });
 
-  DecisionView shown(ends.size(), o.json);
+  DecisionView shown(scan.size(), o.json);
   v1::Decision decision;
   size_t answered = 0;
   while (stream->Read(&decision)) {
@@ -136,8 +154,8 @@ int RunStream(const ConnectionOptions& conn, const StreamOptions& o) {
     PrintError(what, FormatStatus(status));
     return kExitError;
   }
-  if (answered < ends.size()) {
-    PrintError(what, "the server answered " + std::to_string(answered) + " of " + std::to_string(ends.size()) +
+  if (answered < scan.size()) {
+    PrintError(what, "the server answered " + std::to_string(answered) + " of " + std::to_string(scan.size()) +
                          " chunks");
     return kExitError;
   }

@@ -156,6 +156,7 @@ int RunTrain(const ConnectionOptions& conn, const TrainOptions& o) {
   for (v1::Method m : *methods) header.mutable_header()->add_methods(m);
   header.mutable_header()->set_description(o.description);
   if (o.train_seed) header.mutable_header()->mutable_parameters()->set_seed(*o.train_seed);
+  if (o.no_scan_filters) header.mutable_header()->mutable_parameters()->set_filter_scans(false);
   bool open = stream->Write(header);
 
   v1::TrainRequest request;

@@ -33,6 +33,7 @@ struct TrainOptions {
   Placement placement;         // --up, --unit, --height (override the folder's manifest)
   ProtocolOptions protocol;    // views, samples, seed (glimpse-lab's defaults)
   std::optional<uint64_t> train_seed;  // TrainParameters.seed
+  bool no_scan_filters = false;        // TrainParameters.filter_scans = false
   bool json = false;           // print the stored ModelInfo as JSON instead of a summary
   bool quiet = false;          // no progress
 };
@@ -54,7 +55,8 @@ struct ClassifyOptions {
 int RunClassify(const ConnectionOptions& conn, const ClassifyOptions& options);
 
 struct StreamOptions {
-  std::string file;           // or zoo_category
+  std::string file;           // or zoo_category, or frames_dir
+  std::string frames_dir;     // a folder of frames, each from its own sensor (frames.h)
   std::string zoo_category;
   uint64_t seed = 42;         // zoo shape, random order, mesh samples
   std::string model;
@@ -76,6 +78,9 @@ int RunStream(const ConnectionOptions& conn, const StreamOptions& options);
 
 // The single view a stream reveals (see StreamOptions::viewpoint); errors name the file.
 Expected<Cloud> StreamView(const StreamOptions& options);
+// The chunks a stream sends: the view revealed in the given order and cut into chunks (all with its
+// sensor), or the frames of frames_dir in order (each chunk with its frame's sensor).
+Expected<std::vector<Cloud>> StreamChunks(const StreamOptions& options);
 
 struct EvaluateOptions {
   std::string dir;             // DIR/<category>/<meshes>, labelled by folder

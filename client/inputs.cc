@@ -29,6 +29,13 @@ bool IsInputFile(const std::string& path) {
          ext == ".obj" || ext == ".stl";
 }
 
+Status ApplySensor(LoadedFile& file, const std::optional<Vec3>& sensor, const std::string& path) {
+  if (!sensor) return {};
+  if (file.is_mesh) return invalid_argument(path + ": --sensor is for cloud files; a mesh's view has its own sensor");
+  file.cloud.sensor = *sensor;
+  return {};
+}
+
 Expected<LoadedFile> LoadFile(const std::string& path) {
   const std::string ext = Extension(path);
   LoadedFile out;

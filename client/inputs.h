@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -31,6 +32,9 @@ struct LoadedFile {
   Cloud cloud;  // when !is_mesh
 };
 Expected<LoadedFile> LoadFile(const std::string& path);
+// `sensor` (the user's --sensor) replaces a cloud file's own; a mesh's views carry their own sensor,
+// so giving one for a mesh is an error naming the file.
+Status ApplySensor(LoadedFile& file, const std::optional<Vec3>& sensor, const std::string& path);
 
 // Points on a mesh's surface, about `points` of them (kInvalidArgument for a mesh with no area).
 Expected<Cloud> SampleMesh(const Mesh& mesh, size_t points, uint64_t seed);

@@ -56,6 +56,13 @@ void AddConnectionOptions(CLI::App& app, ConnectionOptions& conn) {
 }
 
 // How a mesh without a manifest (or against it) is stood up and sized.
+CLI::Option* AddSensorOption(CLI::App& cmd, std::optional<glimpse::Vec3>& sensor) {
+  return cmd.add_option_function<std::string>("--sensor", [&sensor](const std::string& t) { sensor = *ParseSensor(t); },
+                                              "cloud files: where the sensor was, X,Y,Z in the cloud's frame (replaces "
+                                              "the file's; a PCD's default VIEWPOINT 0 0 0 1 0 0 0 reads as no sensor)")
+      ->check(kSensor);
+}
+
 void AddPlacementOptions(CLI::App& cmd, Placement& placement) {
   cmd.add_option_function<std::string>("--up", [&placement](const std::string& t) { placement.up = *glimpse::parse_up(t); },
                                        "the mesh axis that points up: +z, -y, x, ... or \"x y z\" (overrides up_axis.csv)")
@@ -145,6 +152,14 @@ int Main(int argc, char** argv) {
   AddPlacementOptions(*train, t.placement);
   train->add_option_function<uint64_t>("--train-seed", [&t](const uint64_t& s) { t.train_seed = s; },
                                        "k-means and sampling seed of training (default: the server's)");
+  train->add_option("--elevations", t.protocol.train_elevations_deg,
+                    "more training views of each mesh from these elevations (degrees above the horizon, besides the "
+                    "paper's 30), as glimpse-lab's --train-elevations: for cameras mounted low or high (0,15 "
+                    "measured in the README; training takes several times longer)")
+      ->delimiter(',')->check(CLI::Range(-90.f, 90.f))->group("Meshes");
+  train->add_flag("--no-scan-filters", t.no_scan_filters,
+                  "the model classifies every point sent as it is (default: it removes stray returns and a floor and "
+                  "thins dense scans to its training density)");
   train->add_flag("--json", t.json, "print the stored model as JSON");
   train->add_flag("-q,--quiet", t.quiet, "no progress on stderr");
   train->callback([&] { run = [&] { return RunTrain(conn, t); }; });
@@ -163,16 +178,14 @@ int Main(int argc, char** argv) {
   auto* view = classify->add_option("--view", c.view, "meshes: which of the paper's 6 viewpoints (azimuth 60*N deg) sees the object")
                    ->capture_default_str()->check(CLI::Range(0, 5))->group("Meshes");
   classify->add_flag("--whole", c.whole, "meshes: the whole sampled cloud instead of a single view")->excludes(view)->group("Meshes");
-  classify->add_option_function<std::string>("--sensor", [&c](const std::string& t) { c.sensor = *ParseSensor(t); },
-                                              "clouds: where the sensor was, X,Y,Z in the cloud's frame (replaces the "
-                                              "file's; a PCD's default VIEWPOINT 0 0 0 1 0 0 0 reads as no sensor)")
-      ->check(kSensor);
+  AddSensorOption(*classify, c.sensor);
   AddProtocolOptions(*classify, c.protocol, false);
   AddPlacementOptions(*classify, c.placement);
   classify->callback([&] { run = [&] { return RunClassify(conn, c); }; });
 
   // stream
-  auto* stream = app.add_subcommand("stream", "simulate a scanner: reveal one view in chunks over StreamClassify");
+  auto* stream = app.add_subcommand("stream", "simulate a scanner: reveal one view in chunks over StreamClassify, or "
+                                              "stream a folder of frames from several sensor positions (--frames)");
   StreamOptions s;
   auto* file = stream->add_option("FILE", s.file, "cloud or mesh file");
   auto* zoo_shape = stream->add_option("--zoo", s.zoo_category, "a zoo shape of this category instead of a file")
@@ -193,10 +206,15 @@ int Main(int argc, char** argv) {
                                    "which of the paper's 6 viewpoints (azimuth 60*N deg) sees the object: meshes and zoo "
                                    "shapes [0]; a cloud file streams as it is unless given")
       ->check(CLI::Range(0, 5));
-  stream->add_option_function<std::string>("--sensor", [&s](const std::string& t) { s.sensor = *ParseSensor(t); },
-                                            "cloud files: where the sensor was, X,Y,Z in the cloud's frame (replaces "
-                                            "the file's; a PCD's default VIEWPOINT reads as no sensor)")
-      ->check(kSensor)->excludes(stream_view);
+  AddSensorOption(*stream, s.sensor)->excludes(stream_view);
+  auto* frames = stream->add_option("--frames", s.frames_dir,
+                                    "a folder of frames (.pcd/.ply/...), each from its own sensor position (its file's "
+                                    "VIEWPOINT or glimpse_sensor comment, or DIR/poses.csv: file,x,y,z for points in the "
+                                    "common frame, file,x,y,z,qw,qx,qy,qz for points in the sensor's frame), streamed in "
+                                    "natural name order, one chunk per frame (--chunk-points cuts a frame into several)")
+                     ->check(CLI::ExistingDirectory);
+  frames->excludes(file)->excludes(zoo_shape)->excludes(stream_view)->excludes(chunks)->excludes("--order")
+      ->excludes("--sensor");
   stream->add_flag("--json", s.json, "one JSON object per decision");
   stream->add_option("--known-acceptance", s.known_acceptance,
                      "operating point of \"unknown\": the share of known clouds to accept, in (0, 1] (default: "
@@ -231,8 +249,8 @@ int Main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
     if (train->parsed() && t.dir.empty() && !t.zoo) throw CLI::RequiredError("train needs DIR or --zoo");
-    if (stream->parsed() && s.file.empty() && s.zoo_category.empty())
-      throw CLI::RequiredError("stream needs FILE or --zoo CATEGORY");
+    if (stream->parsed() && s.file.empty() && s.zoo_category.empty() && s.frames_dir.empty())
+      throw CLI::RequiredError("stream needs FILE, --zoo CATEGORY or --frames DIR");
   } catch (const CLI::ParseError& e) {
     const int code = app.exit(e);  // prints help/version (code 0) or the error
     return code == 0 ? kExitOk : kExitUsage;

@@ -109,6 +109,10 @@ ObjectViews ViewsOfMesh(const Mesh& mesh, const std::string& key, bool any_pose,
   }
   for (size_t v = 0; v < options.views; ++v)
     out.views.push_back(object_view(full, v, options.views, any_pose, seed, options.hpr_radius_factor));
+  for (float elevation : options.train_elevations_deg)
+    if (elevation != kPaperElevationDeg)
+      for (size_t v = 0; v < options.views; ++v)
+        out.views.push_back(object_view(full, v, options.views, any_pose, seed, options.hpr_radius_factor, elevation));
   return out;
 }
 

@@ -32,6 +32,9 @@ struct ProtocolOptions {
   size_t views = 6;          // evenly spaced among the paper's 6 viewpoints; 0: the whole sampled cloud
   double hpr_radius_factor = 100.0;
   uint64_t seed = 42;        // sizes, samples and poses, as glimpse-lab's --seed
+  // Training only: more views of the same azimuths from these elevations (deg above the horizon), as
+  // glimpse-lab's --train-elevations, so the model learns cameras mounted low or high.
+  std::vector<float> train_elevations_deg;
 };
 
 // A folder DIR/<category>/<files>: its meshes (.off .obj .ply .stl; a .ply without faces gives its

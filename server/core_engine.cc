@@ -60,6 +60,7 @@ Expected<TrainParams> ToTrainParams(const TrainSpec& spec) {
   }
   if (p.has_seed()) params.seed = p.seed();
   if (p.has_normalise_histograms()) params.normalise_histograms = p.normalise_histograms();
+  if (p.has_filter_scans()) params.filter_scans = p.filter_scans();
   return params;
 }
 
@@ -82,6 +83,7 @@ v1::TrainParameters FromTrainParams(const TrainParams& params) {
   p.set_centres_per_category(static_cast<uint32_t>(params.decision.centres_per_category));
   p.set_neighbours(static_cast<uint32_t>(params.decision.neighbours));
   p.set_normalise_histograms(params.normalise_histograms);
+  p.set_filter_scans(params.filter_scans);
   return p;
 }
 

@@ -173,7 +173,8 @@ double settle_margin(std::vector<std::pair<double, bool>> decisions, double prec
 }
 
 Calibration calibrate(const ModelImpl& impl, MethodId method, const std::vector<Eigen::MatrixXd>& histograms,
-                      const std::vector<int>& labels, const std::vector<int>& objects, const std::vector<uint8_t>& whole,
+                      const std::vector<Eigen::MatrixXd>& queries, const std::vector<int>& labels,
+                      const std::vector<int>& objects, const std::vector<uint8_t>& whole,
                       const std::vector<std::string>& object_categories, int categories, int threads) {
   const TrainParams& p = impl.params;
   Calibration c;
@@ -205,6 +206,7 @@ Calibration calibrate(const ModelImpl& impl, MethodId method, const std::vector<
     bool ok = true;
     for (size_t j = 0; j < parts.size() && ok; ++j) {
       const Eigen::MatrixXd& h = histograms[static_cast<size_t>(parts[j])];
+      const Eigen::MatrixXd& q = queries[static_cast<size_t>(parts[j])];
       Eigen::MatrixXd train_h(static_cast<Eigen::Index>(train_rows.size()), h.cols());
       for (size_t r = 0; r < train_rows.size(); ++r) train_h.row(static_cast<Eigen::Index>(r)) = h.row(train_rows[r]);
       DecisionParams dp = p.decision;
@@ -218,7 +220,7 @@ Calibration calibrate(const ModelImpl& impl, MethodId method, const std::vector<
       const std::vector<uint8_t> reference_whole = whole_references(stage->kind, whole, train_rows);
       scores[j].resize(static_cast<Eigen::Index>(test_rows.size()), categories);
       for (size_t r = 0; r < test_rows.size(); ++r) {
-        StageScores answer = decide_with_distances(*stage, h.row(test_rows[r]).transpose());
+        StageScores answer = decide_with_distances(*stage, q.row(test_rows[r]).transpose());
         scores[j].row(static_cast<Eigen::Index>(r)) = answer.scores.transpose();
         nearest[r].push_back(nearest_references(std::move(answer), reference_whole));
       }

@@ -1,5 +1,7 @@
 #include "glimpse/classifiers.h"
 
+#include <omp.h>
+
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
@@ -49,6 +51,29 @@ Eigen::VectorXd bag_of_keypoints(const std::vector<int>& words, int clusters, bo
   for (int w : words)
     if (w >= 0 && w < clusters) h[w] += 1;
   if (normalise && !words.empty()) h /= static_cast<double>(words.size());
+  return h;
+}
+
+Eigen::VectorXd soft_bag_of_keypoints(const KeypointCodebook& cb, const std::vector<Descriptor>& descriptors, int spread,
+                                      bool normalise) {
+  const Eigen::Index k = cb.centres.rows();
+  Eigen::VectorXd h = Eigen::VectorXd::Zero(k);
+  if (descriptors.empty() || k == 0) return h;
+  const Eigen::MatrixXd z = project(cb.pca, standardise(cb.standardiser, descriptor_rows(descriptors)));
+  const size_t m = static_cast<size_t>(std::clamp<Eigen::Index>(spread, 1, k));
+  std::vector<std::pair<double, Eigen::Index>> d(static_cast<size_t>(k));
+  for (Eigen::Index i = 0; i < z.rows(); ++i) {
+    for (Eigen::Index c = 0; c < k; ++c) d[static_cast<size_t>(c)] = {(cb.centres.row(c) - z.row(i)).norm(), c};
+    std::partial_sort(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(m), d.end());
+    if (d[0].first <= 1e-12) {  // on a centre: all of it there
+      h[d[0].second] += 1;
+      continue;
+    }
+    double total = 0;
+    for (size_t j = 0; j < m; ++j) total += 1 / d[j].first;
+    for (size_t j = 0; j < m; ++j) h[d[j].second] += (1 / d[j].first) / total;
+  }
+  if (normalise) h /= static_cast<double>(z.rows());
   return h;
 }
 
@@ -175,6 +200,14 @@ double l1_rows(const Eigen::MatrixXd& m, Eigen::Index i, const Eigen::VectorXd& 
   return (m.row(i).transpose() - x).lpNorm<1>();
 }
 
+// L1 distances from x to every row of m, accumulated column by column: each column is contiguous in
+// Eigen's column-major storage, so this runs at memory speed where a row at a time strides across it.
+template <typename Vector>
+void l1_to_rows(const Eigen::MatrixXd& m, const Vector& x, Eigen::ArrayXd& out) {
+  out.setZero(m.rows());
+  for (Eigen::Index c = 0; c < m.cols(); ++c) out += (m.col(c).array() - x[c]).abs();
+}
+
 double median(std::vector<double> v) {
   if (v.empty()) return 0;
   std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
@@ -205,9 +238,17 @@ Expected<DecisionStage> fit_decision(const Eigen::MatrixXd& histograms, const st
   st.kind = params.kind;
   st.categories = categories;
   st.neighbours = std::max(1, params.neighbours);
-  auto pca = fit_pca(histograms, params.pca_explained_variance, params.max_pca_dims);
-  if (!pca.ok()) return pca.error();
-  st.pca = std::move(*pca);
+  if (params.pca_explained_variance > 0) {
+    auto pca = fit_pca(histograms, params.pca_explained_variance, params.max_pca_dims);
+    if (!pca.ok()) return pca.error();
+    st.pca = std::move(*pca);
+  } else {  // no PCA: L1 on the histograms themselves (the identity projection)
+    st.projected = false;
+    const Eigen::Index d = histograms.cols();
+    st.pca.mean = Eigen::VectorXd::Zero(d);
+    st.pca.basis = Eigen::MatrixXd::Identity(d, d);
+    st.pca.explained = Eigen::VectorXd::Constant(d, 1.0 / static_cast<double>(std::max<Eigen::Index>(d, 1)));
+  }
   const Eigen::MatrixXd y = project(st.pca, histograms);
 
   std::vector<double> scale;
@@ -216,12 +257,25 @@ Expected<DecisionStage> fit_decision(const Eigen::MatrixXd& histograms, const st
     st.labels = labels;
     // Scale: the median distance from a training vector to its nearest one of another object (the
     // distance a new object is from the training set; another view of the same object is closer).
-    for (Eigen::Index i = 0; i < y.rows(); ++i) {
-      double best = INFINITY;
-      for (Eigen::Index j = 0; j < y.rows(); ++j)
-        if (j != i && !same_object(i, j)) best = std::min(best, l1_rows(y, j, y.row(i).transpose()));
-      if (std::isfinite(best)) scale.push_back(best);
+    // Quadratic in the training vectors (tens of thousands with several elevations and prefixes):
+    // each row's distances in one column-wise pass, rows shared among threads (each writes its own
+    // slot, so the result does not depend on the thread count).
+    std::vector<double> nearest(static_cast<size_t>(y.rows()), INFINITY);
+    const int workers = threads > 0 ? threads : std::max(1, omp_get_max_threads());
+#pragma omp parallel num_threads(workers)
+    {
+      Eigen::ArrayXd dist;
+#pragma omp for schedule(dynamic, 16)
+      for (Eigen::Index i = 0; i < y.rows(); ++i) {
+        l1_to_rows(y, y.row(i), dist);
+        double best = INFINITY;
+        for (Eigen::Index j = 0; j < y.rows(); ++j)
+          if (j != i && !same_object(i, j)) best = std::min(best, dist[j]);
+        nearest[static_cast<size_t>(i)] = best;
+      }
     }
+    for (double best : nearest)
+      if (std::isfinite(best)) scale.push_back(best);
   } else {
     // K-means centres of each category's training vectors (sec. 3.3.3); one per category = the paper.
     const int per = params.kind == DecisionRule::kNearestCentre ? 1 : std::max(1, params.centres_per_category);
@@ -260,12 +314,37 @@ Expected<DecisionStage> fit_decision(const Eigen::MatrixXd& histograms, const st
   return st;
 }
 
-StageScores decide_with_distances(const DecisionStage& st, const Eigen::VectorXd& histogram) {
-  const Eigen::VectorXd y = project_row(st.pca, histogram);
+bool is_identity_projection(const Pca& pca) {
+  return pca.basis.rows() == pca.basis.cols() && pca.mean.size() == pca.basis.rows() && pca.mean.isZero() &&
+         pca.basis.isIdentity();
+}
+
+StageScores decide_with_distances(const DecisionStage& st, const Eigen::VectorXd& histogram, bool by_shape) {
   const Eigen::Index n = st.references.rows();
   std::vector<std::pair<double, Eigen::Index>> d(static_cast<size_t>(n));
-  for (Eigen::Index i = 0; i < n; ++i) d[static_cast<size_t>(i)] = {l1_rows(st.references, i, y), i};
+  double temperature = st.temperature;
   StageScores out;
+  if (by_shape && !st.projected) {
+    auto unit = [](const Eigen::VectorXd& v) {
+      const double mass = v.lpNorm<1>();
+      return mass > 0 ? Eigen::VectorXd(v / mass) : v;
+    };
+    const Eigen::VectorXd y = unit(histogram);
+    double mass = 0;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const Eigen::VectorXd ref = st.references.row(i).transpose();
+      mass += ref.lpNorm<1>();
+      d[static_cast<size_t>(i)] = {(unit(ref) - y).lpNorm<1>(), i};
+    }
+    // Distances between unit-mass histograms: the temperature in the same units.
+    if (mass > 0) temperature = st.temperature / (mass / static_cast<double>(n));
+  } else {
+    const Eigen::VectorXd y = project_row(st.pca, histogram);
+    Eigen::ArrayXd dist;
+    l1_to_rows(st.references, y, dist);
+    for (Eigen::Index i = 0; i < n; ++i) d[static_cast<size_t>(i)] = {dist[i], i};
+    out.residual = (histogram - st.pca.mean - st.pca.basis * y).lpNorm<1>();
+  }
   Eigen::VectorXd& best = out.nearest_distance;
   best = Eigen::VectorXd::Constant(st.categories, INFINITY);
   out.nearest_reference = Eigen::VectorXi::Constant(st.categories, -1);
@@ -279,21 +358,20 @@ StageScores decide_with_distances(const DecisionStage& st, const Eigen::VectorXd
     std::partial_sort(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(k), d.end());
     // Votes of the k nearest, each weighted by how close it is relative to the nearest.
     for (size_t i = 0; i < k; ++i)
-      scores[st.labels[static_cast<size_t>(d[i].second)]] += std::exp(-(d[i].first - d[0].first) / st.temperature);
+      scores[st.labels[static_cast<size_t>(d[i].second)]] += std::exp(-(d[i].first - d[0].first) / temperature);
   } else {
     // Softmin over each category's nearest centre (or, for kNearestReference, training vector).
     const double lo = best.minCoeff();
-    for (int c = 0; c < st.categories; ++c) scores[c] = std::exp(-(best[c] - lo) / st.temperature);
+    for (int c = 0; c < st.categories; ++c) scores[c] = std::exp(-(best[c] - lo) / temperature);
   }
   // A small floor keeps every category possible (no hard zero), then scores sum to 1.
   scores.array() += 1e-3;
   out.scores = scores / scores.sum();
-  out.residual = (histogram - st.pca.mean - st.pca.basis * y).lpNorm<1>();
   return out;
 }
 
-Eigen::VectorXd decide(const DecisionStage& st, const Eigen::VectorXd& histogram) {
-  return decide_with_distances(st, histogram).scores;
+Eigen::VectorXd decide(const DecisionStage& st, const Eigen::VectorXd& histogram, bool by_shape) {
+  return decide_with_distances(st, histogram, by_shape).scores;
 }
 
 }  // namespace glimpse

@@ -11,6 +11,8 @@
 #include <random>
 #include <string>
 
+#include "random.h"
+
 namespace glimpse {
 namespace {
 
@@ -52,8 +54,6 @@ uint64_t splitmix64(uint64_t x) {
   return x ^ (x >> 31);
 }
 
-// Our own mapping of the engine's output (std::uniform_*_distribution is implementation-defined).
-double uniform01(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
 Index uniform_index(std::mt19937_64& rng, Index n) {
   return static_cast<Index>((static_cast<unsigned __int128>(rng()) * static_cast<uint64_t>(n)) >> 64);
 }

@@ -52,8 +52,19 @@ std::array<float, 8> pfh8(const std::vector<Vec3>& points, const std::vector<Vec
   return h;
 }
 
+float descriptor_radius(const Keypoint& kp, float r, const DescriptorParams& params) {
+  if (params.characteristic_scale_supports <= 0) return r;
+  return std::clamp(kp.characteristic_radius, r, std::max(1.f, params.characteristic_scale_supports) * r);
+}
+
+float descriptor_reach(float r, const DescriptorParams& params) {
+  const float hood = params.characteristic_scale_supports > 0 ? std::max(1.f, params.characteristic_scale_supports) * r : r;
+  return std::max(1.f, params.large_window_supports) * hood;
+}
+
 Descriptor local_descriptor(const NeighbourIndex& tree, const std::vector<LocalSurface>& surfaces, const Keypoint& kp,
-                            float r, const DescriptorParams& params, std::vector<Neighbour>& nb) {
+                            float support_r, const DescriptorParams& params, std::vector<Neighbour>& nb) {
+  const float r = descriptor_radius(kp, support_r, params);
   Descriptor d = Descriptor::Zero();
   const Points& pts = tree.points();
   const LocalSurface& s = surfaces[kp.index];

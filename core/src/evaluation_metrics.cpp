@@ -33,9 +33,10 @@ double balanced_accuracy(std::span<const StageDecision> decisions, std::string_v
   return n ? sum / double(n) : 0.0;
 }
 
-void add_ablation(EvalResult& result, const EvalResult& other, const std::string& label) {
+void add_ablation(EvalResult& result, const EvalResult& other, const std::string& label, const std::string& group) {
   for (MethodId m : other.params.methods) {
     AblationRow row;
+    row.group = group;
     row.label = label;
     row.method = m;
     for (const Stage& s : result.params.stages) {

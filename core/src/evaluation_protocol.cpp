@@ -17,84 +17,14 @@
 #include "glimpse/neighbourhoods.h"
 #include "glimpse/surface_fit.h"
 #include "glimpse/views.h"
-#include "model_impl.h"
+#include "evaluation_internal.h"
 #include "parallel.h"
 
 namespace glimpse {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
-
-bool contains(const std::vector<MethodId>& v, MethodId m) { return std::find(v.begin(), v.end(), m) != v.end(); }
-
-
-// body(i) for i in [0, n) on `threads` threads; progress is reported from thread 0 only.
-template <class Body>
-void parallel_for(size_t n, int threads, const std::string& phase, const EvalProgressFn& progress, Body&& body) {
-  std::atomic<size_t> done{0};
-  if (progress) progress({phase, 0, n});
-#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
-  for (int64_t i = 0; i < static_cast<int64_t>(n); ++i) {
-    body(static_cast<size_t>(i));
-    const size_t d = ++done;
-    if (progress && omp_get_thread_num() == 0) progress({phase, d, n});
-  }
-  if (progress) progress({phase, n, n});
-}
-
-struct View {
-  int object = 0;
-  int view = 0;  // index among the object's evaluated viewpoints
-  Cloud cloud;   // as the sensor saw it: what is tested
-  Cloud learnt;  // as training learns it (training_view: tilted); empty when that is `cloud` itself
-};
-
-// The features of one top-down prefix of one view (count == view size: the full view), cut from the
-// view as seen or from its learnt (tilted) copy.
-struct FeatureSlot {
-  size_t view = 0;
-  size_t count = 0;
-  bool learnt = false;
-  bool ok = false;
-  CloudFeatures features;
-  std::string error;
-  double seconds = 0;
-};
-
-// What the phases share.
-struct Protocol {
-  const std::vector<EvalObject>& objects;
-  const EvalParams& params;
-  const EvalProgressFn& progress;
-  int threads = 1;
-  TrainParams tp;
-  std::vector<MethodId> base;
-  int folds = 1;                 // models trained: the CV folds, or 1 for a cross-source evaluation
-  std::vector<Points> full;      // full 3D cloud per object (sec. 3.4)
-  std::vector<View> views;
-  std::vector<FeatureSlot> slots;  // [0, views.size()): the full views; then the distinct prefixes
-  std::vector<float> margin;       // keypoint cut margin per view
-  std::vector<Stage> stages;       // the main stages, then the exploration grid's
-  std::vector<std::vector<int>> stage_slot;   // [view][stage] -> slot, -1 none
-  std::vector<std::vector<int>> train_slots;  // [view] -> slots trained on: the full view, then prefixes
-  std::vector<std::shared_ptr<const Model>> fold_models;
-  std::vector<std::vector<int>> fold_to_ours;  // per fold: model category index -> report category index
-  EvalResult r;
-
-  bool tested(size_t v) const { return r.object_fold[static_cast<size_t>(views[v].object)] >= 0; }
-  bool learnt(size_t v) const {
-    const EvalRole role = objects[static_cast<size_t>(views[v].object)].role;
-    return role == EvalRole::kCrossValidate || role == EvalRole::kTrainOnly;
-  }
-  bool unknown(size_t v) const { return r.object_truth[static_cast<size_t>(views[v].object)] < 0; }
-  size_t full_points(size_t v) const { return std::max<size_t>(1, full[static_cast<size_t>(views[v].object)].size()); }
-  const Cloud& learnt_cloud(size_t v) const { return views[v].learnt.points.empty() ? views[v].cloud : views[v].learnt; }
-  bool tilted(size_t v) const { return !views[v].learnt.points.empty(); }
-  uint64_t object_seed(size_t o) const { return glimpse::object_seed(params.seed, objects[o].category + "/" + objects[o].id); }
-};
+using namespace eval_internal;
 
 Status validate(const std::vector<EvalObject>& objects, const EvalParams& p) {
   if (objects.empty()) return invalid_argument("no objects to evaluate");
@@ -203,12 +133,24 @@ void make_views(Protocol& P) {
   const auto t0 = Clock::now();
   const size_t n = std::clamp<size_t>(P.params.views_per_object, 1, 6);
   P.views.assign(P.objects.size() * n, {});
+  // Training-only views from other elevations follow the tested ones (learnt objects only).
+  std::vector<float> elevation(P.views.size(), kPaperElevationDeg);
+  for (float e : P.params.train_elevations_deg)
+    for (size_t o = 0; o < P.objects.size(); ++o)
+      if ((P.objects[o].role == EvalRole::kCrossValidate || P.objects[o].role == EvalRole::kTrainOnly) &&
+          e != kPaperElevationDeg)
+        for (size_t v = 0; v < n; ++v) {
+          P.views.push_back({});
+          P.views.back().object = static_cast<int>(o), P.views.back().view = static_cast<int>(v);
+          P.views.back().train_only = true;
+          elevation.push_back(e);
+        }
   parallel_for(P.views.size(), P.threads, "HPR views", P.progress, [&](size_t j) {
-    const size_t o = j / n, v = j % n;
+    if (j < P.objects.size() * n) P.views[j].object = static_cast<int>(j / n), P.views[j].view = static_cast<int>(j % n);
+    const size_t o = size_t(P.views[j].object), v = size_t(P.views[j].view);
     const EvalObject& object = P.objects[o];
-    P.views[j].object = static_cast<int>(o);
-    P.views[j].view = static_cast<int>(v);
-    P.views[j].cloud = object_view(P.full[o], v, n, object.any_pose, P.object_seed(o), P.params.hpr_radius_factor);
+    P.views[j].cloud =
+        object_view(P.full[o], v, n, object.any_pose, P.object_seed(o), P.params.hpr_radius_factor, elevation[j]);
     if ((object.role == EvalRole::kCrossValidate || object.role == EvalRole::kTrainOnly) && P.tp.tilt_deg > 0)
       P.views[j].learnt = training_view(P.views[j].cloud, P.tp, P.object_seed(o) + v);
   });
@@ -216,10 +158,51 @@ void make_views(Protocol& P) {
   for (const EvalObject& o : P.objects) posed += o.any_pose;
   P.r.timings.push_back({"HPR views", seconds_since(t0),
                          std::to_string(P.views.size()) + " views" +
+                             (P.views.size() > P.objects.size() * n
+                                  ? " (" + std::to_string(P.views.size() - P.objects.size() * n) + " for training only)"
+                                  : std::string()) +
                              (posed ? ", " + std::to_string(posed) + " objects without an up in random poses" : "")});
 }
 
-void compute_slot(Protocol& P, FeatureSlot& slot, const Cloud& cloud) {
+// ---- 2b. the density each model learns (median relative density of its training views), and the
+// test views of a non-ideal condition: the sensor's view, through the filters at that density ----
+void trained_densities(Protocol& P) {
+  std::vector<double> density(P.views.size(), 0.0);
+  parallel_for(P.views.size(), P.threads, "training density", P.progress, [&](size_t v) {
+    if (P.learnt(v)) density[v] = relative_density(P.learnt_cloud(v).points);
+  });
+  for (int fold = 0; fold < P.folds; ++fold) {
+    std::vector<double> d;
+    for (size_t v = 0; v < P.views.size(); ++v)
+      if (P.learnt(v) && P.r.object_fold[size_t(P.views[v].object)] != fold && density[v] > 0) d.push_back(density[v]);
+    std::sort(d.begin(), d.end());
+    P.r.trained_density.push_back(d.empty() ? 0.0 : d[d.size() / 2]);
+  }
+}
+
+void sensor_test_views(Protocol& P) {
+  const ScanCondition& condition = P.params.test_condition;
+  if (condition.is_ideal()) return;
+  const auto t0 = Clock::now();
+  const size_t n = std::clamp<size_t>(P.params.views_per_object, 1, 6);
+  parallel_for(P.views.size(), P.threads, "sensor views", P.progress, [&](size_t v) {
+    if (!P.tested(v)) return;
+    View& view = P.views[v];
+    const size_t o = size_t(view.object);
+    if (view.learnt.points.empty()) view.learnt = view.cloud;  // training keeps the ideal view
+    view.ideal_points = std::max<size_t>(1, view.cloud.points.size());
+    ScanFilterParams fp = P.params.filters;
+    fp.relative_density = P.r.trained_density[size_t(P.r.object_fold[o])];
+    view.cloud = filter_scan(condition_view(P.objects[o], P.full[o], size_t(view.view), n, P.object_seed(o), condition,
+                                            P.params.points_per_object, P.params.hpr_radius_factor),
+                             fp);
+  });
+  P.r.timings.push_back({"sensor views", seconds_since(t0), describe(condition) + ", filtered"});
+}
+
+}  // namespace
+
+void eval_internal::compute_slot(Protocol& P, FeatureSlot& slot, const Cloud& cloud) {
   const auto c0 = Clock::now();
   auto f = cloud_features(cloud, P.tp, P.base, 1);
   slot.seconds = seconds_since(c0);
@@ -227,6 +210,8 @@ void compute_slot(Protocol& P, FeatureSlot& slot, const Cloud& cloud) {
   if (f.ok()) slot.features = std::move(*f);
   else slot.error = f.error().message;
 }
+
+namespace {
 
 // ---- 3. full-view features (and the keypoint cut margin) ----
 void full_view_features(Protocol& P) {
@@ -261,6 +246,7 @@ void prefix_features(Protocol& P) {
   std::vector<std::map<size_t, int>> slot_of(n_views);
   P.stage_slot.assign(n_views, std::vector<int>(P.stages.size(), -1));
   P.train_slots.assign(n_views, {});
+  P.seen_slots.assign(n_views, {});
   std::vector<std::map<size_t, int>> learnt_slot_of(n_views);
   auto slot_for = [&](size_t v, size_t count, bool learnt) -> int {
     if (count == 0) return -1;
@@ -291,11 +277,17 @@ void prefix_features(Protocol& P) {
     }
     if (P.learnt(v)) {
       const size_t n = P.learnt_cloud(v).points.size();
-      P.train_slots[v].push_back(slot_for(v, n, true));
+      // A tilted view is learnt tilted; its held-out calibration decides it as seen (what a test cloud is).
+      auto learn = [&](size_t count) {
+        const int id = slot_for(v, count, true);
+        if (id < 0) return;
+        P.train_slots[v].push_back(id);
+        P.seen_slots[v].push_back(P.tilted(v) && P.tp.calibration_folds >= 2 ? slot_for(v, count, false) : id);
+      };
+      learn(n);
       for (double f : P.tp.partial_prefixes) {
         const size_t count = static_cast<size_t>(std::round(f * double(n)));
-        if (count >= n) continue;
-        if (const int id = slot_for(v, count, true); id >= 0) P.train_slots[v].push_back(id);
+        if (count < n) learn(count);
       }
     }
   }
@@ -371,17 +363,24 @@ Status train_and_classify(Protocol& P) {
     for (size_t v = 0; v < P.views.size(); ++v) {
       const int o = P.views[v].object;
       if (r.object_fold[static_cast<size_t>(o)] == fold) {
-        test_views.push_back(v);
+        if (!P.views[v].train_only) test_views.push_back(v);
         continue;
       }
       if (!P.learnt(v)) continue;
       const EvalObject& object = P.objects[static_cast<size_t>(o)];
       const std::string id = object.source + "/" + object.id;
-      for (int s : P.train_slots[v])  // the first is the whole (learnt) view, then its prefixes
-        if (P.slots[s].ok) samples.push_back({object.category, id, P.slots[s].features, s == P.train_slots[v].front()});
+      for (size_t k = 0; k < P.train_slots[v].size(); ++k) {  // the whole (learnt) view, then its prefixes
+        const FeatureSlot& slot = P.slots[static_cast<size_t>(P.train_slots[v][k])];
+        if (!slot.ok) continue;
+        samples.push_back({object.category, id, slot.features, k == 0});
+        const FeatureSlot& seen = P.slots[static_cast<size_t>(P.seen_slots[v][k])];
+        if (&seen != &slot && seen.ok) samples.back().as_seen = seen.features;
+      }
     }
     train_samples += samples.size();
-    auto trained = train_on_features(std::move(samples), P.tp);
+    TrainParams tp = P.tp;  // the model records the density its training views had (scan filters)
+    tp.filters.relative_density = r.trained_density[size_t(fold)];
+    auto trained = train_on_features(std::move(samples), tp);
     if (!trained.ok()) return Error{trained.error().code, tag + ": training failed: " + trained.error().message};
     const auto model = std::make_shared<const Model>(std::move(*trained));
     P.fold_models.push_back(model);
@@ -483,6 +482,7 @@ void stream_views(Protocol& P) {
       t.winners.push_back(d->winner >= 0 ? P.fold_to_ours[static_cast<size_t>(fold)][static_cast<size_t>(d->winner)] : -1);
       t.confidence.push_back(d->confidence);
       t.settled.push_back(d->settled ? 1 : 0);
+      t.unknown.push_back(d->unknown ? 1 : 0);
       t.keypoints.push_back(d->keypoints);
       t.points.push_back(d->points);
       std::vector<double> raw(r.categories.size(), 0.0);
@@ -591,12 +591,15 @@ Expected<EvalResult> run_evaluation(const std::vector<EvalObject>& objects, cons
   assign_folds(P);
   make_object_clouds(P);
   make_views(P);
+  trained_densities(P);
+  sensor_test_views(P);
   full_view_features(P);
   prefix_features(P);
   stage_statistics(P);
   if (Status s = train_and_classify(P); !s.ok()) return s.error();
   exploration_changes(P);
   stream_views(P);
+  robustness_matrix(P);
   flag_problems(P);
   P.r.total_seconds = seconds_since(t_start);
   return std::move(P.r);

@@ -1,5 +1,5 @@
-// The evaluation report: markdown a person reads, a CSV of every decision, SVG evolution curves like
-// the paper's Figures 5-6 (hand-written SVG, no dependencies), and a terminal summary.
+// The evaluation report a person reads: the markdown sections in the order they appear (the CSV, SVG and
+// terminal writers and the report folder are evaluation_writers.cpp's).
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -12,39 +12,17 @@
 #include <sstream>
 
 #include "glimpse/evaluation.h"
+#include "evaluation_format.h"
+#include "evaluation_internal.h"
 #include "model_impl.h"
 
 namespace glimpse {
 
 namespace {
 
+using namespace eval_internal;
+
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-std::string fmt(const char* f, double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, f, v);
-  return buf;
-}
-
-// "12" / "12.5" style percent, "–" for NaN.
-std::string pct(double v, int decimals = 0) {
-  if (std::isnan(v)) return "–";
-  return fmt(decimals ? "%.1f" : "%.0f", v);
-}
-
-std::string xml_escape(std::string_view s) {
-  std::string out;
-  for (char c : s) {
-    switch (c) {
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '&': out += "&amp;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
-    }
-  }
-  return out;
-}
 
 const char* paper_category_label(const std::string& c) {
   if (c == "human") return "Human";
@@ -87,32 +65,6 @@ double paper_diagonal(std::string_view stage, const std::string& category, Metho
       if (category == kOrder[c]) return t.rate[c][col];
   }
   return kNaN;
-}
-
-std::vector<std::string> main_stage_names(const EvalResult& r) {
-  std::vector<std::string> out;
-  for (const Stage& s : r.params.stages) out.push_back(stage_name(s));
-  return out;
-}
-
-std::string method_label(MethodId m) {
-  switch (m) {
-    case MethodId::kBoK: return "BoK";
-    case MethodId::kBoG: return "BoG";
-    case MethodId::kKGH: return "KGH";
-    case MethodId::kVFH: return "VFH";
-    case MethodId::kESF: return "ESF";
-    case MethodId::kUSH: return "USH";
-    case MethodId::kSize: return "Size only";
-    case MethodId::kFusion: return "Fusion";
-  }
-  return "?";
-}
-
-const StageStats* stats_of(const EvalResult& r, std::string_view stage) {
-  for (const StageStats& s : r.stage_stats)
-    if (s.stage == stage) return &s;
-  return nullptr;
 }
 
 std::string join_methods(const std::vector<MethodId>& ms) {
@@ -202,7 +154,36 @@ void write_protocol(std::ostringstream& o, const EvalResult& r) {
     << ") | VFH, KGH, BoK, BoG |\n";
   o << "| codebooks | BoK " << t.bok_clusters << ", BoG " << t.bog_keypoint_clusters << "x" << t.bog_volume_clusters
     << " -> " << t.bog_pca_dims << " dims, KGH " << t.kgh_clusters << "x" << t.kgh_distance_bins
-    << (t.normalise_histograms ? ", histograms normalised" : "") << " | BoK 60, BoG 6x5 -> 65, KGH 8x15 |\n";
+    << (t.normalise_up_to_keypoints > 0
+            ? ", histograms divided by their count up to " + std::to_string(t.normalise_up_to_keypoints) +
+                  " keypoints and by that many's after"
+            : t.normalise_histograms ? ", histograms normalised" : "")
+    << " | BoK 60, BoG 6x5 -> 65, KGH 8x15; normalised early in the exploration, not later |\n";
+  const KeypointParams& kp = t.features.keypoints;
+  const SurfaceParams& sp = t.features.surface;
+  o << "| keypoints | r = median distance to the " << sp.support_neighbours << "th nearest neighbour (surfaces need "
+    << sp.min_neighbours << " within r); "
+    << (kp.response == KeypointResponse::kHarris ? "ranked by the Harris response det - 0.04 tr^2 (window r/2), its "
+                                                   "local maxima within r"
+                                                 : "ranked by the smaller principal Harris curvature")
+    << "; rho1 "
+    << (kp.max_characteristic_radius_m > 0 ? "<= " + fmt("%g", double(kp.max_characteristic_radius_m)) + " m"
+        : kp.max_radius_supports > 0       ? "<= " + fmt("%g", double(kp.max_radius_supports)) + " r"
+                                           : std::string("uncapped"))
+    << "; each claims " << (kp.claim_min_supports > 0 ? "max(rho1, " + fmt("%g", double(kp.claim_min_supports)) + " r)" : std::string("rho1"))
+    << "; "
+    << (kp.exclude_boundary ? "no keypoint " + (kp.boundary_band_supports > 0 ? "within " + fmt("%g", double(kp.boundary_band_supports)) +
+                                                                                    " r of a boundary point"
+                                                                              : std::string("on a boundary point")) +
+                                  " (angular gap > " + fmt("%g", std::round(kp.boundary_gap_rad * 180 / 3.14159265358979)) +
+                                  " deg among the neighbours within " + fmt("%g", double(kp.boundary_radius_supports)) + " r)"
+                            : std::string("boundary kept"))
+    << "; descriptors over "
+    << (t.features.descriptor.characteristic_scale_supports > 0
+            ? "rho1 clamped to [r, " + fmt("%g", double(t.features.descriptor.characteristic_scale_supports)) + " r]"
+            : std::string("r"))
+    << " | r as small as the density allows; rho1 = 2 / sqrt(lambda1) claims its sphere; boundary points and their "
+       "neighbourhood excluded |\n";
   const char* kind = t.decision.kind == DecisionRule::kNearestCentre ? "nearest centre"
                      : t.decision.kind == DecisionRule::kCentres   ? "several centres per category"
                      : t.decision.kind == DecisionRule::kNearestReference
@@ -211,7 +192,11 @@ void write_protocol(std::ostringstream& o, const EvalResult& r) {
   o << "| decision | " << kind;
   if (t.decision.kind == DecisionRule::kNearestNeighbours) o << " (k = " << t.decision.neighbours << ")";
   if (t.decision.kind == DecisionRule::kCentres) o << " (" << t.decision.centres_per_category << " per category)";
-  o << ", L1 | one K-means centre per category, L1 |\n";
+  o << ", L1 " << (t.decision.pca_explained_variance > 0 ? "after PCA (" + pct(100 * t.decision.pca_explained_variance) +
+                                                                 " % of the variance, BoG <= " + std::to_string(t.bog_pca_dims) + " dims)"
+                                                           : "on the histograms (BoG reduced to " + std::to_string(t.bog_pca_dims) +
+                                                                 " dims)")
+    << " | one K-means centre per category, L1 |\n";
   o << "| exploration grid (category changes) | keypoint counts ";
   for (size_t i = 0; i < r.grid.size(); ++i) o << (i ? ", " : "") << r.grid[i];
   o << (p.explore_step > 1 ? " (coarser than the paper's every keypoint: changes between grid points are not seen)" : "")
@@ -276,72 +261,6 @@ void write_accuracy(std::ostringstream& o, const EvalResult& r) {
     o << "\n";
   }
   o << "\nChance is " << pct(100.0 / double(std::max<size_t>(1, r.categories.size())), 0) << " %.\n\n";
-}
-
-void write_size(std::ostringstream& o, const EvalResult& r) {
-  const bool size_method = std::find(r.params.methods.begin(), r.params.methods.end(), MethodId::kSize) != r.params.methods.end();
-  if (!size_method && r.ablations.empty()) return;
-  const std::vector<std::string> stages = main_stage_names(r);
-  o << "## How much is size\n\n";
-  o << "Objects are scaled to real-life sizes, and the category ranges barely overlap (human 1.55-1.95 m tall, chair "
-       "0.80-1.10, table 0.70-0.80, parts at most 0.40 m across), so size alone tells much. **Size only** decides from "
-       "the visible height and the two horizontal extents of the (partial) cloud, nothing else, with the same decision "
-       "stage. The **size-blind** rows repeat the evaluation with every object scaled to the same height (1 m), for "
-       "training and test alike: what is left is shape.\n\n| method | accuracy: ";
-  for (size_t i = 0; i < stages.size(); ++i) o << (i ? " | " : "") << stages[i];
-  o << " | balanced: ";
-  for (size_t i = 0; i < stages.size(); ++i) o << (i ? " | " : "") << stages[i];
-  o << " |\n|---|";
-  for (size_t i = 0; i < 2 * stages.size(); ++i) o << "---:|";
-  o << "\n";
-  auto real_row = [&](MethodId m) {
-    o << "| " << method_label(m) << " |";
-    for (const std::string& s : stages) o << " " << pct(accuracy(r.decisions, s, m).percent(), 1) << " |";
-    for (const std::string& s : stages) o << " " << pct(balanced_accuracy(r.decisions, s, m, r.categories.size()), 1) << " |";
-    o << "\n";
-  };
-  if (size_method) real_row(MethodId::kSize);
-  for (const AblationRow& a : r.ablations) {
-    if (std::find(r.params.methods.begin(), r.params.methods.end(), a.method) != r.params.methods.end()) real_row(a.method);
-    o << "| " << method_label(a.method) << ", " << a.label << " |";
-    for (double v : a.accuracy) o << " " << (v < 0 ? "–" : pct(v, 1)) << " |";
-    for (double v : a.balanced) o << " " << (v < 0 ? "–" : pct(v, 1)) << " |";
-    o << "\n";
-  }
-  o << "\n";
-}
-
-void write_keypoints(std::ostringstream& o, const EvalResult& r) {
-  o << "## Keypoints and visible fraction per view, by category and stage\n\n";
-  o << "Mean over all views (every fold's test views are all views). `kp` = keypoints found on the stage's prefix, "
-       "`vis` = prefix points / full 3D cloud points (%). Exploration-grid stages follow the main ones.\n\n";
-  o << "| stage |";
-  for (const std::string& c : r.categories) o << " " << c << " kp | " << c << " vis |";
-  o << " all kp | all vis | failed | feature CPU s |\n|---|";
-  for (size_t i = 0; i < r.categories.size(); ++i) o << "---:|---:|";
-  o << "---:|---:|---:|---:|\n";
-  for (const StageStats& st : r.stage_stats) {
-    size_t failed = 0;
-    for (size_t f : st.failed) failed += f;
-    o << "| " << st.stage << " |";
-    for (size_t c = 0; c < r.categories.size(); ++c)
-      o << " " << pct(st.keypoints[c], 1) << " | " << pct(st.visible_percent[c], 1) << " |";
-    o << " " << pct(st.mean_keypoints, 1) << " | " << pct(st.mean_visible_percent, 1) << " | " << failed << " | "
-      << fmt("%.1f", st.feature_seconds) << " |\n";
-  }
-  o << "\nKeypoint stage cuts, over the views whose full view has at least k keypoints (elsewhere the stage is the "
-       "whole view): keypoints re-extraction finds on the prefix cut below the k-th highest full-view keypoint.\n\n"
-       "| stage | views with >= k keypoints | prefix keypoints mean (min-max) | visible % |\n|---|---:|---:|---:|\n";
-  for (const StageStats& st : r.stage_stats) {
-    if (st.stage.size() < 3 || st.stage.substr(st.stage.size() - 2) != "kp") continue;
-    o << "| " << st.stage << " | " << st.cut_views << " | ";
-    if (st.cut_views)
-      o << pct(st.cut_mean_keypoints, 1) << " (" << st.cut_min_keypoints << "-" << st.cut_max_keypoints << ") | "
-        << pct(st.cut_visible_percent, 1) << " |\n";
-    else
-      o << "– | – |\n";
-  }
-  o << "\n";
 }
 
 void write_confusions(std::ostringstream& o, const EvalResult& r) {
@@ -423,9 +342,11 @@ void write_streams(std::ostringstream& o, const EvalResult& r) {
          "hold rule), for comparison only.\n\n";
     o << "| settled when | views settled | precision | mean visible % | median visible % |\n|---|---:|---:|---:|---:|\n";
   }
+  const SettleRow session = settle_summary(r.streams, -1);
   row("**session default** (calibrated margin, confidence >= " + fmt("%.2f", sp.settle_confidence) + ", the winner held " +
-          std::to_string(sp.stability_window) + " chunks, the newest included)",
-      settle_summary(r.streams, -1));
+          std::to_string(sp.stability_window) + " chunks, the newest included" +
+          (session.unknown ? "; " + std::to_string(session.unknown) + " settled as unknown, counted wrong" : std::string()) + ")",
+      session);
   for (double t : r.params.settle_sweep) row("confidence >= " + fmt("%.2f", t), settle_summary(r.streams, t, min_kp));
   o << "\nPer category, the session's own flag:\n\n| category | views settled | precision | mean visible % |\n"
        "|---|---:|---:|---:|\n";
@@ -444,25 +365,6 @@ void write_streams(std::ostringstream& o, const EvalResult& r) {
 
 }  // namespace
 
-std::string streams_csv(const EvalResult& r) {
-  std::ostringstream o;
-  o << "fold,object,view,truth,chunk,visible_fraction,winner,confidence,settled,keypoints,points";
-  for (const std::string& c : r.categories) o << ",raw_" << c;
-  o << "\n";
-  for (const StreamTrace& t : r.streams)
-    for (size_t i = 0; i < t.winners.size(); ++i) {
-      o << t.fold << "," << r.object_ids[static_cast<size_t>(t.object)] << "," << t.view << ","
-        << r.categories[static_cast<size_t>(t.truth)] << "," << i << "," << fmt("%.4f", t.visible_fraction[i]) << ","
-        << (t.winners[i] >= 0 ? r.categories[static_cast<size_t>(t.winners[i])] : std::string()) << ","
-        << fmt("%.4f", t.confidence[i]) << "," << int(t.settled[i]) << "," << t.keypoints[i] << ","
-        << (i < t.points.size() ? t.points[i] : 0);
-      for (size_t c = 0; c < r.categories.size(); ++c)
-        o << "," << (i < t.raw_scores.size() && c < t.raw_scores[i].size() ? fmt("%.4f", t.raw_scores[i][c]) : "");
-      o << "\n";
-    }
-  return o.str();
-}
-
 double paper_accuracy(MethodId method, std::string_view stage) {
   const int col = paper_method_column(method);
   if (col < 0) return kNaN;
@@ -478,8 +380,10 @@ std::string markdown_report(const EvalResult& r) {
   o << "# Glimpse evaluation: the paper's protocol (Rozsa & Sziranyi, sec. 3.4, 4, 5)\n\n";
   write_protocol(o, r);
   write_accuracy(o, r);
-  write_size(o, r);
-  write_keypoints(o, r);
+  o << eval_internal::size_section(r);
+  o << eval_internal::robustness_section(r);
+  o << eval_internal::keypoints_section(r);
+  o << eval_internal::keypoint_ablation_section(r);
   o << "## Confusion tables\n\n";
   write_confusions(o, r);
   write_changes(o, r);
@@ -496,129 +400,5 @@ std::string markdown_report(const EvalResult& r) {
   return o.str();
 }
 
-std::string decisions_csv(const EvalResult& r) {
-  std::ostringstream o;
-  o << "fold,object,view,stage,method,visible_fraction,points,keypoints,truth,winner";
-  for (const std::string& c : r.categories) o << ",score_" << c;
-  o << ",novelty,unknown\n";
-  for (const StageDecision& d : r.decisions) {
-    o << d.fold << "," << r.object_ids[d.object] << "," << d.view << "," << d.stage << "," << method_name(d.method) << ","
-      << fmt("%.4f", d.visible_fraction) << "," << d.points << "," << d.keypoints << ","
-      << (d.truth >= 0 ? r.categories[static_cast<size_t>(d.truth)] : "unknown:" + r.unknown_categories[static_cast<size_t>(d.unknown_class)]) << ","
-      << (d.winner >= 0 ? r.categories[d.winner] : std::string("none"));
-    for (size_t c = 0; c < r.categories.size(); ++c)
-      o << "," << (c < d.scores.size() ? fmt("%.4f", d.scores[c]) : std::string());
-    o << "," << (std::isfinite(d.novelty) ? fmt("%.4f", d.novelty) : std::string()) << "," << (d.unknown ? 1 : 0) << "\n";
-  }
-  return o.str();
-}
-
-std::string evolution_svg(const std::vector<ExplorationTrace>& traces, const std::vector<std::string>& categories,
-                          bool correct, std::string_view title) {
-  const double panel_w = 760, panel_h = 150, left = 170, top = 50, gap = 40, right = 30;
-  const size_t n_cat = std::max<size_t>(1, categories.size());
-  const double width = left + panel_w + right, height = top + double(n_cat) * (panel_h + gap) + 20;
-  double x_max = 10;
-  for (const ExplorationTrace& t : traces)
-    if (t.correct() == correct) x_max = std::max(x_max, 100 * t.full_visible_fraction);
-  x_max = 10 * std::ceil(x_max / 10);
-
-  std::ostringstream o;
-  o << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << width << "\" height=\"" << height
-    << "\" viewBox=\"0 0 " << width << " " << height << "\" font-family=\"sans-serif\" font-size=\"12\">\n";
-  o << "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
-  o << "<text x=\"" << width / 2 << "\" y=\"24\" text-anchor=\"middle\" font-size=\"16\">" << xml_escape(title) << "</text>\n";
-  for (size_t q = 0; q < categories.size(); ++q) {
-    const double y0 = top + double(q) * (panel_h + gap);
-    auto y_of = [&](double level) { return y0 + panel_h * (double(n_cat) - level - 0.5) / double(n_cat); };
-    auto x_of = [&](double percent) { return left + panel_w * percent / x_max; };
-    size_t shown = 0;
-    for (const ExplorationTrace& t : traces) shown += t.truth == int(q) && t.correct() == correct;
-    o << "<g>\n<rect x=\"" << left << "\" y=\"" << y0 << "\" width=\"" << panel_w << "\" height=\"" << panel_h
-      << "\" fill=\"none\" stroke=\"#888\"/>\n";
-    o << "<text x=\"" << left << "\" y=\"" << y0 - 6 << "\" font-weight=\"bold\">true category: " << xml_escape(categories[q])
-      << " (" << shown << " views)</text>\n";
-    for (size_t c = 0; c < categories.size(); ++c)
-      o << "<text x=\"" << left - 8 << "\" y=\"" << y_of(double(c)) + 4 << "\" text-anchor=\"end\""
-        << (c == q ? " font-weight=\"bold\"" : "") << ">" << xml_escape(categories[c]) << "</text>\n"
-        << "<line x1=\"" << left << "\" x2=\"" << left + panel_w << "\" y1=\"" << y_of(double(c)) << "\" y2=\""
-        << y_of(double(c)) << "\" stroke=\"#eee\"/>\n";
-    for (double x = 0; x <= x_max + 1e-9; x += 10)
-      o << "<text x=\"" << x_of(x) << "\" y=\"" << y0 + panel_h + 14 << "\" text-anchor=\"middle\">" << x << "</text>\n";
-    size_t k = 0;
-    for (const ExplorationTrace& t : traces) {
-      if (t.truth != int(q) || t.correct() != correct) continue;
-      // Jitter each view's line within its band so overlapping decisions stay distinguishable.
-      const double jitter = shown > 1 ? 0.6 * (double(k) / double(shown - 1) - 0.5) : 0.0;
-      const int hue = int((k * 137) % 360);
-      ++k;
-      std::string pts;
-      auto add = [&](double vis, int winner) {
-        if (winner < 0) return;
-        pts += fmt("%.1f", x_of(100 * vis)) + "," + fmt("%.1f", y_of(double(winner) + jitter)) + " ";
-      };
-      for (size_t g = 0; g < t.grid.size(); ++g) add(t.visible_fraction[g], t.winners[g]);
-      add(t.full_visible_fraction, t.final_winner);
-      o << "<polyline fill=\"none\" stroke=\"hsl(" << hue << ",70%,40%)\" stroke-opacity=\"0.7\" points=\"" << pts
-        << "\"><title>" << "object " << t.object << " view " << t.view << "</title></polyline>\n";
-    }
-    o << "</g>\n";
-  }
-  o << "<text x=\"" << left + panel_w / 2 << "\" y=\"" << height - 4
-    << "\" text-anchor=\"middle\">visible part of the full 3D cloud (%)</text>\n";
-  o << "</svg>\n";
-  return o.str();
-}
-
-std::string summary_table(const EvalResult& r) {
-  const std::vector<std::string> stages = main_stage_names(r);
-  std::ostringstream o;
-  o << "method  ";
-  for (const std::string& s : stages) o << std::string(std::max<int>(1, 14 - int(s.size())), ' ') << s;
-  o << "\n";
-  for (MethodId m : r.params.methods) {
-    std::string name = method_label(m);
-    o << name << std::string(std::max<int>(1, 8 - int(name.size())), ' ');
-    for (const std::string& s : stages) {
-      std::string cell = pct(accuracy(r.decisions, s, m).percent(), 1);
-      const double paper = paper_accuracy(m, s);
-      if (!std::isnan(paper)) cell += " (" + pct(paper) + ")";
-      o << std::string(std::max<int>(1, 14 - int(cell.size())), ' ') << cell;
-    }
-    o << "\n";
-  }
-  o << "visible%";
-  for (const std::string& s : stages) {
-    const StageStats* st = stats_of(r, s);
-    const std::string cell = st ? pct(st->mean_visible_percent, 1) : "-";
-    o << std::string(std::max<int>(1, 14 - int(cell.size())), ' ') << cell;
-  }
-  o << "\n";
-  return o.str();
-}
-
-Status write_report(const EvalResult& r, const std::string& dir) {
-  std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec) return invalid_argument("cannot create " + dir + ": " + ec.message());
-  auto write = [&](const std::string& name, const std::string& text) -> Status {
-    const std::string path = (std::filesystem::path(dir) / name).string();
-    std::ofstream f(path, std::ios::binary);
-    f << text;
-    f.close();
-    if (!f) return internal_error("cannot write " + path);
-    return {};
-  };
-  const char* kFiles[] = {"report.md", "decisions.csv", "evolution_correct.svg", "evolution_incorrect.svg", "streams.csv"};
-  const std::string method = method_label(r.change_method);
-  const std::string texts[] = {
-      markdown_report(r), decisions_csv(r),
-      evolution_svg(r.traces, r.categories, true, "Finally correct views: decided category along the exploration (" + method + ")"),
-      evolution_svg(r.traces, r.categories, false, "Finally incorrect views: decided category along the exploration (" + method + ")"),
-      streams_csv(r)};
-  for (size_t i = 0; i < std::size(kFiles); ++i)
-    if (Status s = write(kFiles[i], texts[i]); !s.ok()) return s;
-  return {};
-}
 
 }  // namespace glimpse

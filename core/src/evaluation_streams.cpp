@@ -19,7 +19,10 @@ SettleRow settle_summary(const std::vector<StreamTrace>& traces, double threshol
                                                t.keypoints[i] >= min_keypoints;
       if (!settled) continue;
       ++row.settled_views;
-      row.correct += t.winners[i] == t.truth;
+      // A known view the session settles as "unknown" is answered wrongly (the sweep reads scores only).
+      const bool unknown = threshold < 0 && i < t.unknown.size() && t.unknown[i];
+      row.correct += !unknown && t.winners[i] == t.truth;
+      row.unknown += unknown;
       visible.push_back(100.0 * t.visible_fraction[i]);
       break;
     }

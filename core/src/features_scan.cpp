@@ -67,12 +67,28 @@ void ScanFeatures::Impl::refit_touched(const std::vector<uint32_t>& added) {
     st.surfaces[i] = local_surface(*index, i, r, viewpoint[i], params.surface.min_neighbours, near);
     // Its boundary status may have changed, and so may "touches a boundary" of its neighbours.
     if (params.keypoints.exclude_boundary) {
+      // Boundary status reads a point's normal and its neighbours within the boundary radius B: i's
+      // changed, and, when B > r, so may every point within B of i (an added point is among the touched).
+      // "Touches a boundary" reads the boundary status within the band: reset within B + band.
+      const KeypointParams& kp = params.keypoints;
+      const float boundary_reach = kp.boundary_radius_supports > 1 ? kp.boundary_radius_supports * r : 0.f;
       memo.boundary[i] = -1;
-      for (const Neighbour& q : near) memo.touches_boundary[q.index] = -1;
+      if (boundary_reach > 0) {
+        index->radius(st.cloud.points[i], boundary_reach, near);
+        for (const Neighbour& q : near) memo.boundary[q.index] = -1;
+      }
+      const float touch_reach = boundary_reach + kp.boundary_band_supports * r;
+      if (touch_reach > 0) {
+        if (boundary_reach > 0 || touch_reach != r) index->radius(st.cloud.points[i], touch_reach, near);
+        for (const Neighbour& q : near) memo.touches_boundary[q.index] = -1;
+      } else {
+        memo.touches_boundary[i] = -1;
+      }
     }
   }
-  // Descriptors read normals up to r away and the large window (R) around the keypoint.
-  const float reach = std::max(1.f, params.descriptor.large_window_supports) * r + r;
+  // Descriptors read normals within their neighbourhood (whose surfaces read r farther) and the large
+  // window around the keypoint.
+  const float reach = descriptor_reach(r, params.descriptor) + r;
   for (uint32_t i : added) {
     index->radius(st.cloud.points[i], reach, near);
     for (const Neighbour& q : near) cache[q.index].reset();
@@ -101,7 +117,7 @@ ScanFeatures& ScanFeatures::operator=(ScanFeatures&&) noexcept = default;
 bool ScanFeatures::ready() const { return impl_->index != nullptr; }
 const FeatureState& ScanFeatures::state() const { return impl_->st; }
 size_t ScanFeatures::points() const { return impl_->st.cloud.points.size(); }
-const std::optional<Vec3>& ScanFeatures::sensor() const { return impl_->sensor; }
+const std::vector<std::optional<Vec3>>& ScanFeatures::viewpoints() const { return impl_->viewpoint; }
 
 Expected<size_t> ScanFeatures::add(const Cloud& chunk, const CancelFn& cancel) {
   Impl& m = *impl_;
@@ -161,6 +177,38 @@ Expected<size_t> ScanFeatures::add(const Cloud& chunk, const CancelFn& cancel) {
     find_keypoints_and_descriptors(*m.index, st, m.params, m.params.keypoints.exclude_boundary ? &m.memo : nullptr,
                                    &m.cache);
   return added.size();
+}
+
+bool one_sensor(const std::vector<std::optional<Vec3>>& point_sensors) {
+  return std::all_of(point_sensors.begin(), point_sensors.end(),
+                     [&](const std::optional<Vec3>& s) { return s == point_sensors.front(); });
+}
+
+Expected<FeatureState> extract_fused(const Cloud& cloud, const std::vector<std::optional<Vec3>>& point_sensors,
+                                     const FeatureParams& params, const CancelFn& cancel) {
+  if (point_sensors.size() != cloud.points.size())
+    return invalid_argument("a fused scan needs one sensor per point (" + std::to_string(point_sensors.size()) +
+                            " for " + std::to_string(cloud.points.size()) + " points)");
+  if (one_sensor(point_sensors)) {
+    Cloud one = cloud;
+    if (!point_sensors.empty()) one.sensor = point_sensors.front();
+    return extract(one, params, cancel);
+  }
+  std::vector<Cloud> groups;
+  for (size_t i = 0; i < cloud.points.size(); ++i) {
+    auto g = std::find_if(groups.begin(), groups.end(), [&](const Cloud& c) { return c.sensor == point_sensors[i]; });
+    if (g == groups.end()) g = groups.insert(groups.end(), Cloud{{}, point_sensors[i]});
+    g->points.push_back(cloud.points[i]);
+  }
+  ScanFeatures scan(params);
+  for (const Cloud& group : groups)
+    if (auto kept = scan.add(group, cancel); !kept.ok()) return kept.error();
+  if (!scan.ready())
+    return invalid_argument("too few usable points: " + std::to_string(scan.points()) + " after cleaning, at least " +
+                            std::to_string(params.min_points) + " needed");
+  FeatureState state = scan.state();
+  state.cloud.sensor = cloud.sensor ? cloud.sensor : state.cloud.sensor;
+  return state;
 }
 
 }  // namespace glimpse

@@ -108,15 +108,30 @@ Expected<CloudFeatures> cloud_features(const Cloud& cloud, const TrainParams& pa
 
 Eigen::VectorXd method_histogram(const ModelImpl& impl, MethodId method, const CloudFeatures& f) {
   const TrainParams& p = impl.params;
+  const int up_to = p.normalise_up_to_keypoints;
+  const bool normalise = p.normalise_histograms && up_to <= 0;
+  // sec. 4: counts divided by min(count, count at up_to keypoints).
+  auto early = [&](Eigen::VectorXd h, double count, double count_at_up_to) {
+    if (up_to > 0 && count > 0) h /= std::min(count, count_at_up_to);
+    return h;
+  };
+  const double n = static_cast<double>(up_to);
   switch (method) {
     case MethodId::kBoK:
-      return bag_of_keypoints(keypoint_words(impl.bok, f.descriptors), p.bok_clusters, p.normalise_histograms);
-    case MethodId::kBoG:
-      return bag_of_graphs(local_graphs(f.positions, keypoint_words(impl.bog, f.descriptors)), impl.graphs,
-                           p.normalise_histograms);
-    case MethodId::kKGH:
-      return keypoint_global_histogram(f.positions, keypoint_words(impl.kgh, f.descriptors), p.kgh_clusters,
-                                       p.kgh_distance_bins, impl.kgh_max_distance_m, p.normalise_histograms);
+      return early(p.bok_soft_words > 1
+                       ? soft_bag_of_keypoints(impl.bok, f.descriptors, p.bok_soft_words, normalise)
+                       : bag_of_keypoints(keypoint_words(impl.bok, f.descriptors), p.bok_clusters, normalise),
+                   static_cast<double>(f.descriptors.size()), n);
+    case MethodId::kBoG: {
+      const auto graphs = local_graphs(f.positions, keypoint_words(impl.bog, f.descriptors));
+      return early(bag_of_graphs(graphs, impl.graphs, normalise), static_cast<double>(graphs.size()), n);
+    }
+    case MethodId::kKGH: {
+      const double k = static_cast<double>(f.positions.size());
+      return early(keypoint_global_histogram(f.positions, keypoint_words(impl.kgh, f.descriptors), p.kgh_clusters,
+                                             p.kgh_distance_bins, impl.kgh_max_distance_m, normalise),
+                   k * (k - 1), n * (n - 1));
+    }
     case MethodId::kVFH: return f.vfh ? Eigen::VectorXd(f.vfh->cast<double>()) : Eigen::VectorXd::Zero(kVfhSize);
     case MethodId::kESF: return f.esf ? Eigen::VectorXd(f.esf->cast<double>()) : Eigen::VectorXd::Zero(kEsfSize);
     case MethodId::kUSH:
@@ -134,7 +149,13 @@ MethodDecision method_decision(const ModelImpl& impl, MethodId method, const Clo
   MethodDecision out;
   std::vector<NearestReferences> nearest;
   for (size_t j = 0; j < parts.size(); ++j) {
-    StageScores s = decide_with_distances(*impl.stages[static_cast<int>(parts[j])], method_histogram(impl, parts[j], f));
+    const MethodId m = parts[j];
+    // sec. 4: early in the exploration (fewer than normalise_up_to_keypoints keypoints) the words'
+    // proportions are compared, the references' too; later the counts.
+    const int up_to = impl.params.normalise_up_to_keypoints;
+    const bool early = up_to > 0 && (m == MethodId::kBoK || m == MethodId::kKGH) &&
+                       f.descriptors.size() < static_cast<size_t>(up_to);
+    StageScores s = decide_with_distances(*impl.stages[static_cast<int>(m)], method_histogram(impl, m, f), early);
     out.scores = out.scores.size() ? Eigen::VectorXd(out.scores + s.scores) : s.scores;
     if (calibrated) nearest.push_back(nearest_references(std::move(s), cal.reference_whole[j]));
   }
@@ -182,6 +203,7 @@ void judge_unknown(const Model& model, const MethodDecision& decision, const Clo
     c.unknown_reason = std::move(why);
     return;
   }
+  c.category_novelty.assign(decision.novelty.data(), decision.novelty.data() + decision.novelty.size());
   if (decision.novelty.size() && c.winner >= 0) c.novelty = decision.novelty[c.winner];
   (void)set_known_acceptance(model, c, 0);  // 0 (the default) is always valid
 }
@@ -289,15 +311,21 @@ Expected<Model> train(const std::vector<TrainingCloud>& data, const TrainParams&
   // Features of every job, in parallel; batches keep progress and cancel responsive.
   const int threads = resolve_threads(params.threads);
   std::vector<Expected<CloudFeatures>> feats(jobs.size(), internal_error("not computed"));
+  // Tilted training views: the clouds as given are what calibration decides (what a sensor sends).
+  const bool tilted = params.tilt_deg > 0 && params.calibration_folds >= 2;
+  std::vector<Expected<CloudFeatures>> as_seen(tilted ? jobs.size() : 0, internal_error("not computed"));
   const size_t batch = static_cast<size_t>(threads) * 4;
   for (size_t begin = 0; begin < jobs.size(); begin += batch) {
     if (cancelled_now()) return cancelled("training cancelled");
     const int64_t end = static_cast<int64_t>(std::min(jobs.size(), begin + batch));
 #pragma omp parallel for num_threads(threads) schedule(dynamic, 1)
     for (int64_t j = static_cast<int64_t>(begin); j < end; ++j) {
-      const Cloud& cloud = learnt[jobs[j].cloud];
-      feats[j] = jobs[j].prefix ? cloud_features(reveal_top_down(cloud, jobs[j].prefix), params, base, 1, cancel)
-                                : cloud_features(cloud, params, base, 1, cancel);
+      auto features_of = [&](const Cloud& cloud) {
+        return jobs[j].prefix ? cloud_features(reveal_top_down(cloud, jobs[j].prefix), params, base, 1, cancel)
+                              : cloud_features(cloud, params, base, 1, cancel);
+      };
+      feats[j] = features_of(learnt[jobs[j].cloud]);
+      if (tilted) as_seen[j] = features_of(data[jobs[j].cloud].cloud);
     }
     if (progress) progress({"features", static_cast<size_t>(end), jobs.size()});
   }
@@ -314,9 +342,23 @@ Expected<Model> train(const std::vector<TrainingCloud>& data, const TrainParams&
                                               ": " + feats[j].error().message};
     }
     samples.push_back({d.category, d.object_id, std::move(*feats[j]), jobs[j].prefix == 0});
+    if (tilted && as_seen[j].ok()) samples.back().as_seen = std::move(*as_seen[j]);
   }
   feats.clear();
-  auto model = train_on_features(std::move(samples), params, progress, cancel);
+  as_seen.clear();
+  // The density clouds are classified at: the median relative density of the training clouds as given.
+  TrainParams learnt_params = params;
+  if (params.filter_scans && params.filters.relative_density <= 0) {
+    std::vector<double> density(data.size(), 0.0);
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 4)
+    for (int64_t i = 0; i < static_cast<int64_t>(data.size()); ++i) density[i] = relative_density(data[i].cloud.points);
+    std::erase(density, 0.0);
+    if (!density.empty()) {
+      std::nth_element(density.begin(), density.begin() + std::ptrdiff_t(density.size() / 2), density.end());
+      learnt_params.filters.relative_density = density[density.size() / 2];
+    }
+  }
+  auto model = train_on_features(std::move(samples), learnt_params, progress, cancel);
   if (model.ok()) {
     // Statistics count the clouds given, not the prefixes made of them.
     model->stats.clouds = data.size();
@@ -361,8 +403,9 @@ Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainP
   const std::vector<MethodId> base = base_methods(params);
   const int threads = resolve_threads(params.threads);
   std::vector<CloudFeatures> f;
+  std::vector<std::optional<CloudFeatures>> as_seen;
   f.reserve(data.size());
-  for (auto& d : data) f.push_back(std::move(d.features));
+  for (auto& d : data) f.push_back(std::move(d.features)), as_seen.push_back(std::move(d.as_seen));
 
   // 2. Keypoint codebooks (sec. 3.2.5).
   report("codebooks", 0, 3);
@@ -410,16 +453,26 @@ Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainP
 
   // 3. Global histograms and decision stages (sec. 3.3).
   size_t done = 0;
-  std::vector<Eigen::MatrixXd> histograms(kMethodCount);
+  std::vector<Eigen::MatrixXd> histograms(kMethodCount), queries(kMethodCount);
+  const bool tilted = std::any_of(as_seen.begin(), as_seen.end(), [](const auto& a) { return a.has_value(); });
   for (MethodId m : base) {
     Eigen::MatrixXd& h = histograms[static_cast<size_t>(m)];
+    Eigen::MatrixXd& q = queries[static_cast<size_t>(m)];
     for (size_t i = 0; i < f.size(); ++i) {
       const Eigen::VectorXd row = method_histogram(*impl, m, f[i]);
       if (i == 0) h.resize(static_cast<Eigen::Index>(f.size()), row.size());
       h.row(static_cast<Eigen::Index>(i)) = row.transpose();
+      if (!tilted) continue;
+      if (i == 0) q.resize(h.rows(), h.cols());
+      if (as_seen[i]) q.row(static_cast<Eigen::Index>(i)) = method_histogram(*impl, m, *as_seen[i]).transpose();
+      else q.row(static_cast<Eigen::Index>(i)) = h.row(static_cast<Eigen::Index>(i));
     }
+    if (!tilted) q = h;
     DecisionParams dp = params.decision;
-    if (m == MethodId::kBoG) dp.max_pca_dims = params.bog_pca_dims;
+    if (m == MethodId::kBoG) {  // 1032 graph types reduced to 65 dims (sec. 4), also without PCA elsewhere
+      dp.max_pca_dims = params.bog_pca_dims;
+      if (dp.pca_explained_variance <= 0) dp.pca_explained_variance = 1;
+    }
     auto stage = fit_decision(h, labels, static_cast<int>(model.categories.size()), dp,
                               params.seed + 10 + static_cast<uint64_t>(m), threads, object_of);
     if (!stage.ok()) return with_method(m, stage.error());
@@ -438,7 +491,7 @@ Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainP
   std::vector<std::string> object_categories(object_index.size());
   for (size_t i = 0; i < labels.size(); ++i)
     object_categories[static_cast<size_t>(object_of[i])] = model.categories[static_cast<size_t>(labels[i])];
-  impl->calibration = calibrate(*impl, model.default_method, histograms, labels, object_of, whole, object_categories,
+  impl->calibration = calibrate(*impl, model.default_method, histograms, queries, labels, object_of, whole, object_categories,
                                 static_cast<int>(model.categories.size()), threads);
   report("calibration", 1, 1);
   if (cancelled_now()) return cancelled("training cancelled");
@@ -461,64 +514,5 @@ Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainP
   return model;
 }
 
-// ---- Classification -------------------------------------------------------------------------------
-
-std::string size_warning(const TrainingSummary& stats, const Cloud& cloud) {
-  if (!(stats.max_extent_m > 0) || cloud.points.empty()) return {};
-  Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
-  for (const Vec3& p : cloud.points)
-    if (p.allFinite()) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
-  const float extent = (hi - lo).maxCoeff();
-  if (!std::isfinite(extent)) return {};
-  char known[96];
-  std::snprintf(known, sizeof known, "the model knows %.2g-%.2g m objects", stats.min_extent_m, stats.max_extent_m);
-  char buf[256];
-  if (extent > 4 * stats.max_extent_m) {
-    const char* unit = extent > 300 * stats.max_extent_m ? "millimetres" : extent > 30 * stats.max_extent_m ? "centimetres" : "another unit";
-    std::snprintf(buf, sizeof buf, "the cloud spans %.3g m, %s: %s? Clouds are in metres", extent, known, unit);
-    return buf;
-  }
-  if (extent < stats.min_extent_m / 4) {
-    std::snprintf(buf, sizeof buf, "the cloud spans only %.3g m, %s: another unit (clouds are in metres)?", extent, known);
-    return buf;
-  }
-  return {};
-}
-
-Status check_feature_version(const Model& model) {
-  if (model.feature_version == kFeaturePipelineVersion) return {};
-  return failed_precondition("the model was trained with feature pipeline version " +
-                             std::to_string(model.feature_version) + ", this build computes version " +
-                             std::to_string(kFeaturePipelineVersion) + ": its references do not match new features; retrain it");
-}
-
-Expected<Classification> classify(const Model& model, const Cloud& cloud, std::optional<MethodId> method,
-                                  const CancelFn& cancel) {
-  if (!model.impl) return failed_precondition("the model is not trained");
-  if (Status s = check_feature_version(model); !s.ok()) return s.error();
-  const MethodId m = method.value_or(model.default_method);
-  if (!needs(model.methods, m))
-    return failed_precondition(std::string("the model was not trained for method '") + method_name(m) + "'");
-  const ModelImpl& impl = *model.impl;
-  const auto t0 = std::chrono::steady_clock::now();
-  auto f = cloud_features(cloud, impl.params, component_methods(impl, m), impl.params.threads, cancel);
-  if (!f.ok()) return f.error();
-  if (cancel && cancel()) return cancelled("classification cancelled");
-  Classification c;
-  c.feature_ms = ms_since(t0);
-  const auto t1 = std::chrono::steady_clock::now();
-  const MethodDecision decision = method_decision(impl, m, *f);
-  const Eigen::VectorXd& scores = decision.scores;
-  c.decision_ms = ms_since(t1);
-  c.method = m;
-  c.winner = argmax(scores);
-  judge_unknown(model, decision, *f, c);
-  c.categories = model.categories;
-  c.scores.assign(scores.data(), scores.data() + scores.size());
-  c.points = f->points;
-  c.keypoints = f->positions.size();
-  c.warning = size_warning(model.stats, cloud);
-  return c;
-}
 
 }  // namespace glimpse

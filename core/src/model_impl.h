@@ -3,6 +3,7 @@
 #pragma once
 
 #include <array>
+#include <chrono>
 #include <limits>
 #include <optional>
 
@@ -57,6 +58,14 @@ Expected<CloudFeatures> cloud_features(const Cloud& cloud, const TrainParams& pa
                                        const std::vector<MethodId>& methods, int threads,
                                        const CancelFn& cancel = {});
 
+// classify_fused's decision once the model's filters ran: `filtered` is filter_scan(cloud) with `report`
+// (nullptr: the model does not filter), each kept point facing the sensor of its nearest raw point.
+// The session calls it with the filter it ran to see whether anything would be filtered.
+Expected<Classification> classify_filtered(const Model& model, const Cloud& cloud,
+                                           const std::vector<std::optional<Vec3>>& point_sensors,
+                                           const Cloud* filtered, const ScanFilterReport& report, MethodId method,
+                                           std::chrono::steady_clock::time_point started, const CancelFn& cancel = {});
+
 // The global histogram of one base method (every method but fusion).
 Eigen::VectorXd method_histogram(const ModelImpl& impl, MethodId method, const CloudFeatures& f);
 
@@ -71,16 +80,21 @@ struct TrainingSample {
   std::string object_id;
   CloudFeatures features;
   bool whole = true;  // the whole training cloud, not one of its top-down prefixes
+  // The same cloud as a sensor gives it, when what is learnt differs (training views are tilted, see
+  // TrainParams::tilt_deg): calibration decides these held-out clouds, as a test cloud would come.
+  std::optional<CloudFeatures> as_seen;
 };
 Expected<Model> train_on_features(std::vector<TrainingSample> samples, const TrainParams& params,
                                   const ProgressFn& progress = {}, const CancelFn& cancel = {});
 
 // Inner cross-validation of `method`'s decision stages over params.calibration_folds folds of the
 // training objects (`objects[i]` the object of row i, `object_categories` per object); histograms[m] the
-// training rows of base method m, `whole` per row: a whole cloud (1) or a top-down prefix (0). The
-// codebooks are the model's own (fitted without labels).
+// training rows of base method m (what the stages learn), queries[m] the same rows as a sensor gives
+// them (what a held-out row is decided on; the same matrix when nothing is tilted), `whole` per row: a
+// whole cloud (1) or a top-down prefix (0). The codebooks are the model's own (fitted without labels).
 Calibration calibrate(const ModelImpl& impl, MethodId method, const std::vector<Eigen::MatrixXd>& histograms,
-                      const std::vector<int>& labels, const std::vector<int>& objects, const std::vector<uint8_t>& whole,
+                      const std::vector<Eigen::MatrixXd>& queries, const std::vector<int>& labels,
+                      const std::vector<int>& objects, const std::vector<uint8_t>& whole,
                       const std::vector<std::string>& object_categories, int categories, int threads);
 
 // A failed precondition naming both versions when the model's features were computed differently.

@@ -142,14 +142,23 @@ void VoxelIndex::nearest(const Vec3& q, size_t k, std::vector<Neighbour>& out) c
 }
 
 float median_knn_distance(const NeighbourIndex& tree, size_t k, size_t sample) {
+  const size_t ks[] = {k};
+  return median_knn_distances(tree, ks, sample)[0];
+}
+
+std::vector<float> median_knn_distances(const NeighbourIndex& tree, std::span<const size_t> ks_in, size_t sample) {
   const Points& pts = tree.points();
-  if (pts.size() < 2 || k == 0) return 0.f;
-  k = std::min(k, pts.size() - 1);
+  std::vector<float> out(ks_in.size(), 0.f);
+  if (pts.size() < 2 || ks_in.empty()) return out;
+  std::vector<size_t> ks(ks_in.begin(), ks_in.end());
+  for (size_t& k : ks) k = std::min(k, pts.size() - 1);
+  const size_t kmax = *std::max_element(ks.begin(), ks.end());
+  if (kmax == 0) return out;
   const size_t step = std::max<size_t>(1, pts.size() / std::max<size_t>(sample, 1));
   std::vector<size_t> at;
   for (size_t i = 0; i < pts.size(); i += step) at.push_back(i);
   std::vector<Neighbour> nn;
-  auto kth = [&](size_t i) {
+  auto kth = [&](size_t i, size_t k) {
     tree.nearest(pts[i], k + 1, nn);  // the point itself comes first
     return std::sqrt(nn[k].distance_sq);
   };
@@ -159,28 +168,35 @@ float median_knn_distance(const NeighbourIndex& tree, size_t k, size_t sample) {
     return *mid;
   };
   // A k-nearest search costs about two radius searches, so: the exact k-th distance at a few samples
-  // gives a radius R a little above the typical one; at every sample the k-th smallest distance
-  // within R is exact, and a sample with fewer than k + 1 points within R has its k-th distance
-  // beyond R. While those are fewer than half, the median is exactly the one of the k-th distances.
+  // gives a radius R a little above the typical one (for the largest k asked); at every sample the k-th
+  // smallest distance within R is exact, and a sample with fewer than k + 1 points within R has its k-th
+  // distance beyond R. While those are fewer than half, the median is exactly the one of the k-th
+  // distances. One radius search per sample serves every k.
   std::vector<float> pilot;
-  for (size_t j = 0; j < at.size(); j += std::max<size_t>(1, at.size() / 16)) pilot.push_back(kth(at[j]));
+  for (size_t j = 0; j < at.size(); j += std::max<size_t>(1, at.size() / 16)) pilot.push_back(kth(at[j], kmax));
   const float R = 1.2f * median(pilot);
-  std::vector<float> d;
-  d.reserve(at.size());
+  std::vector<std::vector<float>> d(ks.size());
+  for (auto& v : d) v.reserve(at.size());
   auto closer = [](const Neighbour& a, const Neighbour& b) { return a.distance_sq < b.distance_sq; };
   for (size_t i : at) {
     tree.radius(pts[i], R, nn);
-    if (nn.size() < k + 1) {
-      d.push_back(std::numeric_limits<float>::infinity());
-      continue;
+    for (size_t q = 0; q < ks.size(); ++q) {
+      const size_t k = ks[q];
+      if (k == 0 || nn.size() < k + 1) {
+        d[q].push_back(k == 0 ? 0.f : std::numeric_limits<float>::infinity());
+        continue;
+      }
+      std::nth_element(nn.begin(), nn.begin() + static_cast<std::ptrdiff_t>(k), nn.end(), closer);
+      d[q].push_back(std::sqrt(nn[k].distance_sq));
     }
-    std::nth_element(nn.begin(), nn.begin() + static_cast<std::ptrdiff_t>(k), nn.end(), closer);
-    d.push_back(std::sqrt(nn[k].distance_sq));
   }
-  const float m = median(d);
-  if (std::isfinite(m)) return m;
-  for (size_t j = 0; j < at.size(); ++j) d[j] = kth(at[j]);
-  return median(d);
+  for (size_t q = 0; q < ks.size(); ++q) {
+    out[q] = median(d[q]);
+    if (std::isfinite(out[q])) continue;
+    for (size_t j = 0; j < at.size(); ++j) d[q][j] = kth(at[j], ks[q]);
+    out[q] = median(d[q]);
+  }
+  return out;
 }
 
 float snap_radius(float r) {

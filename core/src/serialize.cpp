@@ -148,8 +148,13 @@ void visit_params(TrainParams& p, F&& f) {
   f("keypoints.exclude_boundary", p.features.keypoints.exclude_boundary);
   f("keypoints.boundary_gap_rad", p.features.keypoints.boundary_gap_rad);
   f("keypoints.max_keypoints", p.features.keypoints.max_keypoints);
+  f("keypoints.claim_min_supports", p.features.keypoints.claim_min_supports);
+  f("keypoints.boundary_band_supports", p.features.keypoints.boundary_band_supports);
+  f("keypoints.boundary_radius_supports", p.features.keypoints.boundary_radius_supports);
+  f("keypoints.response", p.features.keypoints.response);
   f("descriptor.large_window_supports", p.features.descriptor.large_window_supports);
   f("descriptor.max_pfh_points", p.features.descriptor.max_pfh_points);
+  f("descriptor.characteristic_scale_supports", p.features.descriptor.characteristic_scale_supports);
   f("global.normal_radius_m", p.global.normal_radius_m);
   f("global.fill_size_component", p.global.fill_size_component);
   f("ush.max_depth_m", p.ush.max_depth_m);
@@ -157,7 +162,9 @@ void visit_params(TrainParams& p, F&& f) {
   f("ush.flat_curvedness", p.ush.flat_curvedness);
   f("codebook_explained_variance", p.codebook_explained_variance);
   f("bok_clusters", p.bok_clusters);
+  f("bok_soft_words", p.bok_soft_words);
   f("normalise_histograms", p.normalise_histograms);
+  f("normalise_up_to_keypoints", p.normalise_up_to_keypoints);
   f("bog_keypoint_clusters", p.bog_keypoint_clusters);
   f("bog_volume_clusters", p.bog_volume_clusters);
   f("bog_pca_dims", p.bog_pca_dims);
@@ -174,6 +181,19 @@ void visit_params(TrainParams& p, F&& f) {
   f("known_acceptance", p.known_acceptance);
   f("tilt_deg", p.tilt_deg);
   f("seed", p.seed);
+  f("filters.enabled", p.filter_scans);
+  f("filters.remove_ground", p.filters.remove_ground);
+  f("filters.ground_distance_m", p.filters.ground_distance_m);
+  f("filters.max_tilt_deg", p.filters.max_tilt_deg);
+  f("filters.ground_band_m", p.filters.ground_band_m);
+  f("filters.min_ground_fraction", p.filters.min_ground_fraction);
+  f("filters.ground_min_sides", p.filters.ground_min_sides);
+  f("filters.min_ground_fill", p.filters.min_ground_fill);
+  f("filters.min_ground_extent_m", p.filters.min_ground_extent_m);
+  f("filters.remove_outliers", p.filters.remove_outliers);
+  f("filters.outlier_radius_spacings", p.filters.outlier_radius_spacings);
+  f("filters.outlier_min_neighbours", p.filters.outlier_min_neighbours);
+  f("filters.relative_density", p.filters.relative_density);
 }
 
 template <class T>
@@ -291,6 +311,7 @@ DecisionStage read_stage(Reader& r, int categories, Eigen::Index histogram_size)
   }
   s.temperature = r.f64("decision temperature");
   if (r.failed()) return s;
+  s.projected = !is_identity_projection(s.pca);
   if (s.categories != categories || s.neighbours < 1 || s.references.rows() < 1 ||
       s.references.cols() != s.pca.basis.cols() || s.pca.mean.size() != histogram_size || !(s.temperature > 0))
     r.fail("inconsistent decision stage");
@@ -481,6 +502,9 @@ Expected<Model> deserialize(std::span<const uint8_t> bytes) {
       if (auto it = values.find(name); it != values.end() && !from_double(v, it->second))
         r.fail(std::string("parameter ") + name + " has an impossible value");
     });
+    // A model from before the scan filters classifies as it did: unfiltered.
+    if (!values.count("filters.enabled")) p.filter_scans = false;
+    if (!(p.filters.relative_density >= 0 && p.filters.relative_density < 1e12)) r.fail("filters.relative_density out of range");
     p.methods = read_methods(r);
     p.default_method = static_cast<MethodId>(r.u8("default method"));
     p.fusion_of = read_methods(r);

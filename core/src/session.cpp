@@ -3,11 +3,14 @@
 #include "glimpse/session.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <string>
 
 #include "glimpse/features.h"
+#include "glimpse/preprocess.h"
+#include "glimpse/scan_filters.h"
 #include "model_impl.h"
 
 namespace glimpse {
@@ -18,7 +21,8 @@ class Session final : public ScanSession {
  public:
   Session(std::shared_ptr<const Model> model, const SessionParams& params, MethodId method)
       : model_(std::move(model)), impl_(*model_->impl), params_(params), method_(method),
-        components_(component_methods(impl_, method)), features_(feature_params()) {
+        components_(component_methods(impl_, method)), features_(feature_params()),
+        duplicates_(impl_.params.features.duplicate_tolerance_m) {
     if (const Calibration& c = impl_.calibration;
         params_.use_model_calibration && c.method == method_ && c.settle_margin > 0 && params_.settle_confidence > 0)
       params_.full_margin = c.settle_margin / params_.settle_confidence;
@@ -42,8 +46,22 @@ class Session final : public ScanSession {
     return fp;
   }
   Status check(const Cloud& chunk) const;
+  // A model that filters its scans (floor, strays, density) judges them on the scan so far, filtered
+  // as a whole: a floor, a stray or the density is a property of the whole scan, not of the newest
+  // chunk (a top-down scan's last chunk is all floor). See SessionParams::global_refresh_growth for
+  // when the filters run and which features then decide a chunk.
+  bool filtered() const { return impl_.params.filter_scans; }
+  size_t points() const { return filtered() ? raw_.points.size() : features_.points(); }
+  void add_raw(const Cloud& chunk);
+  // ScanFeatures catch up with the raw points (in their chunks' sensor runs): the points they kept.
+  Expected<size_t> feed_features();
+  // Classify's of the accumulated points (the last one again when nothing was added since).
+  const Expected<Classification>& classify_so_far();
   bool update_method_features(bool whole_cloud_too);
   void decide();
+  // Tracks a chunk's evidence (the newest decision's own scores and novelty) through the stability
+  // window into last_.
+  void track(ChunkEvidence e);
 
   std::shared_ptr<const Model> model_;
   const ModelImpl& impl_;
@@ -51,6 +69,14 @@ class Session final : public ScanSession {
   MethodId method_;
   std::vector<MethodId> components_;
   ScanFeatures features_;
+  DuplicateFilter duplicates_;                      // filtered(): clean()'s rule on the raw points
+  Cloud raw_;                                       // filtered(): the points as sent, cleaned
+  std::vector<std::optional<Vec3>> raw_sensors_;    // per raw point: its chunk's sensor
+  size_t fed_ = 0;                                  // raw points added to features_
+  size_t filters_at_ = 0;                           // raw points when the filters last ran
+  bool filters_change_ = false;                     // ... and whether they changed the scan
+  Expected<Classification> classified_ = failed_precondition("nothing classified yet");
+  size_t classified_points_ = 0;
   CloudFeatures method_features_;
   bool have_features_ = false;
   size_t global_at_points_ = 0;
@@ -67,8 +93,8 @@ Status Session::check(const Cloud& chunk) const {
   if (chunk.points.size() > params_.max_chunk_points)
     return resource_exhausted("a chunk of " + std::to_string(chunk.points.size()) + " points exceeds the limit of " +
                               std::to_string(params_.max_chunk_points));
-  if (features_.points() >= params_.max_points)
-    return resource_exhausted("the session holds " + std::to_string(features_.points()) + " points, its limit is " +
+  if (points() >= params_.max_points)
+    return resource_exhausted("the session holds " + std::to_string(points()) + " points, its limit is " +
                               std::to_string(params_.max_points));
   return check_cloud(chunk, "chunk " + std::to_string(chunks_));
 }
@@ -105,12 +131,27 @@ bool Session::update_method_features(bool whole_cloud_too) {
 void Session::decide() {
   method_decision_ = method_decision(impl_, method_, method_features_);
   const Eigen::VectorXd& scores = method_decision_.scores;
-  last_.raw_scores.assign(scores.data(), scores.data() + scores.size());
   ChunkEvidence e;
-  e.scores = last_.raw_scores;
+  e.scores.assign(scores.data(), scores.data() + scores.size());
   e.novelty.assign(method_decision_.novelty.data(), method_decision_.novelty.data() + method_decision_.novelty.size());
   e.keypoints = method_features_.positions.size();
   e.cannot_judge = cannot_judge(method_, components_, method_features_);
+  track(std::move(e));
+}
+
+// A Classify's answer as a chunk's evidence: its scores and per-category novelty; a cloud the method
+// cannot judge is unknown with a NaN novelty and the reason.
+ChunkEvidence evidence_of(const Classification& c) {
+  ChunkEvidence e;
+  e.scores = c.scores;
+  e.novelty = c.category_novelty;
+  e.keypoints = c.keypoints;
+  if (c.unknown && !std::isfinite(c.novelty)) e.cannot_judge = c.unknown_reason;
+  return e;
+}
+
+void Session::track(ChunkEvidence e) {
+  last_.raw_scores = e.scores;
   track_.decision.chunk_index = last_.chunk_index;
   track_decision(track_, e, std::any_of(components_.begin(), components_.end(), uses_keypoints), threshold_, params_);
   const StreamDecision& d = track_.decision;
@@ -130,7 +171,7 @@ Expected<StreamDecision> Session::add(const Cloud& chunk) {
   last_.chunk_index = chunks_++;
   last_.final = false;
   // Points beyond the session's limit are not kept (the next chunk is refused).
-  const size_t room = params_.max_points - features_.points();
+  const size_t room = params_.max_points - points();
   Cloud part;
   const Cloud* take = &chunk;
   if (chunk.points.size() > room) {
@@ -138,7 +179,38 @@ Expected<StreamDecision> Session::add(const Cloud& chunk) {
     part.points.assign(chunk.points.begin(), chunk.points.begin() + static_cast<std::ptrdiff_t>(room));
     take = &part;
   }
-  auto kept = features_.add(*take);
+  Expected<size_t> kept = size_t{0};
+  if (filtered()) {
+    add_raw(*take);
+    last_.points = raw_.points.size();
+    // The filters cost what the scan holds: they run again once it grew by global_refresh_growth (as
+    // VFH does); in between, a filtered scan's chunks repeat its last decision, an unfiltered one's grow
+    // ScanFeatures.
+    const size_t n = raw_.points.size();
+    if (!filters_at_ || double(n) >= (1.0 + params_.global_refresh_growth) * double(filters_at_)) {
+      const auto t0 = std::chrono::steady_clock::now();
+      ScanFilterReport report;
+      const Cloud scan = filter_scan(raw_, impl_.params.filters, &report);
+      filters_at_ = n;
+      // A floor or a thinned density changes what every method sees; a few stray points (1 % at most:
+      // a sparse top-down prefix's edge) do not, and the chunk-by-chunk features keep them until
+      // finish(), which is Classify's of the filtered scan.
+      filters_change_ = report.ground > 0 || report.voxel_m > 0 || double(report.outliers) > 0.01 * double(report.input);
+      if (filters_change_) {  // Classify's of the filtered scan
+        classified_ = classify_filtered(*model_, raw_, raw_sensors_, &scan, report, method_, t0);
+        classified_points_ = n;
+        if (!classified_.ok()) return last_;  // undecided: too few points, nothing but floor, a line
+        last_.keypoints = classified_->keypoints;
+        track(evidence_of(*classified_));
+        return last_;
+      }
+    } else if (filters_change_) {
+      return last_;  // the last decision stands until the scan has grown enough to filter it again
+    }
+    kept = feed_features();
+  } else {
+    kept = features_.add(*take);
+  }
   if (!kept.ok()) return kept.error();
   last_.points = features_.points();
   if (!features_.ready()) return last_;  // nothing to decide on yet
@@ -149,24 +221,64 @@ Expected<StreamDecision> Session::add(const Cloud& chunk) {
   return last_;
 }
 
+void Session::add_raw(const Cloud& chunk) {
+  for (const Vec3& p : chunk.points)
+    if (p.allFinite() && duplicates_.keep(p)) raw_.points.push_back(p), raw_sensors_.push_back(chunk.sensor);
+  if (chunk.sensor) raw_.sensor = chunk.sensor;
+}
+
+Expected<size_t> Session::feed_features() {
+  size_t added = 0;
+  while (fed_ < raw_.points.size()) {
+    Cloud run;
+    run.sensor = raw_sensors_[fed_];
+    for (; fed_ < raw_.points.size() && raw_sensors_[fed_] == run.sensor; ++fed_) run.points.push_back(raw_.points[fed_]);
+    auto kept = features_.add(run);
+    if (!kept.ok()) return kept.error();
+    added += *kept;
+  }
+  return added;
+}
+
+const Expected<Classification>& Session::classify_so_far() {
+  if (raw_.points.size() != classified_points_ || !classified_.ok()) {
+    classified_ = classify_fused(*model_, raw_, raw_sensors_, method_);
+    classified_points_ = raw_.points.size();
+  }
+  return classified_;
+}
+
 Expected<StreamDecision> Session::finish() {
-  if (!features_.ready()) return last_;
-  if (!update_method_features(true) && !have_features_) return last_;
-  last_.keypoints = method_features_.positions.size();
-  decide();
+  Classification c;
+  if (filtered()) {
+    // The final decision is Classify's of the accumulated scan (filtered as a whole, each point facing
+    // its chunk's sensor): the last chunk's, tracked once more.
+    const Expected<Classification>& got = classify_so_far();
+    if (!got.ok()) return last_;
+    last_.points = got->points;
+    last_.keypoints = got->keypoints;
+    track(evidence_of(*got));
+    c = *got;
+  } else {
+    if (!features_.ready()) return last_;
+    if (!update_method_features(true) && !have_features_) return last_;
+    last_.keypoints = method_features_.positions.size();
+    decide();
+    c.method = method_;
+    c.winner = static_cast<int>(std::max_element(last_.raw_scores.begin(), last_.raw_scores.end()) - last_.raw_scores.begin());
+    judge_unknown(*model_, method_decision_, method_features_, c);
+  }
   // The scan is over: the answer is Classify's of the whole scan (at the session's operating point),
   // not the running average.
-  Classification c;
-  c.method = method_;
-  c.winner = static_cast<int>(std::max_element(last_.raw_scores.begin(), last_.raw_scores.end()) - last_.raw_scores.begin());
-  judge_unknown(*model_, method_decision_, method_features_, c);
   (void)set_known_acceptance(*model_, c, params_.known_acceptance);  // checked by create()
   last_.scores = last_.raw_scores;
   const int before = track_.winners.empty() ? -1 : track_.winners.back();
   const int now = c.unknown ? static_cast<int>(last_.scores.size()) : c.winner;
-  if (before >= 0 && now != before) {
+  if (before >= 0 && now != before) {  // the running average had not caught up: not settled on it
     ++last_.category_changes;
     last_.winner_held_chunks = 1;
+    last_.settled = false;
+    last_.confidence = 0;
   }
   last_.winner = c.winner;
   last_.unknown = c.unknown;

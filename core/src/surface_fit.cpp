@@ -8,6 +8,7 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <numbers>
 
 #include "glimpse/normal_orientation.h"
 #include "parallel.h"
@@ -18,14 +19,19 @@ float support_radius(const NeighbourIndex& tree, const SurfaceParams& params) {
   return estimate_density(tree, params.support_radius_m, params.support_neighbours).support_radius_m;
 }
 
-Eigen::Vector2f harris_eigenvalues(float p1, float p2, float p3, float p4, float p5) {
-  // Sipiran & Bustos 2011: Harris matrix of the fitted quadric under a unit Gaussian.
-  const double A = double(p4) * p4 + 2.0 * p1 * p1 + 2.0 * p2 * p2;
-  const double B = double(p5) * p5 + 2.0 * p2 * p2 + 2.0 * p3 * p3;
-  const double C = double(p4) * p5 + 2.0 * p1 * p2 + 2.0 * p2 * p3;
+Eigen::Vector2f harris_matrix_eigenvalues(double p1, double p2, double p3, double p4, double p5, double sigma) {
+  const double s2 = sigma * sigma;
+  const double A = p4 * p4 + s2 * (p1 * p1 + p2 * p2);
+  const double B = p5 * p5 + s2 * (p2 * p2 + p3 * p3);
+  const double C = p4 * p5 + s2 * (p1 * p2 + p2 * p3);
   const double mean = 0.5 * (A + B);
   const double dev = std::sqrt(0.25 * (A - B) * (A - B) + C * C);
   return {static_cast<float>(std::max(0.0, mean - dev)), static_cast<float>(mean + dev)};
+}
+
+Eigen::Vector2f harris_eigenvalues(float p1, float p2, float p3, float p4, float p5) {
+  // Sipiran & Bustos 2011's closed form, the quadric in metres: sigma^2 = 2 m^2.
+  return harris_matrix_eigenvalues(p1, p2, p3, p4, p5, std::numbers::sqrt2);
 }
 
 Eigen::Vector2f principal_curvatures(float p1, float p2, float p3, float p4, float p5) {
@@ -261,6 +267,9 @@ LocalSurface local_surface(const NeighbourIndex& tree, uint32_t index, float r,
               p5 = static_cast<float>(c[4]);
   const Eigen::Vector2f k = principal_curvatures(p1, p2, p3, p4, p5);
   const Eigen::Vector2f lambda = harris_eigenvalues(p1, p2, p3, p4, p5);
+  // The Harris response over the fit's own window (sigma = r/2): in units of r, sigma = 1/2.
+  const Eigen::Vector2f e = harris_matrix_eigenvalues(c[0], c[1], c[2], c[3], c[4], 0.5);
+  s.harris_response = static_cast<float>(harris_response(e[0], e[1]));
   s.normal = n.cast<float>();
   s.k1 = k[0];
   s.k2 = k[1];

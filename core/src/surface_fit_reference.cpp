@@ -43,6 +43,8 @@ LocalSurface reference_local_surface(const Points& pts, uint32_t index, float r,
   const Eigen::Vector2f h = harris_eigenvalues(p1, p2, p3, p4, p5);
   s.normal = n.cast<float>();
   s.k1 = k[0], s.k2 = k[1], s.lambda_min = h[0], s.lambda_max = h[1];
+  const Eigen::Vector2f e = harris_matrix_eigenvalues(q[0], q[1], q[2], q[3], q[4], 0.5);  // sigma = r/2
+  s.harris_response = static_cast<float>(harris_response(e[0], e[1]));
   s.valid = true;
   // Where the two smallest PCA axes nearly tie the normal is ill-defined: callers skip such points.
   s.neighbours = (es.eigenvalues()[1] - es.eigenvalues()[0]) > 1e-3 * es.eigenvalues()[2] ? 1 : 0;

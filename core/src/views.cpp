@@ -17,13 +17,12 @@ extern "C" {
 #include <libqhull_r/qhull_ra.h>
 }
 
+#include "random.h"
+
 namespace glimpse {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-
-// Uniform in [0, 1) from the top 53 bits: the same on every standard library.
-double uniform01(std::mt19937_64& rng) { return double(rng() >> 11) * 0x1.0p-53; }
 
 double triangle_area(const Vec3& a, const Vec3& b, const Vec3& c) {
   return 0.5 * (b - a).cast<double>().cross((c - a).cast<double>()).norm();
@@ -279,7 +278,7 @@ Cloud hidden_point_removal(const Points& points, const Vec3& camera, double radi
   return view;
 }
 
-std::vector<Vec3> paper_viewpoints(const Points& points) {
+std::vector<Vec3> paper_viewpoints(const Points& points, float elevation_deg) {
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
   size_t n = 0;
   for (const Vec3& p : points)
@@ -290,7 +289,7 @@ std::vector<Vec3> paper_viewpoints(const Points& points) {
   for (const Vec3& p : points)
     if (p.allFinite()) radius = std::max(radius, (p.cast<double>() - centroid).norm());
   const double distance = 3.0 * radius;  // sec. 3.4: 6 viewpoints around the object
-  const double elevation = 30.0 * kPi / 180.0;
+  const double elevation = double(elevation_deg) * kPi / 180.0;
   std::vector<Vec3> cameras;
   for (int k = 0; k < 6; ++k) {
     const double azimuth = k * 60.0 * kPi / 180.0;
@@ -316,13 +315,13 @@ Points object_cloud(const Mesh& mesh, size_t points, uint64_t seed) {
 }
 
 Cloud object_view(const Points& full, size_t view, size_t views, bool any_pose, uint64_t pose_seed,
-                  double hpr_radius_factor) {
+                  double hpr_radius_factor, float elevation_deg) {
   views = std::clamp<size_t>(views, 1, 6);
   const size_t viewpoint = (std::min(view, views - 1) * 6) / views;
   Points posed;
   if (any_pose) posed = place_on_ground(rotate_points(full, random_rotation(object_seed(pose_seed, std::to_string(view)))));
   const Points& cloud = any_pose ? posed : full;
-  const std::vector<Vec3> cameras = paper_viewpoints(cloud);
+  const std::vector<Vec3> cameras = paper_viewpoints(cloud, elevation_deg);
   if (viewpoint >= cameras.size()) return Cloud{};
   return hidden_point_removal(cloud, cameras[viewpoint], hpr_radius_factor);
 }

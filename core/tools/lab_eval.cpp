@@ -9,169 +9,17 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <numbers>
 #include <sstream>
 
 #include "glimpse/evaluation.h"
+#include "lab_eval.h"
 
 namespace glimpse::lab {
 
 namespace {
 
-struct EvalOptions {
-  std::string data;
-  std::string train;
-  std::string test;
-  std::string size_blind = "fusion";
-  std::string also_train;
-  std::string unknown;
-  float tilt = -1;
-  size_t zoo = 0;
-  std::string points = "6000";
-  size_t views = 6;
-  int folds = 5;
-  std::string methods = "bok,bog,kgh,vfh,esf,ush,size,fusion";
-  std::string train_on = "partial";
-  std::string train_prefixes = "0.15,0.25,0.35,0.5,0.7";
-  std::string decision = "nearest";
-  std::string fusion_of;
-  int neighbours = 0;
-  double pca_variance = 0;
-  int pca_dims = 0;
-  int threads = 0;
-  uint64_t seed = 42;
-  std::string out = "out/eval";
-  bool quick = false;
-  size_t max_objects = 0;
-  size_t explore_step = 5;
-  float cut_margin = 1.5f;
-  std::string stages = "full,10kp,25kp,55kp,10%,20%";
-  double stream_chunk = 0.02;
-};
 
-// A progress bar on stderr; plain lines (every 10 %) when stderr is not a terminal.
-class ProgressBar {
- public:
-  ProgressBar() : tty_(isatty(STDERR_FILENO) != 0) {}
-  ~ProgressBar() { finish_line(); }
-
-  void operator()(const EvalProgress& p) {
-    if (p.phase != phase_) {
-      finish_line();
-      phase_ = p.phase;
-      last_decile_ = -1;
-      start_ = std::chrono::steady_clock::now();
-    }
-    const double frac = p.total ? double(p.done) / double(p.total) : 1.0;
-    const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-    if (tty_) {
-      const int width = 30, filled = static_cast<int>(frac * width);
-      std::fprintf(stderr, "\r%-28s [%s%s] %zu/%zu %5.1fs", phase_.c_str(), std::string(filled, '#').c_str(),
-                   std::string(width - filled, '.').c_str(), p.done, p.total, secs);
-      open_ = true;
-    } else if (int decile = static_cast<int>(frac * 10); decile > last_decile_) {
-      last_decile_ = decile;
-      std::fprintf(stderr, "%s: %zu/%zu (%.1fs)\n", phase_.c_str(), p.done, p.total, secs);
-    }
-    std::fflush(stderr);
-  }
-
- private:
-  void finish_line() {
-    if (open_) std::fputc('\n', stderr);
-    open_ = false;
-  }
-  bool tty_;
-  bool open_ = false;
-  std::string phase_;
-  int last_decile_ = -1;
-  std::chrono::steady_clock::time_point start_;
-};
-
-Expected<EvalParams> params_from(const EvalOptions& o) {
-  EvalParams p;
-  if (o.points == "vertices") {
-    p.points_per_object = 0;
-  } else {
-    char* end = nullptr;
-    const long n = std::strtol(o.points.c_str(), &end, 10);
-    if (n <= 0 || *end) return invalid_argument("--points must be 'vertices' or a positive count, not '" + o.points + "'");
-    p.points_per_object = static_cast<size_t>(n);
-  }
-  p.views_per_object = o.views;
-  p.folds = o.folds;
-  p.methods.clear();
-  std::stringstream list(o.methods);
-  for (std::string name; std::getline(list, name, ',');) {
-    auto m = parse_method(name);
-    if (!m.ok()) return m.error();
-    p.methods.push_back(*m);
-  }
-  if (o.train_on != "partial" && o.train_on != "full")
-    return invalid_argument("--train-on must be 'full' or 'partial', not '" + o.train_on + "'");
-  p.train.partial_prefixes.clear();
-  std::stringstream fractions(o.train_prefixes);
-  for (std::string item; std::getline(fractions, item, ',');) {
-    char* end = nullptr;
-    const double f = std::strtod(item.c_str(), &end);
-    if (item.empty() || *end || !(f > 0 && f < 1))
-      return invalid_argument("--train-prefixes takes fractions in (0, 1), not '" + item + "'");
-    if (o.train_on == "partial") p.train.partial_prefixes.push_back(f);
-  }
-  if (o.decision == "nearest-centre") p.train.decision.kind = DecisionRule::kNearestCentre;
-  else if (o.decision == "centres") p.train.decision.kind = DecisionRule::kCentres;
-  else if (o.decision == "knn") p.train.decision.kind = DecisionRule::kNearestNeighbours;
-  else if (o.decision == "nearest") p.train.decision.kind = DecisionRule::kNearestReference;
-  else return invalid_argument("--decision must be nearest-centre, centres, knn or nearest, not '" + o.decision + "'");
-  if (!o.fusion_of.empty()) {
-    p.train.fusion_of.clear();
-    std::stringstream parts(o.fusion_of);
-    for (std::string name; std::getline(parts, name, ',');) {
-      auto m = parse_method(name);
-      if (!m.ok()) return m.error();
-      if (*m == MethodId::kFusion) return invalid_argument("--fusion-of: fusion cannot be its own component");
-      p.train.fusion_of.push_back(*m);
-    }
-  }
-  if (o.neighbours > 0) p.train.decision.neighbours = o.neighbours;
-  if (o.tilt >= 0) p.train.tilt_deg = o.tilt;
-  if (o.pca_variance > 0) p.train.decision.pca_explained_variance = o.pca_variance;
-  if (o.pca_dims > 0) p.train.decision.max_pca_dims = o.pca_dims;
-  p.threads = o.threads;
-  p.seed = o.seed;
-  p.explore_step = o.explore_step;
-  p.stages.clear();
-  for (const std::string& name : [&] {
-         std::vector<std::string> v;
-         std::stringstream list(o.stages);
-         for (std::string item; std::getline(list, item, ',');) v.push_back(item);
-         return v;
-       }()) {
-    char* end = nullptr;
-    const double x = std::strtod(name.c_str(), &end);
-    if (name == "full") p.stages.push_back({StageKind::kFull, 0});
-    else if (end && std::string(end) == "kp" && x >= 1) p.stages.push_back({StageKind::kKeypoints, x});
-    else if (end && std::string(end) == "%" && x > 0 && x <= 100) p.stages.push_back({StageKind::kFraction, x / 100});
-    else return invalid_argument("--stages takes full, Nkp and N% items, not '" + name + "'");
-  }
-  if (!std::any_of(p.stages.begin(), p.stages.end(), [](const Stage& s) { return s.kind == StageKind::kKeypoints; }))
-    p.explore_max_keypoints = 0;
-  if (!(o.stream_chunk >= 0 && o.stream_chunk < 1)) return invalid_argument("--stream-chunk must be in [0, 1)");
-  p.stream_chunk_fraction = o.stream_chunk;
-  p.cut_margin_supports = o.cut_margin;
-  if (o.quick) {  // CI: 3 views per object, a coarser exploration grid
-    p.views_per_object = std::min<size_t>(p.views_per_object, 3);
-    p.explore_step = std::max<size_t>(p.explore_step, 10);
-  }
-  return p;
-}
-
-std::vector<std::string> split_list(const std::string& text) {
-  std::vector<std::string> out;
-  std::stringstream list(text);
-  for (std::string item; std::getline(list, item, ',');)
-    if (!item.empty()) out.push_back(item);
-  return out;
-}
 
 // The objects of every folder in `dirs`, each given `role`.
 Expected<std::vector<EvalObject>> load_sources(const std::vector<std::string>& dirs, EvalRole role, uint64_t seed,
@@ -195,35 +43,6 @@ Expected<std::vector<EvalObject>> load_sources(const std::vector<std::string>& d
     }
   }
   return all;
-}
-
-// The size-blind ablation (every object 1 m tall, train and test) of `methods`: the same protocol
-// without streams or the keypoint exploration, its accuracies added to `result` beside the real ones.
-Status size_blind_ablation(EvalResult& result, const std::vector<EvalObject>& objects, const EvalParams& params,
-                           const std::string& methods, ProgressBar& bar) {
-  EvalParams p = params;
-  p.methods.clear();
-  for (const std::string& name : split_list(methods)) {
-    auto m = parse_method(name);
-    if (!m.ok()) return m.error();
-    p.methods.push_back(*m);
-  }
-  if (p.methods.empty()) return {};
-  p.stream_chunk_fraction = 0;
-  p.explore_max_keypoints = 0;
-  const bool keypoints = std::any_of(p.methods.begin(), p.methods.end(), [](MethodId m) {
-    return m == MethodId::kBoK || m == MethodId::kBoG || m == MethodId::kKGH;
-  });
-  if (!keypoints) std::erase_if(p.stages, [](const Stage& s) { return s.kind == StageKind::kKeypoints; });
-  const auto t0 = std::chrono::steady_clock::now();
-  auto blind = run_evaluation(common_height(objects, 1.0f), p, result.source + ", every object 1 m tall",
-                              [&bar](const EvalProgress& e) { bar({"size-blind: " + e.phase, e.done, e.total}); });
-  if (!blind.ok()) return blind.error();
-  add_ablation(result, *blind, "size-blind: every object 1 m tall, train and test");
-  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  result.timings.push_back({"size-blind ablation", secs, std::to_string(blind->decisions.size()) + " decisions"});
-  result.total_seconds += secs;
-  return {};
 }
 
 int run_eval(const EvalOptions& o) {
@@ -294,6 +113,11 @@ int run_eval(const EvalOptions& o) {
       std::fprintf(stderr, "glimpse-lab eval: --size-blind: %s\n", s.error().message.c_str());
       return 2;
     }
+  if (o.keypoint_ablation)
+    if (Status s = keypoint_ablation(*result, objects, *params, bar); !s.ok()) {
+      std::fprintf(stderr, "glimpse-lab eval: --keypoint-ablation: %s\n", s.error().message.c_str());
+      return 2;
+    }
   bar({"done", 1, 1});
   result->timings.insert(result->timings.begin(), {"load objects", load_seconds, std::to_string(objects.size()) + " meshes"});
   result->total_seconds += load_seconds;
@@ -356,6 +180,10 @@ void add_eval_command(CLI::App& app) {
                   "bounding radius sees about the same number of points whatever the object's size)")
       ->capture_default_str();
   cmd->add_option("--views", o->views, "views per object (1-6, evenly spaced of the paper's 6)")->capture_default_str();
+  cmd->add_option("--train-elevations", o->train_elevations,
+                  "training-only views besides the tested ones: the same azimuths from these elevations, degrees "
+                  "above the horizon, comma-separated (tested views stay at the paper's 30; e.g. 0,15 for cameras "
+                  "mounted low)");
   cmd->add_option("--folds", o->folds, "cross-validation folds (by object, stratified)")->capture_default_str();
   cmd->add_option("--methods", o->methods, "comma-separated: bok,bog,kgh,vfh,esf,ush,size,fusion")->capture_default_str();
   cmd->add_option("--train-on", o->train_on,
@@ -367,7 +195,8 @@ void add_eval_command(CLI::App& app) {
   cmd->add_option("--decision", o->decision, "nearest-centre (the paper), centres, knn or nearest (every training vector a reference)")->capture_default_str();
   cmd->add_option("--fusion-of", o->fusion_of, "comma-separated components of fusion (default: the recogniser's)");
   cmd->add_option("--neighbours", o->neighbours, "k of the k-NN decision (0: the recogniser's default)");
-  cmd->add_option("--pca-variance", o->pca_variance, "explained variance the decision stage's PCA keeps (0: default)");
+  cmd->add_option("--pca-variance", o->pca_variance,
+                  "explained variance the decision stage's PCA keeps (0: default; negative: no PCA, L1 on the histograms)");
   cmd->add_option("--pca-dims", o->pca_dims, "at most this many PCA dimensions in the decision stage (0: default)");
   cmd->add_option("--threads", o->threads, "threads (0: all cores); results do not depend on it")->capture_default_str();
   cmd->add_option("--seed", o->seed, "seed of sizes, samples, folds, codebooks")->capture_default_str();
@@ -381,9 +210,56 @@ void add_eval_command(CLI::App& app) {
   cmd->add_option("--stream-chunk", o->stream_chunk,
                   "stream every test view in chunks of this fraction of the full cloud (0: no streaming)")
       ->capture_default_str();
+  cmd->add_option("--sensor", o->sensor,
+                  "test views from: ideal (HPR on samples, the paper's), depth (Kinect-class camera) or lidar "
+                  "(16 beams), cast against the mesh; training views stay ideal")
+      ->capture_default_str();
+  cmd->add_option("--distance", o->distance, "depth/lidar: metres from the sensor to the object's centre")
+      ->capture_default_str();
+  cmd->add_option("--elevation", o->elevation, "depth/lidar: degrees above the horizon")->capture_default_str();
+  cmd->add_option("--tilt", o->scan_tilt, "test views' up off by up to DEG degrees (random direction)")
+      ->capture_default_str();
+  cmd->add_flag("--floor", o->floor, "depth/lidar: a floor patch under the object, removed by the ground filter");
+  cmd->add_option("--outliers", o->outliers, "stray points added to each test view, x its size")->capture_default_str();
+  cmd->add_option("--matrix", o->matrix, "robustness matrix: none, small (default run) or full")->capture_default_str();
+  cmd->add_option("--matrix-views", o->matrix_views,
+                  "views per tested object in the robustness matrix (0: 1 for small, 2 for full)")
+      ->capture_default_str();
   cmd->add_option("--cut-margin", o->cut_margin, "keypoint stage cut below the k-th keypoint, in support radii")
       ->capture_default_str();
+  cmd->add_option("--preset", o->preset,
+                  "paper: the paper's settings for every flag not given (mesh vertices, full-view training, "
+                  "BoK/BoG/KGH/VFH, one centre per category with L1 on the histograms, r from 6 neighbours, no "
+                  "rho1 cap, claims of rho1, boundary test over 2 r with a band of r/4, descriptors at rho1 up to "
+                  "8 r, normalised up to 25 keypoints)");
+  cmd->add_option("--support-neighbours", o->support_neighbours,
+                  "support radius r = median distance to this nearest neighbour (default 30)");
+  cmd->add_option("--min-neighbours", o->min_neighbours, "fewer neighbours within r: no surface (default 8)");
+  cmd->add_option("--keypoint-cap", o->keypoint_cap, "keypoints need rho1 <= this x r; 0: no cap (default 8)");
+  cmd->add_option("--claim-min", o->claim_min, "a keypoint claims max(rho1, this x r); 0: rho1 (default 1)");
+  cmd->add_option("--boundary-band", o->boundary_band,
+                  "no keypoint within this x r of a view's boundary point; 0: boundary points only (default 1)");
+  cmd->add_option("--descriptor-scale", o->descriptor_scale,
+                  "describe each keypoint over its rho1 clamped to [r, this x r]; 0: over r (default)");
+  cmd->add_option("--boundary-radius", o->boundary_radius,
+                  "the boundary test looks at neighbours within this x r (default 1)");
+  cmd->add_option("--boundary-gap", o->boundary_gap, "boundary point: an angular gap wider than DEG (default 90)");
+  cmd->add_option("--keypoint-response", o->keypoint_response,
+                  "lambda-min (the paper: smaller principal Harris curvature) or harris (det - k tr^2, local maxima)");
+  cmd->add_option("--normalise-up-to", o->normalise_up_to,
+                  "keypoint histograms divided by their count up to N keypoints and by N's after (sec. 4); 0: always");
+  cmd->add_option("--soft-words", o->soft_words,
+                  "BoK: each keypoint shared among its N nearest words (default 1: one word, the paper)");
+  cmd->add_option("--default-method", o->default_method,
+                  "the method of the category changes and streams (default: the recogniser's, fusion)");
+  cmd->add_flag("--keypoint-ablation", o->keypoint_ablation,
+                "also re-run the keypoint methods with one keypoint or decision setting changed at a time (rho1 cap, "
+                "claim radius, boundary band, r, vertices/samples, response, normalisation, PCA, decision, prefixes)");
   cmd->callback([o, cmd] {
+    if (Status s = apply_preset(*o, [cmd](const char* flag) { return cmd->get_option(flag)->count() > 0; }); !s.ok()) {
+      std::fprintf(stderr, "glimpse-lab eval: %s\n", s.error().message.c_str());
+      throw CLI::RuntimeError(2);
+    }
     if (o->data.empty() && o->train.empty() && o->zoo == 0) {
       std::fprintf(stderr, "glimpse-lab eval: give --data DIR, --train DIR --test DIR, or --zoo N\n%s", cmd->help().c_str());
       throw CLI::RuntimeError(2);

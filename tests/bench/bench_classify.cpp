@@ -41,6 +41,7 @@
 #include "glimpse/codebook.h"
 #include "glimpse/global_descriptors.h"
 #include "glimpse/model.h"
+#include "glimpse/scan_filters.h"
 #include "glimpse/train_params.h"
 #include "glimpse/views.h"
 #include "glimpse/zoo.h"
@@ -181,6 +182,22 @@ const Model* model_without_novelty() {
   return m.get();
 }
 
+// Issue 18: what the scan filters (isolated points, ground plane, voxel grid to the trained density) add
+// to Classify of a 10k-point view. BM_ScanFilters/<0 human 1.7 m, 1 part 0.17 m> times filter_scan alone
+// with the model's parameters; BM_ClassifyUnfiltered the same views through a model trained alike with
+// filter_scans off; after the table the ratio filters / unfiltered Classify is printed (goal <= 0.2),
+// and the whole filtered Classify (BM_ClassifySize, fusion) against the unfiltered one: a dense view is
+// thinned to the trained density first, so its features cost less.
+const Model* unfiltered_model() {
+  static const std::unique_ptr<Model> m = [] {
+    TrainParams p;
+    p.filter_scans = false;
+    auto trained = train(test::synthetic_views(4, 3, 11), p);
+    return trained.ok() ? std::make_unique<Model>(std::move(*trained)) : nullptr;
+  }();
+  return m.get();
+}
+
 void BM_ClassifyNovelty(benchmark::State& state) {
   const Model* m = state.range(0) ? model() : model_without_novelty();
   state.SetLabel(state.range(0) ? "fusion with novelty" : "fusion without novelty");
@@ -197,6 +214,33 @@ void BM_ClassifyNovelty(benchmark::State& state) {
 }
 BENCHMARK(BM_ClassifyNovelty)->DenseRange(0, 1)->Unit(benchmark::kMillisecond);
 
+void BM_ScanFilters(benchmark::State& state) {
+  const Cloud& view = state.range(0) ? part_view() : human_view();
+  state.SetLabel(state.range(0) ? "part 0.17 m" : "human 1.7 m");
+  ScanFilterParams p;
+  p.relative_density = 3900;  // what SHREC's and the zoo's training views measure (median)
+  ScanFilterReport report;
+  for (auto _ : state) {
+    const Cloud out = filter_scan(view, p, &report);
+    benchmark::DoNotOptimize(out.points.data());
+  }
+  state.counters["kept"] = double(report.kept);
+}
+BENCHMARK(BM_ScanFilters)->DenseRange(0, 1)->Unit(benchmark::kMillisecond);
+
+void BM_ClassifyUnfiltered(benchmark::State& state) {
+  const Model* m = unfiltered_model();
+  const Cloud& view = state.range(0) ? part_view() : human_view();
+  state.SetLabel(state.range(0) ? "fusion, part 0.17 m" : "fusion, human 1.7 m");
+  if (!m) return state.SkipWithError("training failed");
+  for (auto _ : state) {
+    auto r = classify(*m, view, MethodId::kFusion);
+    if (!r.ok()) return state.SkipWithError(r.error().message.c_str());
+    benchmark::DoNotOptimize(r->winner);
+  }
+}
+BENCHMARK(BM_ClassifyUnfiltered)->DenseRange(0, 1)->Unit(benchmark::kMillisecond);
+
 // The console table, and the real time of each BM_ClassifySize median (or only run) for the ratios.
 class SizeRatioReporter : public benchmark::ConsoleReporter {
  public:
@@ -209,11 +253,15 @@ class SizeRatioReporter : public benchmark::ConsoleReporter {
         ms[r.run_name.args] = r.GetAdjustedRealTime();  // "method/object"
       if (!r.error_occurred && (median || single) && r.run_name.function_name == "BM_ClassifyNovelty")
         novelty_ms[r.run_name.args] = r.GetAdjustedRealTime();  // "0" without, "1" with
+      if (!r.error_occurred && (median || single) &&
+          (r.run_name.function_name == "BM_ScanFilters" || r.run_name.function_name == "BM_ClassifyUnfiltered"))
+        filter_ms[r.run_name.function_name + "/" + r.run_name.args] = r.GetAdjustedRealTime();
     }
     ConsoleReporter::ReportRuns(runs);
   }
   std::map<std::string, double> ms;
   std::map<std::string, double> novelty_ms;
+  std::map<std::string, double> filter_ms;
 };
 
 }  // namespace
@@ -239,6 +287,18 @@ int main(int argc, char** argv) {
   if (without != reporter.novelty_ms.end() && with != reporter.novelty_ms.end() && without->second > 0)
     std::printf("novelty: fusion classify %.2f ms with, %.2f ms without: ratio %.3f (goal <= 1.05)\n", with->second,
                 without->second, with->second / without->second);
+  for (const char* object : {"0", "1"}) {
+    const auto f = reporter.filter_ms.find(std::string("BM_ScanFilters/") + object);
+    const auto c = reporter.filter_ms.find(std::string("BM_ClassifyUnfiltered/") + object);
+    if (f == reporter.filter_ms.end() || c == reporter.filter_ms.end() || c->second <= 0) continue;
+    std::printf("scan filters on a 10k-point %s view: %.2f ms, unfiltered fusion Classify %.2f ms: +%.0f %% (goal <= 20 %%)\n",
+                object[0] == '0' ? "human" : "part", f->second, c->second, 100 * f->second / c->second);
+    // End to end: the filtered Classify (BM_ClassifySize, fusion) also decides on the thinned cloud.
+    const auto whole = reporter.ms.find(std::to_string(std::size(glimpse::kAllMethods) - 1) + "/" + object);
+    if (whole != reporter.ms.end())
+      std::printf("  filtered fusion Classify of the same view %.2f ms: %.2fx the unfiltered\n", whole->second,
+                  whole->second / c->second);
+  }
   benchmark::Shutdown();
   return 0;
 }

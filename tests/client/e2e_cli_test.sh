@@ -123,6 +123,13 @@ run 0 train "$PLAIN" --name plain --methods ush,vfh,fusion --views 3 --mesh-poin
 err_has "^train: up: \+y for every mesh \(--up\)$" && err_has "^train: size: mesh units x 0.001 m \(--unit\)$"
 run 0 models show plain --json && out_has '"feature_version":[1-9]' && out_has '"max_extent_m":1\.[0-9]'
 out_has '"bok_codebook_size":60'  # the parameters used (a default nobody asked for), not an echo of the request
+out_has '"filter_scans":true'
+# More training views from other elevations (as glimpse-lab --train-elevations): 3 elevations x 3 views;
+# a model that classifies what it is sent as it is.
+run 0 train "$PLAIN" --name plain-low --methods ush --views 3 --mesh-points 1500 --up y --unit mm --elevations 0,15 \
+  --no-scan-filters && out_has "^trained plain-low:1 \(default\): 2 categories, 36 clouds"
+run 0 models show plain-low --json && out_has '"filter_scans":false'
+run 2 train "$PLAIN" --name bad --elevations 95
 # A folder plus the zoo (the recipe): the zoo adds objects of the folder's categories only.
 MIX="$GLIMPSE_TEST_TMP/mix"
 mkdir -p "$MIX/chair" "$MIX/table"
@@ -203,11 +210,20 @@ run 0 stream "$DATA/blob/s3.xyz" --model folder --chunks 3 --rate 0 --sensor 0,0
 run 2 stream "$DATA/blob/s3.xyz" --model folder --sensor 0,0 && err_has "X,Y,Z"
 run 2 stream "$DATA/blob/s3.xyz" --model folder --sensor 0,0,0 --view 1
 run 1 stream "$BOX" --model tiny --sensor 0,0,0 --rate 0 && err_has "sensor is for cloud files"
+# A folder of frames, each from its own sensor (here from poses.csv): one chunk per frame, then the final.
+FRAMES="$GLIMPSE_TEST_TMP/frames"
+mkdir -p "$FRAMES" && cp "$DATA/blob/s1.xyz" "$FRAMES/f10.xyz" && cp "$DATA/blob/s3.xyz" "$FRAMES/f9.xyz"
+run 1 stream --frames "$FRAMES" --model folder --rate 0 && err_has "f9\.xyz: a frame needs its sensor position"
+printf 'f9.xyz,0,-3,1\nf10.xyz,0,3,1\n' >"$FRAMES/poses.csv"
+run 0 stream --frames "$FRAMES" --model folder --rate 0 && out_lines 3 && out_has "^chunk 2/2 " && out_has "^final points "
+run 0 stream --frames "$FRAMES" --model folder --rate 0 --chunk-points 1000 --json && out_has '"chunk":4,' && out_has '"final":true'
+run 2 stream --frames "$FRAMES" "$DATA/blob/s1.xyz" --model folder
+run 2 stream --frames "$FRAMES" --order random --model folder
 run 1 stream --zoo human --model nope --rate 0 && err_has "^glimpse: stream --zoo human: NOT_FOUND"
 run 1 stream "$GLIMPSE_TEST_TMP/nothing.off" --model tiny && err_has "nothing\.off"
 
 # ---- models ----
-run 0 models list && out_lines 8 && out_has "^tiny +2 +\* " && out_has "^folder +1 +\* "
+run 0 models list && out_lines 9 && out_has "^tiny +2 +\* " && out_has "^folder +1 +\* "
 run 0 models show tiny && out_has "^version: +2 \(default\)" && out_has "^description: +second one"
 run 0 models set-default tiny:1 && out_has "version 1"
 run 0 models show tiny --json && out_has '"version":1' && out_has '"is_default":true'

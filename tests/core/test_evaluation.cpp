@@ -387,7 +387,9 @@ TEST(RunEvaluation, ReducedProtocolOnTheZooIsWellAboveChance) {
     EXPECT_TRUE(std::is_sorted(t.visible_fraction.begin(), t.visible_fraction.end()));
   }
   const SettleRow settled = settle_summary(r->streams, -1);
-  EXPECT_GE(settled.precision_percent(), 95.0);  // measured 100 (40 of 60 views settled)
+  // A view settled as "unknown" counts wrong (issue 20: the default operating point accepts 95 % of
+  // held-out known clouds); before unknown could settle, 100 % of 40.
+  EXPECT_GE(settled.precision_percent(), 90.0);  // measured 92.5 (37 of the 40 views settled)
   EXPECT_GE(settled.settled_percent(), 60.0);    // measured 66.7
   std::cout << "zoo reduced: full fusion " << accuracy(r->decisions, "full", MethodId::kFusion).percent() << " %, VFH "
             << accuracy(r->decisions, "full", MethodId::kVFH).percent() << " %, 20 % fusion "
@@ -410,6 +412,87 @@ TEST(RunEvaluation, ReducedProtocolOnTheZooIsWellAboveChance) {
     EXPECT_EQ(r1->streams[i].winners, r->streams[i].winners) << i;
     EXPECT_EQ(r1->streams[i].confidence, r->streams[i].confidence) << i;
   }
+}
+
+TEST(ConditionView, IdealIsTheProtocolsViewAndSensorsSeeTheSameObjectFromTheSameSide) {
+  const std::vector<EvalObject> objects = zoo_objects(1, 5);
+  for (const EvalObject& o : objects) {
+    const uint64_t seed = object_seed(7, o.category + "/" + o.id);
+    const Points full = object_cloud(o.mesh, 3000, seed);
+    const Cloud ideal = object_view(full, 1, 3, o.any_pose, seed);
+    EXPECT_EQ(condition_view(o, full, 1, 3, seed, {}, 3000, 100).points, ideal.points) << o.category;
+    ScanCondition depth;
+    depth.sensor = SensorKind::kDepthCamera, depth.distance_m = 2.5f, depth.elevation_deg = 30.f;
+    const Cloud d = condition_view(o, full, 1, 3, seed, depth, 3000, 100);
+    ASSERT_GT(d.points.size(), 100u) << o.category;  // a 0.1 m part at 2.5 m: a few hundred pixels
+    ASSERT_TRUE(d.sensor && ideal.sensor);
+    // Same azimuth (120 deg for view 1 of 3) and elevation: the sensors sit on one ray from the object.
+    const Vec3 to_ideal = (*ideal.sensor - bounds(full).centre()).normalized();
+    const Vec3 to_depth = (*d.sensor - bounds(o.any_pose ? d.points : full).centre()).normalized();
+    if (!o.any_pose) EXPECT_GT(to_ideal.dot(to_depth), 0.99f) << o.category;
+    // The depth camera's points lie on the object (noise of a few mm at 2.5 m), within its bounds.
+    const Bounds m = bounds(o.any_pose ? ideal.points : o.mesh.vertices);
+    if (!o.any_pose)
+      for (const Vec3& p : d.points) {
+        EXPECT_TRUE((p.array() >= m.min.array() - 0.05f).all() && (p.array() <= m.max.array() + 0.05f).all());
+        if (!((p.array() >= m.min.array() - 0.05f).all())) break;
+      }
+  }
+}
+
+TEST(RunEvaluation, SensorTestViewsAndTheRobustnessMatrix) {
+  const std::vector<EvalObject> objects = zoo_objects(4, 3);
+  EvalParams p = reduced_params();
+  p.methods = {MethodId::kFusion};
+  p.stages = {{StageKind::kFull, 0}, {StageKind::kFraction, 0.1}, {StageKind::kFraction, 0.2}};
+  p.explore_max_keypoints = 0;
+  p.stream_chunk_fraction = 0;
+  p.test_condition.sensor = SensorKind::kDepthCamera;
+  p.test_condition.distance_m = 2.5f;
+  ScanCondition floor = p.test_condition;
+  floor.floor = true, floor.outliers = 0.02;
+  p.matrix = {ScanCondition{}, floor};
+  p.matrix_views_per_object = 1;
+  auto r = run_evaluation(objects, p, "zoo, depth camera");
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  // The tested views are the depth camera's, filtered to the training density; stages keep their share.
+  ASSERT_EQ(r->trained_density.size(), 2u);
+  for (double d : r->trained_density) EXPECT_GT(d, 100.0);
+  for (const StageDecision& d : r->decisions)
+    if (d.stage == "10%") EXPECT_NEAR(d.visible_fraction, 0.10, 5e-3);  // rounding on small parts
+  const double full = accuracy(r->decisions, "full", MethodId::kFusion).percent();
+  // The matrix: one row per condition, one view per object; the floor is found and removed.
+  ASSERT_EQ(r->robustness.size(), 2u);
+  for (const RobustnessRow& row : r->robustness) {
+    EXPECT_EQ(row.views, objects.size());
+    ASSERT_EQ(row.accuracy.size(), p.stages.size());
+  }
+  const RobustnessRow& ideal = r->robustness[0];
+  const RobustnessRow& residue = r->robustness[1];
+  EXPECT_EQ(ideal.ground_views, 0u);
+  EXPECT_GE(residue.ground_views, objects.size() * 9 / 10);
+  EXPECT_GT(residue.median_points_raw, 3 * residue.median_points);  // the floor and density filtered out
+  const std::string md = markdown_report(*r);
+  EXPECT_NE(md.find("## Robustness matrix"), std::string::npos);
+  EXPECT_NE(md.find("depth camera 2.5 m, 30 deg, floor, 2 % outliers"), std::string::npos);
+  EXPECT_NE(md.find("## Test views from a simulated sensor"), std::string::npos);
+  std::cout << "zoo, depth camera test views: fusion full " << full << " %; matrix ideal full " << ideal.accuracy[0]
+            << " %, 20 % " << ideal.accuracy[2] << " %; floor + outliers full " << residue.accuracy[0] << " %, 20 % "
+            << residue.accuracy[2] << " % (ground on " << residue.ground_views << " of " << residue.views << ")\n";
+  // Measured (zoo 4 per category, seed 3, 2 folds, 3 views, 3000 points): depth camera test views 81.7 %
+  // full (60 views, one is 1.7 points); matrix (20 views, one is 5 points): ideal 80 / 75 (full / 20 %),
+  // depth camera with floor and 2 % outliers 80 / 80.
+  EXPECT_GE(full, 78.0);                      // measured 81.7
+  EXPECT_GE(residue.accuracy[0], 75.0);       // measured 80
+  EXPECT_GE(residue.accuracy[2], 75.0);       // measured 80
+  // Same answers on one thread.
+  EvalParams one = p;
+  one.threads = 1;
+  auto r1 = run_evaluation(objects, one, "zoo, depth camera");
+  ASSERT_TRUE(r1.ok());
+  for (size_t i = 0; i < r->robustness.size(); ++i) EXPECT_EQ(r1->robustness[i].accuracy, r->robustness[i].accuracy);
+  ASSERT_EQ(r1->decisions.size(), r->decisions.size());
+  for (size_t i = 0; i < r->decisions.size(); ++i) EXPECT_EQ(r1->decisions[i].scores, r->decisions[i].scores) << i;
 }
 
 std::vector<EvalObject> with_role(std::vector<EvalObject> objects, EvalRole role, const std::string& source) {
@@ -542,6 +625,39 @@ TEST(RunEvaluation, AZooCategoryHeldOutComesOutNovel) {
   EXPECT_NE(decisions_csv(*r).find(",unknown:fourleg,"), std::string::npos);
 }
 
+// Training views from other elevations are learnt, never tested: the same decisions are taken, each
+// model trains on the extra views (and their prefixes) too.
+TEST(RunEvaluation, TrainingElevationsAddTrainingViewsAndNoTestedOnes) {
+  const std::vector<EvalObject> objects = zoo_objects(2, 3);
+  EvalParams p = reduced_params();
+  p.methods = {MethodId::kUSH};
+  p.stages = {{StageKind::kFull, 0}, {StageKind::kFraction, 0.2}};
+  p.explore_max_keypoints = 0;
+  p.stream_chunk_fraction = 0;
+  p.matrix.clear();
+  auto samples = [](const EvalResult& r) {
+    for (const PhaseTiming& t : r.timings)
+      if (t.phase == "train (all folds)") return std::stoul(t.detail);
+    return 0ul;
+  };
+  auto plain = run_evaluation(objects, p, "zoo");
+  p.train_elevations_deg = {0.f, 60.f};
+  auto raised = run_evaluation(objects, p, "zoo");
+  ASSERT_TRUE(plain.ok() && raised.ok());
+  ASSERT_EQ(raised->decisions.size(), plain->decisions.size());
+  for (size_t i = 0; i < plain->decisions.size(); ++i) {
+    EXPECT_EQ(raised->decisions[i].object, plain->decisions[i].object);
+    EXPECT_EQ(raised->decisions[i].view, plain->decisions[i].view);
+    EXPECT_EQ(raised->decisions[i].points, plain->decisions[i].points);  // the tested views are the same
+  }
+  const std::string views = std::find_if(raised->timings.begin(), raised->timings.end(), [](const PhaseTiming& t) {
+                              return t.phase == "HPR views";
+                            })->detail;
+  const size_t extra = 2 * objects.size() * p.views_per_object;
+  EXPECT_NE(views.find("(" + std::to_string(extra) + " for training only)"), std::string::npos) << views;
+  EXPECT_GT(samples(*raised), 2 * samples(*plain));  // three elevations' views and prefixes, a few too small
+}
+
 TEST(Metrics, BalancedAccuracyWeighsEveryCategoryTheSame) {
   std::vector<StageDecision> d;
   auto add = [&](int truth, int winner) {
@@ -590,9 +706,12 @@ TEST(RunEvaluation, ReducedProtocolOnShrec) {
   EXPECT_GE(accuracy(r->decisions, "full", MethodId::kBoK).percent(), 48.0);     // measured 50.7
   const SettleRow settled = settle_summary(r->streams, -1);
   // Settling needs the winner to hold a whole window, the newest chunk included: later, righter.
-  EXPECT_GE(settled.settled_percent(), 83.0);    // measured 86.7 (130 of 150 views)
-  EXPECT_GE(settled.precision_percent(), 96.0);  // measured 97.7 (96.9 when two chunks could settle)
-  EXPECT_LE(settled.mean_visible_percent, 11.0); // measured 10.2 (7.4 when two chunks could settle)
+  // "Unknown" settles like a category and counts wrong here (every view is known): with it 76.7 % settled,
+  // 94.8 % right, at 11.6 % visible; without it 78.7 / 97.5 / 10.6 (86.7 / 97.7 / 10.2 before the
+  // calibration decided held-out clouds untilted, as they come from a sensor).
+  EXPECT_GE(settled.settled_percent(), 74.0);    // measured 76.7 (115 of 150 views)
+  EXPECT_GE(settled.precision_percent(), 93.5);  // measured 94.8
+  EXPECT_LE(settled.mean_visible_percent, 12.5); // measured 11.6
   std::cout << "shrec reduced: full fusion " << accuracy(r->decisions, "full", MethodId::kFusion).percent()
             << " %, 20 % fusion " << accuracy(r->decisions, "20%", MethodId::kFusion).percent() << " %, full BoK "
             << accuracy(r->decisions, "full", MethodId::kBoK).percent() << " %; streams settled "
@@ -641,7 +760,8 @@ TEST(RunEvaluation, ReducedCrossSourceShrecToPsb) {
   EXPECT_GE(p20, 89.0);   // measured 92.1
   EXPECT_GT(full, size + 15);  // shape adds to what a ruler gets right
   EXPECT_GE(settled.settled_percent(), 96.0);    // measured 98.2 (100 when two chunks could settle)
-  EXPECT_GE(settled.precision_percent(), 95.5);  // measured 97.3 (94.7 when two chunks could settle)
+  // Settled as "unknown" counts wrong: 91.1 (97.3 before unknown could settle).
+  EXPECT_GE(settled.precision_percent(), 89.5);  // measured 91.1
 }
 
 }  // namespace

@@ -142,6 +142,8 @@ TEST(LocalSurfaces, AgreeWithATextbookFit) {
     EXPECT_NEAR(fast[i].k2, ref.k2, k_tol + 1e-3f * std::abs(ref.k2)) << "point " << i;
     EXPECT_NEAR(fast[i].lambda_min, ref.lambda_min, l_tol + 1e-3f * ref.lambda_min) << "point " << i;
     EXPECT_NEAR(fast[i].lambda_max, ref.lambda_max, l_tol + 1e-3f * ref.lambda_max) << "point " << i;
+    // The response is dimensionless (window r/2) and of the order of (k r)^4 / 16 at most.
+    EXPECT_NEAR(fast[i].harris_response, ref.harris_response, 1e-4f + 5e-3f * std::abs(ref.harris_response)) << "point " << i;
   }
   EXPECT_GT(compared, cloud.points.size() / 8) << "most sampled points have a well-defined normal";
 }

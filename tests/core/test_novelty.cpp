@@ -84,9 +84,10 @@ TEST(Novelty, IsCalibratedOnHeldOutFoldsOfTheTrainingSet) {
 }
 
 // Cans were never learnt: their views must come out more novel than new balls' and boxes'. Measured
-// (6 objects per category, 3 views, seed 1; tested on 5 new objects, 2 views each): AUROC 0.975; 10 of
-// 20 known views accepted at the default operating point (12 training objects span little: a new box is
-// often outside what the PCA of their histograms keeps), 10 of 10 cans rejected.
+// (6 objects per category, 3 views, seed 1; tested on 5 new objects, 2 views each): AUROC 0.925; 18 of
+// 20 known views accepted at the default operating point (95 % promised), 8 of 10 cans rejected. When
+// calibration decided the held-out views tilted, as they are learnt, and not as they come: AUROC 0.975,
+// 10 of 20 known accepted, 10 of 10 cans rejected (a promise of 95 % kept for half the known views).
 TEST(Novelty, TellsACategoryNeverLearntFromTheKnownOnes) {
   const OpenSet& s = open_set();
   std::vector<double> known, unknown;
@@ -105,9 +106,9 @@ TEST(Novelty, TellsACategoryNeverLearntFromTheKnownOnes) {
   const double a = auroc(known, unknown);
   std::cout << "balls and boxes learnt, cans unknown: AUROC " << a << ", known accepted " << accepted << "/"
             << known.size() << ", cans rejected " << rejected << "/" << unknown.size() << "\n";
-  EXPECT_GE(a, 0.95);  // measured 0.975
-  EXPECT_GE(double(accepted) / double(known.size()), 0.45);  // measured 0.50
-  EXPECT_GE(double(rejected) / double(unknown.size()), 0.9);  // measured 1.0
+  EXPECT_GE(a, 0.90);  // measured 0.925
+  EXPECT_GE(double(accepted) / double(known.size()), 0.85);  // measured 0.90
+  EXPECT_GE(double(rejected) / double(unknown.size()), 0.7);  // measured 0.8
 }
 
 // What the issue names: a cloud in millimetres (a 100 m ball), a room's corner, a 2 m wavy sheet. Their

@@ -10,6 +10,7 @@
 #include "glimpse/session.h"
 #include "glimpse/train_params.h"
 #include "glimpse/views.h"
+#include "shapes.h"
 #include "synthetic.h"
 
 namespace glimpse {
@@ -85,6 +86,7 @@ void expect_same_state(const FeatureState& a, const FeatureState& b) {
     EXPECT_EQ(a.surfaces[i].k1, b.surfaces[i].k1) << "point " << i;
     EXPECT_EQ(a.surfaces[i].k2, b.surfaces[i].k2) << "point " << i;
     EXPECT_EQ(a.surfaces[i].lambda_min, b.surfaces[i].lambda_min) << "point " << i;
+    EXPECT_EQ(a.surfaces[i].harris_response, b.surfaces[i].harris_response) << "point " << i;
   }
   ASSERT_EQ(a.keypoints.size(), b.keypoints.size());
   for (size_t k = 0; k < a.keypoints.size(); ++k) {
@@ -117,6 +119,56 @@ TEST(ScanFeatures, EndOnTheStateExtractGivesTheAccumulatedCloud) {
             expect_same_state(scan.state(), *whole);
             EXPECT_FALSE(scan.state().keypoints.empty());
           }
+  }
+}
+
+// The same with the keypoint options of the paper preset and its ablation (no rho1 cap, claims of rho1, a
+// boundary band of 0, 0.5 or 1.5 r, a boundary test over 2 r, the Harris response, descriptors at rho1): what a chunk changes
+// reaches every memo entry it must.
+TEST(ScanFeatures, KeypointOptionsEndOnTheStateExtractGives) {
+  // A box corner and a ball, seen from one side: corners, curved patches and a view boundary.
+  Cloud scene{test::jitter(test::cube(0.3f, 0.008f), 0.0005f, 5), Vec3(1.2f, 0.9f, 1.1f)};
+  for (const Vec3& p : test::sphere(0.1f, 3000, Vec3(0.5f, 0.15f, 0.1f))) scene.points.push_back(p);
+  struct Option {
+    const char* name;
+    float band, boundary_radius;
+    KeypointResponse response;
+    float descriptor_scale = 0;
+  };
+  for (const Option& o : {Option{"band 0", 0.f, 1.f, KeypointResponse::kLambdaMin},
+                          Option{"band 0.5, boundary over 2 r", 0.5f, 2.f, KeypointResponse::kLambdaMin},
+                          Option{"band 1.5", 1.5f, 1.f, KeypointResponse::kLambdaMin},
+                          Option{"band 0, boundary over 2 r, Harris", 0.f, 2.f, KeypointResponse::kHarris},
+                          Option{"band 0.5, described over rho1 up to 4 r", 0.5f, 1.f, KeypointResponse::kLambdaMin, 4.f}}) {
+    FeatureParams params;
+    params.surface.threads = 1;
+    params.surface.support_radius_m = 0.02f;  // fixed: every chunk takes the incremental path
+    params.keypoints.max_radius_supports = 0;
+    params.keypoints.claim_min_supports = 0;
+    params.keypoints.boundary_band_supports = o.band;
+    params.keypoints.boundary_radius_supports = o.boundary_radius;
+    params.keypoints.response = o.response;
+    params.descriptor.characteristic_scale_supports = o.descriptor_scale;
+    size_t keypoints = 0;
+    for (Order order : {Order::kRandom, Order::kTopDown})
+        for (size_t n : {17u}) {
+          SCOPED_TRACE(std::string(o.name) + ", order " + std::to_string(int(order)) + ", ~" + std::to_string(n) + " chunks");
+          const std::vector<Cloud> chunks = chunks_of(scene, n, order, 5 * n + size_t(order), true);
+          // After every chunk, not only the last: a stale memo entry shows as soon as it matters.
+          ScanFeatures scan(params);
+          std::vector<Cloud> so_far;
+          for (const Cloud& c : chunks) {
+            ASSERT_TRUE(scan.add(c).ok());
+            so_far.push_back(c);
+            if (!scan.ready()) continue;
+            auto whole = extract(concatenated(so_far), params);
+            ASSERT_TRUE(whole.ok()) << whole.error().message;
+            expect_same_state(scan.state(), *whole);
+            if (HasFailure()) return;
+            keypoints += whole->keypoints.size();
+          }
+        }
+    EXPECT_GT(keypoints, 0u) << o.name;
   }
 }
 

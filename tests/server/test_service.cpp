@@ -26,10 +26,21 @@ grpc::Status Classify(Harness& h, const v1::ClassifyRequest& req, v1::ClassifyRe
   return h.stub->Classify(&ctx, req, resp ? resp : &local);
 }
 
-// Waits (briefly) until the server has logged `n` requests: a handler may still be finishing after
-// its client has the status.
+// Polls `done` until it holds or a generous deadline passes (a loaded CI machine may take seconds).
+template <class Done>
+bool WaitUntil(Done done, std::chrono::seconds deadline = std::chrono::seconds(60)) {
+  const auto end = std::chrono::steady_clock::now() + deadline;
+  while (!done()) {
+    if (std::chrono::steady_clock::now() > end) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  return true;
+}
+
+// Waits until the server has logged `n` requests: a handler may still be finishing after its client
+// has the status.
 std::vector<RequestLog> WaitForLogs(Harness& h, size_t n) {
-  for (int i = 0; i < 400 && h.Logs().size() < n; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  WaitUntil([&] { return h.Logs().size() >= n; });
   return h.Logs();
 }
 
@@ -203,7 +214,7 @@ TEST(Train, ClientCancelStopsTrainingAndStoresNothing) {
   *cloud.mutable_cloud()->mutable_cloud() = CloudToProto(SpiralCloud(10));
   stream->Write(cloud);
   stream->WritesDone();
-  for (int i = 0; i < 200 && h.behaviour.train_calls == 0; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  WaitUntil([&] { return h.behaviour.train_calls > 0; });
   ctx.TryCancel();
   for (v1::TrainProgress p; stream->Read(&p);) {
   }
@@ -579,8 +590,7 @@ TEST(StreamClassify, ConcurrentStreamsBeyondTheLimitAreResourceExhausted) {
   first->WritesDone();
   while (first->Read(&d)) {}
   ASSERT_TRUE(first->Finish().ok());
-  for (int i = 0; i < 200 && h.service->streams().active() > 0; ++i)
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  ASSERT_TRUE(WaitUntil([&] { return h.service->streams().active() == 0; })) << "the first stream's slot was never freed";
   grpc::ClientContext third_ctx;
   auto third = h.stub->StreamClassify(&third_ctx);
   ASSERT_TRUE(third->Write(Chunk(10, "m")));

@@ -38,6 +38,11 @@ Eigen::MatrixXd descriptor_rows(const std::vector<Descriptor>& descriptors);
 
 // Histogram of keypoint words; divided by the keypoint count when `normalise` (sec. 4).
 Eigen::VectorXd bag_of_keypoints(const std::vector<int>& words, int clusters, bool normalise);
+// Soft words: each keypoint shares one count among its `spread` nearest codebook centres, in inverse
+// proportion to its distance to each (spread 1: bag_of_keypoints of the hard words). A view of few
+// keypoints then says more than which single cluster each fell in.
+Eigen::VectorXd soft_bag_of_keypoints(const KeypointCodebook& codebook, const std::vector<Descriptor>& descriptors,
+                                      int spread, bool normalise);
 
 // ---- Bag of Graphs (sec. 3.2.6, Fig. 2) -----------------------------------------------------------
 
@@ -85,7 +90,10 @@ struct DecisionStage {
   Eigen::MatrixXd references;  // centres or training vectors, in PCA space (rows)
   std::vector<int> labels;     // category of each reference
   double temperature = 1;      // L1 distance scale turning distances into scores (see fit_decision)
+  bool projected = true;       // false: no PCA (the identity), references are histograms
 };
+// True when the stage's PCA is the identity (fit_decision without PCA; checked once on a read model).
+bool is_identity_projection(const Pca& pca);
 
 // `labels` in [0, categories); every category must have at least one row. `groups` (optional, one per
 // row): the training object of each row. The score temperature is the median distance from a training
@@ -94,8 +102,10 @@ struct DecisionStage {
 Expected<DecisionStage> fit_decision(const Eigen::MatrixXd& histograms, const std::vector<int>& labels,
                                      int categories, const DecisionParams& params, uint64_t seed, int threads,
                                      const std::vector<int>& groups = {});
-// Scores per category in [0, 1], summing to 1 (L1 distances, sec. 4).
-Eigen::VectorXd decide(const DecisionStage& stage, const Eigen::VectorXd& histogram);
+// Scores per category in [0, 1], summing to 1 (L1 distances, sec. 4). `by_shape` (a stage without PCA
+// only): the histogram and every reference divided by their L1 mass first, so only the proportions of
+// the words count (the paper's early-exploration normalisation, sec. 4).
+Eigen::VectorXd decide(const DecisionStage& stage, const Eigen::VectorXd& histogram, bool by_shape = false);
 // The scores with, per category, the L1 distance (in the stage's PCA space) to its nearest reference,
 // which the scores are made of: how far the cloud is from anything of the category learnt, what a
 // novelty score ("none of these") measures an answer against. Computed once, for the cost of decide.
@@ -107,7 +117,7 @@ struct StageScores {
   // large for a cloud unlike every training cloud in a way the kept components cannot show.
   double residual = 0;
 };
-StageScores decide_with_distances(const DecisionStage& stage, const Eigen::VectorXd& histogram);
+StageScores decide_with_distances(const DecisionStage& stage, const Eigen::VectorXd& histogram, bool by_shape = false);
 
 int argmax(const Eigen::VectorXd& scores);  // ties: the lowest index
 

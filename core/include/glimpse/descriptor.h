@@ -29,9 +29,16 @@ enum DescriptorField : int {
 double convex_hull_volume(std::span<const Vec3> points);
 
 struct DescriptorParams {
-  float large_window_supports = 2.5f;  // the large-window normal uses R = this x r (sec. 2.3, eq. 4)
+  float large_window_supports = 2.5f;  // the large-window normal uses R = this x the neighbourhood (sec. 2.3, eq. 4)
   size_t max_pfh_points = 48;          // neighbourhood subsampled (deterministically) above this
+  // The neighbourhood of the PFH and the hull: the support radius r (0), or the keypoint's own
+  // characteristic radius rho1 (eq. 3) clamped to [r, this x r], so a keypoint is described at its scale.
+  float characteristic_scale_supports = 0;
 };
+
+// The radius a keypoint is described over (see DescriptorParams), and the farthest any descriptor reads.
+float descriptor_radius(const Keypoint& keypoint, float support_radius_m, const DescriptorParams& params);
+float descriptor_reach(float support_radius_m, const DescriptorParams& params);
 
 // eq. 7-8: |1/2 - Ip| with Ip = 1/2 - atan((k1 + k2) / (k1 - k2)) / pi: 1/2 on a sphere (cap or cup),
 // 1/4 on a cylinder, 0 on a symmetric saddle (and on a plane).

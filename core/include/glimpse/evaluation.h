@@ -20,6 +20,8 @@
 #include "glimpse/dataset.h"
 #include "glimpse/expected.h"
 #include "glimpse/model.h"
+#include "glimpse/scan_filters.h"
+#include "glimpse/sensors.h"
 #include "glimpse/session.h"
 #include "glimpse/train_params.h"
 
@@ -60,6 +62,43 @@ std::vector<EvalObject> common_height(std::vector<EvalObject> objects, float hei
 // The categories of `objects` in the paper's order (human, chair, table, mechanic, fourleg) when
 // they are among them, then any others sorted by name.
 std::vector<std::string> paper_category_order(const std::vector<EvalObject>& objects);
+
+// ---- How test views are taken: the paper's ideal views or a simulated sensor in a real scene ------------
+
+enum class SensorKind : uint8_t {
+  kIdeal,        // HPR on area-weighted samples from the paper's viewpoints (sec. 3.4)
+  kDepthCamera,  // DepthCameraParams' Kinect-class camera, rays cast against the mesh
+  kLidar,        // LidarParams' 16-beam spinning LiDAR
+};
+std::string_view sensor_name(SensorKind kind);  // "ideal", "depth", "lidar"
+Expected<SensorKind> parse_sensor(std::string_view name);
+
+struct ScanCondition {
+  std::string label;  // the report's row name; empty: described from the fields
+  SensorKind sensor = SensorKind::kIdeal;
+  double density = 1;        // ideal: samples per object x this
+  float distance_m = 2;      // depth / LiDAR: from the sensor to the object's bounding-box centre
+  float elevation_deg = 30;  // depth / LiDAR: above the horizon, seen from that centre
+  float tilt_deg = 0;        // the cloud's up off by up to this, in a random direction (seeded)
+  bool floor = false;        // a floor patch under the object, seen by the sensor
+  double outliers = 0;       // stray points, x the view's size
+  bool operator==(const ScanCondition&) const = default;
+  bool is_ideal() const { return *this == ScanCondition{label}; }
+};
+std::string describe(const ScanCondition& condition);  // "depth 2 m, 30 deg, floor, 2 % outliers"
+
+// The robustness matrices: `small` (the default run's: density 0.25x and 4x, tilt 5 deg, depth camera
+// at 2 m with and without floor and outliers, LiDAR at 10 m) and `full` (depth camera at 1-3 m x 0-45
+// deg, LiDAR at 5-15 m, density 0.25x-4x, tilt 2-10 deg, floor, outliers). Each starts with the ideal
+// views through the same filters, the row every other one is compared with.
+std::vector<ScanCondition> robustness_conditions(std::string_view matrix);  // "none", "small", "full"
+
+// One view of an object under a condition, as the sensor returns it (before any filter). Ideal views are
+// object_view's; the others are cast against the object's mesh in the same pose (any-pose objects get
+// the view's random pose), from the same azimuth as the ideal view, at the condition's distance and
+// elevation. `full` is the object's full 3D cloud at the protocol's density (ideal views only).
+Cloud condition_view(const EvalObject& object, const Points& full, size_t view, size_t views, uint64_t object_seed,
+                     const ScanCondition& condition, size_t points_per_object, double hpr_radius_factor);
 
 // ---- Stages of the top-down exploration (sec. 4) ---------------------------------------------------
 
@@ -197,6 +236,7 @@ struct StreamTrace {
   std::vector<int> winners;              // report category index; -1 while the session cannot decide
   std::vector<double> confidence;
   std::vector<uint8_t> settled;          // the session's own flag
+  std::vector<uint8_t> unknown;          // the session's "none of these" (winners keeps the nearest category)
   std::vector<size_t> keypoints;
   std::vector<size_t> points;                    // accumulated after duplicate removal
   std::vector<std::vector<double>> raw_scores;   // per chunk, the chunk's own scores (report's category order)
@@ -206,6 +246,7 @@ struct StreamTrace {
 struct SettleRow {
   double threshold = -1;  // confidence threshold; -1: the session's own settled flag
   size_t views = 0, settled_views = 0, correct = 0;
+  size_t unknown = 0;                 // settled as "none of these" (counted wrong: every streamed view is known)
   double mean_visible_percent = 0;    // at the first settled chunk, over settled views
   double median_visible_percent = 0;
   double precision_percent() const { return settled_views ? 100.0 * double(correct) / double(settled_views) : 0.0; }
@@ -222,6 +263,9 @@ SettleRow settle_summary(const std::vector<StreamTrace>& traces, double threshol
 struct EvalParams {
   size_t points_per_object = 6000;  // 0: mesh vertices as points (the paper); else area-weighted samples
   size_t views_per_object = 6;      // the first n of paper_viewpoints (azimuth 0, 60, ..., 300 deg)
+  // Training-only views besides the tested ones: the same azimuths from these elevations (deg above the
+  // horizon; the tested views stay at the paper's 30), so a model learns cameras mounted low or high.
+  std::vector<float> train_elevations_deg;
   double hpr_radius_factor = 100;
   std::vector<Stage> stages = paper_stages();
   float cut_margin_supports = 1.5f;  // keypoint cut margin in support radii (see keypoint_prefix)
@@ -235,6 +279,14 @@ struct EvalParams {
   double stream_chunk_fraction = 0.02;
   SessionParams session;
   std::vector<double> settle_sweep = {0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9};
+  // The test views of the main tables (training views are always the ideal ones); a non-ideal
+  // condition's views go through `filters` before anything is measured.
+  ScanCondition test_condition;
+  ScanFilterParams filters;
+  // The robustness matrix: the default method at the main stages under each condition, on the first
+  // matrix_views_per_object of each tested object's views, with every fold's model.
+  std::vector<ScanCondition> matrix;  // glimpse-lab eval runs robustness_conditions("small") by default
+  size_t matrix_views_per_object = 2;
   int threads = 0;  // 0 = all cores; results do not depend on it
   uint64_t seed = 42;
   // threads and seed are taken from the fields above; train.partial_prefixes (fractions of each
@@ -263,8 +315,21 @@ struct StageStats {
   size_t cut_min_keypoints = 0, cut_max_keypoints = 0;
 };
 
-// Another evaluation's accuracy shown beside this one's (the size-blind ablation).
+// One condition of the robustness matrix: the default method's accuracy at the main stages.
+struct RobustnessRow {
+  ScanCondition condition;
+  std::vector<double> accuracy;  // per main stage, %
+  std::vector<double> balanced;  // per main stage, %
+  size_t views = 0, failed = 0;  // failed: no decision on the full view (too few points, ...)
+  double median_points_raw = 0;  // as the sensor returned them
+  double median_points = 0;      // after the filters
+  size_t ground_views = 0;       // views in which a ground plane was removed
+  double seconds = 0;
+};
+
+// Another evaluation's accuracy shown beside this one's (the size-blind ablation, the keypoint ablation).
 struct AblationRow {
+  std::string group = "size";    // the report section: "size" (how much is size), "keypoints"
   std::string label;             // what was changed
   MethodId method = MethodId::kFusion;
   std::vector<double> accuracy;  // per main stage, %
@@ -301,10 +366,17 @@ struct EvalResult {
   int threads = 1;
   std::vector<std::string> notes;           // anything that looks wrong
   std::vector<AblationRow> ablations;       // filled by the caller (add_ablation)
+  std::vector<RobustnessRow> robustness;    // the robustness matrix, in params.matrix's order
+  std::vector<double> trained_density;      // per model: median relative density of its training views
 };
 
+// What a run's views held: "full views 46.7 kp, 84.3 % >= 25" (mean keypoints of the full views and the
+// share of tested views with at least 25, when the 25 kp stage was run).
+std::string keypoint_summary(const EvalResult& r);
+
 // The accuracy of each of `other`'s methods at `result`'s main stages, as ablation rows labelled `label`.
-void add_ablation(EvalResult& result, const EvalResult& other, const std::string& label);
+void add_ablation(EvalResult& result, const EvalResult& other, const std::string& label,
+                  const std::string& group = "size");
 
 struct EvalProgress {
   std::string phase;

@@ -63,6 +63,14 @@ Status check_cloud(const Cloud& cloud, std::string_view what = "");
 // and a note saying why, not an error.
 Expected<FeatureState> extract(const Cloud& cloud, const FeatureParams& params = {}, const CancelFn& cancel = {});
 
+// extract() of a scan fused from several sensor positions: point_sensors names each point's sensor (one
+// per point). The points go in per sensor, in the order the sensors first appear, each facing its own
+// sensor, as a stream's chunks do (ScanFeatures); with one sensor for every point this is extract() of
+// the cloud with it. Errors: extract()'s, and a point_sensors of another length.
+bool one_sensor(const std::vector<std::optional<Vec3>>& point_sensors);
+Expected<FeatureState> extract_fused(const Cloud& cloud, const std::vector<std::optional<Vec3>>& point_sensors,
+                                     const FeatureParams& params = {}, const CancelFn& cancel = {});
+
 // The features of a growing scan. Each chunk's points are cleaned by the rule of clean() against
 // everything kept before (a re-sent or overlapping chunk changes nothing), the density is re-estimated
 // on the accumulated points, and the surfaces of every point whose neighbourhood changed are refitted
@@ -82,8 +90,8 @@ class ScanFeatures {
   bool ready() const;
   const FeatureState& state() const;
   size_t points() const;  // kept so far
-  // The latest chunk's sensor (the viewpoint whole-cloud descriptors use), if any chunk had one.
-  const std::optional<Vec3>& sensor() const;
+  // Per point kept (the state's cloud order): the sensor of the chunk it came in, if it had one.
+  const std::vector<std::optional<Vec3>>& viewpoints() const;
 
  private:
   struct Impl;

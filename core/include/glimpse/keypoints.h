@@ -16,14 +16,30 @@
 
 namespace glimpse {
 
+// What ranks candidate keypoints.
+enum class KeypointResponse : uint8_t {
+  kLambdaMin = 0,  // the paper (sec. 2.2): the smaller principal Harris curvature, descending
+  kHarris = 1,     // Sipiran & Bustos: det - k tr^2 of the Harris matrix (LocalSurface::harris_response),
+                   // candidates only where it is positive and the largest within r
+};
+
 struct KeypointParams {
   // Candidates whose rho1 would exceed this are flat, not keypoints. 0 = automatic:
-  // max_radius_supports x the support radius r.
+  // max_radius_supports x the support radius r; max_radius_supports <= 0: no cap (the paper has none).
   float max_characteristic_radius_m = 0;
   float max_radius_supports = 8.f;
-  // Boundary points of a 2.5D view and their r-neighbourhood never give keypoints (sec. 3.2.2).
+  // A keypoint claims the sphere of radius max(rho1, claim_min_supports x r): no other keypoint inside
+  // it (sec. 2.2). 0: rho1 alone, as the paper words it.
+  float claim_min_supports = 1.f;
+  // Boundary points of a 2.5D view and their neighbourhood of boundary_band_supports x r never give
+  // keypoints (sec. 3.2.2: "in a given radius").
   bool exclude_boundary = true;
   float boundary_gap_rad = std::numbers::pi_v<float> / 2;
+  float boundary_band_supports = 1.f;
+  // The boundary test looks at the neighbours within this x r: on irregular samplings (mesh vertices of
+  // long thin triangles) a neighbourhood of r has angular gaps inside the surface.
+  float boundary_radius_supports = 1.f;
+  KeypointResponse response = KeypointResponse::kLambdaMin;
   size_t max_keypoints = 0;  // 0 = no limit
 };
 
@@ -54,8 +70,8 @@ struct BoundaryMemo {
   std::vector<int8_t> touches_boundary;
 };
 
-// Deterministic: the same surfaces give the same keypoints, in the same order (descending lambda_min,
-// ties by index), whatever the thread count.
+// Deterministic: the same surfaces give the same keypoints, in the same order (descending response,
+// ties by index), whatever the thread count. A memo is valid for one boundary band width.
 std::vector<Keypoint> characteristic_scale_keypoints(const NeighbourIndex& tree,
                                                      const std::vector<LocalSurface>& surfaces,
                                                      float support_radius_m,

@@ -14,6 +14,7 @@
 
 #include "glimpse/cloud.h"
 #include "glimpse/expected.h"
+#include "glimpse/scan_filters.h"
 
 namespace glimpse {
 
@@ -115,11 +116,13 @@ struct Classification {
   double feature_ms = 0;
   double decision_ms = 0;
   std::string warning;  // for a person: e.g. the cloud is far larger than anything the model learnt
+  ScanFilterReport filters;  // what the scan filters took (all zero when the model does not filter)
   // "None of these": the winner stays the nearest known category; unknown when its novelty (see
   // Calibration) is above the threshold of the model's operating point, or when the method cannot
   // judge the cloud (a keypoint method with no keypoint), with the reason and a NaN novelty. NaN
   // novelty otherwise: the method was not calibrated (only the model's default method is).
   double novelty = std::numeric_limits<double>::quiet_NaN();
+  std::vector<double> category_novelty;  // per category (a stream smooths them); empty: not calibrated
   bool unknown = false;
   std::string unknown_reason;
 };
@@ -156,6 +159,14 @@ Expected<Model> train(const std::vector<TrainingCloud>& data, const TrainParams&
 Expected<Classification> classify(const Model& model, const Cloud& cloud,
                                   std::optional<MethodId> method = std::nullopt,
                                   const CancelFn& cancel = {});
+
+// A scan fused from several sensor positions (a stream's chunks): point_sensors names, per point, the
+// sensor that saw it (empty: cloud.sensor for all). The model's filters see the whole scan; each point
+// kept then faces its own sensor (a voxel centroid the sensor of the nearest point it came from), as a
+// stream's chunks do. With one sensor for every point this is classify() of the cloud with that sensor.
+Expected<Classification> classify_fused(const Model& model, const Cloud& cloud,
+                                        const std::vector<std::optional<Vec3>>& point_sensors,
+                                        std::optional<MethodId> method = std::nullopt, const CancelFn& cancel = {});
 
 // Versioned, little-endian byte format with a checksum; deserialize rejects truncated or corrupt input.
 std::vector<uint8_t> serialize(const Model& model);

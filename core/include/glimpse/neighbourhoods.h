@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <unordered_map>
 #include <vector>
 
@@ -69,6 +70,8 @@ class VoxelIndex final : public NeighbourIndex {
 // Median distance from a point to its k-th nearest other point (over a deterministic sample of at
 // most `sample` points); 0 for fewer than 2 points. k = 1 gives the median spacing.
 float median_knn_distance(const NeighbourIndex& tree, size_t k, size_t sample = 300);
+// The same for several k at once (one radius search per sample serves them all), in ks' order.
+std::vector<float> median_knn_distances(const NeighbourIndex& tree, std::span<const size_t> ks, size_t sample = 300);
 
 
 // The density of a cloud and every radius derived from it (sec. 3.2.1: "as small a radius as possible"

@@ -34,13 +34,28 @@ struct LocalSurface {
   float k1 = 0, k2 = 0;         // principal curvatures, k1 >= k2, signed w.r.t. the normal (1/m)
   float lambda_min = 0;         // principal Harris curvatures, lambda_min <= lambda_max (1/m^2)
   float lambda_max = 0;
+  // Harris-3D response det(E) - k tr(E)^2 (Sipiran & Bustos, k = kHarrisK) of the Harris matrix E over a
+  // Gaussian window of sigma = r/2 (the fit's own weights): dimensionless, > 0 at corner-like points.
+  float harris_response = 0;
   uint16_t neighbours = 0;
   bool valid = false;
 };
 
-// Harris-3D matrix of Sipiran & Bustos from the quadric coefficients p1..p5 and its eigenvalues
-// (min, max). On a sphere of radius rho both are 2/rho^2 (eq. 2).
+// The Harris matrix of the quadric z = f(x, y) over a Gaussian window of standard deviation sigma,
+// E = integral of grad f grad f^T G_sigma, in closed form:
+//   A = p4^2 + sigma^2 (p1^2 + p2^2),  B = p5^2 + sigma^2 (p2^2 + p3^2),  C = p4 p5 + sigma^2 (p1 p2 + p2 p3);
+// its eigenvalues (min, max). Units: p1..p3 in 1/length, sigma in the same length, E dimensionless.
+Eigen::Vector2f harris_matrix_eigenvalues(double p1, double p2, double p3, double p4, double p5, double sigma);
+
+// The paper's principal Harris curvatures (eq. 2): Sipiran & Bustos's closed form A = p4^2 + 2 p1^2 + 2 p2^2
+// with the quadric in metres, i.e. harris_matrix_eigenvalues with sigma = sqrt(2) m. On a sphere of radius
+// rho both are 2/rho^2 (eq. 2); with the slopes p4, p5 ~ 0 of a fit in the point's own frame they are
+// 2 k^2 along each principal direction, so lambda_min ~ 2 min(k1^2, k2^2) (1/m^2).
 Eigen::Vector2f harris_eigenvalues(float p1, float p2, float p3, float p4, float p5);
+
+inline constexpr double kHarrisK = 0.04;  // Harris & Stephens' k, as Sipiran & Bustos use it
+// det(E) - k tr(E)^2 of the Harris matrix of eigenvalues (l1, l2).
+inline double harris_response(double l1, double l2, double k = kHarrisK) { return l1 * l2 - k * (l1 + l2) * (l1 + l2); }
 
 // Signed principal curvatures (k1 >= k2) of z = f(x, y) at the origin from the quadric coefficients.
 Eigen::Vector2f principal_curvatures(float p1, float p2, float p3, float p4, float p5);

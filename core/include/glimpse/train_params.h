@@ -9,6 +9,7 @@
 #include "glimpse/features.h"
 #include "glimpse/global_descriptors.h"
 #include "glimpse/model.h"
+#include "glimpse/scan_filters.h"
 #include "glimpse/upright_histogram.h"
 
 namespace glimpse {
@@ -27,7 +28,8 @@ struct DecisionParams {
   DecisionRule kind = DecisionRule::kNearestReference;
   int centres_per_category = 3;     // for kCentres
   int neighbours = 5;               // for kNearestNeighbours
-  double pca_explained_variance = 0.98;  // PCA of the training histograms (sec. 3.3.2)
+  double pca_explained_variance = 0.98;  // PCA of the training histograms (sec. 3.3.2); <= 0: none, L1 on
+                                         // the histograms themselves (BoG still reduced to bog_pca_dims)
   int max_pca_dims = 65;
 };
 
@@ -40,7 +42,13 @@ struct TrainParams {
 
   double codebook_explained_variance = 0.95;  // PCA of standardised descriptors (sec. 3.2.5)
   int bok_clusters = 60;
+  int bok_soft_words = 1;  // 1: each keypoint one word (the paper); N: shared among its N nearest words
   bool normalise_histograms = true;  // divide by keypoint count: partial views see fewer (sec. 4)
+  // The paper's rule (sec. 4): normalise early in the exploration, not later. > 0: a histogram is divided
+  // by its count while the view holds fewer than this many keypoints and by the count at this many after
+  // (graphs: as many; KGH pairs: N (N - 1)), so a view with many keypoints keeps how many it has.
+  // 0: normalise_histograms alone decides.
+  int normalise_up_to_keypoints = 0;
   int bog_keypoint_clusters = 6;
   int bog_volume_clusters = 5;
   int bog_pca_dims = 65;
@@ -60,6 +68,13 @@ struct TrainParams {
   // (seeded): a scanner knows up to a few degrees, and on a flat top a tilt of 2 degrees makes the first
   // points seen a strip along one edge instead of the whole top. 0: as given.
   float tilt_deg = 5.f;
+
+  // Every cloud classified (Classify, ClassifyBatch, a stream's final decision) first goes through the
+  // scan filters: isolated points, a ground plane, a voxel grid down to filters.relative_density, which
+  // train() sets to the median relative density of its training clouds. Training clouds are learnt as
+  // given. Models written before the filters existed read with filter_scans false and classify as before.
+  bool filter_scans = true;
+  ScanFilterParams filters;
 
   DecisionParams decision;
   // Calibration on held-out folds of the training objects (inner cross-validation by object): the

@@ -80,8 +80,9 @@ std::vector<uint32_t> hidden_point_removal_indices(const Points& points, const V
 
 // Sec. 3.4: 6 viewpoints per object: azimuth 0, 60, ..., 300 deg about +z, elevation 30 deg above
 // the horizon, at 3x the bounding-sphere radius (largest distance from the centroid) from the
-// centroid. Empty input gives no viewpoints.
-std::vector<Vec3> paper_viewpoints(const Points& points);
+// centroid. Empty input gives no viewpoints. Another elevation gives the same ring higher or lower.
+inline constexpr float kPaperElevationDeg = 30.f;
+std::vector<Vec3> paper_viewpoints(const Points& points, float elevation_deg = kPaperElevationDeg);
 
 // ---- the protocol's views of one object (sec. 3.4): the lab, the client and the tests share them ----
 
@@ -95,9 +96,10 @@ Points object_cloud(const Mesh& mesh, size_t points, uint64_t seed);
 
 // View `view` of `views` evenly spaced among the 6 of paper_viewpoints, by hidden point removal. An
 // object without a natural up is first turned to a random pose of its own for this view (seeded by
-// pose_seed and the view) and put on the ground.
+// pose_seed and the view) and put on the ground. `elevation_deg` raises or lowers the ring of viewpoints
+// (training views from several heights; the pose is the same at every elevation).
 Cloud object_view(const Points& full, size_t view, size_t views, bool any_pose, uint64_t pose_seed,
-                  double hpr_radius_factor = 100.0);
+                  double hpr_radius_factor = 100.0, float elevation_deg = kPaperElevationDeg);
 
 // ---- top-to-bottom exploring sequence (sec. 4) ----
 

@@ -1,0 +1,123 @@
+// The evaluation protocol's shared state and helpers (evaluation_protocol.cpp runs the phases;
+// evaluation_robustness.cpp adds the robustness matrix with the same views, features and models).
+#pragma once
+
+#include <omp.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "glimpse/evaluation.h"
+#include "model_impl.h"
+
+namespace glimpse::eval_internal {
+
+using Clock = std::chrono::steady_clock;
+
+inline double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+inline bool contains(const std::vector<MethodId>& v, MethodId m) { return std::find(v.begin(), v.end(), m) != v.end(); }
+
+// The base methods whose features the evaluated methods need (fusion brings its components).
+inline std::vector<MethodId> feature_methods(const TrainParams& tp) {
+  std::vector<MethodId> base;
+  auto add = [&](MethodId m) {
+    if (m != MethodId::kFusion && !contains(base, m)) base.push_back(m);
+  };
+  for (MethodId m : tp.methods) add(m);
+  if (contains(tp.methods, MethodId::kFusion))
+    for (MethodId m : tp.fusion_of) add(m);
+  return base;
+}
+
+// body(i) for i in [0, n) on `threads` threads; progress is reported from thread 0 only.
+template <class Body>
+void parallel_for(size_t n, int threads, const std::string& phase, const EvalProgressFn& progress, Body&& body) {
+  std::atomic<size_t> done{0};
+  if (progress) progress({phase, 0, n});
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
+  for (int64_t i = 0; i < static_cast<int64_t>(n); ++i) {
+    body(static_cast<size_t>(i));
+    const size_t d = ++done;
+    if (progress && omp_get_thread_num() == 0) progress({phase, d, n});
+  }
+  if (progress) progress({phase, n, n});
+}
+
+struct View {
+  int object = 0;
+  int view = 0;  // index among the object's evaluated viewpoints
+  bool train_only = false;  // a training view from another elevation (train_elevations_deg): never tested
+  Cloud cloud;   // as the sensor saw it: what is tested
+  Cloud learnt;  // as training learns it (training_view: tilted); empty when that is `cloud` itself
+  // The ideal view's size when `cloud` was taken by another sensor (0: `cloud` is the ideal view): the
+  // stage fractions of a sensor's view are the same share of its points as of the ideal view's.
+  size_t ideal_points = 0;
+};
+
+// The features of one top-down prefix of one view (count == view size: the full view), cut from the
+// view as seen or from its learnt (tilted) copy.
+struct FeatureSlot {
+  size_t view = 0;
+  size_t count = 0;
+  bool learnt = false;
+  bool ok = false;
+  CloudFeatures features;
+  std::string error;
+  double seconds = 0;
+};
+
+// What the phases share.
+struct Protocol {
+  const std::vector<EvalObject>& objects;
+  const EvalParams& params;
+  const EvalProgressFn& progress;
+  int threads = 1;
+  TrainParams tp;
+  std::vector<MethodId> base;
+  int folds = 1;                 // models trained: the CV folds, or 1 for a cross-source evaluation
+  std::vector<Points> full;      // full 3D cloud per object (sec. 3.4)
+  std::vector<View> views;
+  std::vector<FeatureSlot> slots;  // [0, views.size()): the full views; then the distinct prefixes
+  std::vector<float> margin;       // keypoint cut margin per view
+  std::vector<Stage> stages;       // the main stages, then the exploration grid's
+  std::vector<std::vector<int>> stage_slot;   // [view][stage] -> slot, -1 none
+  std::vector<std::vector<int>> train_slots;  // [view] -> slots trained on: the full view, then prefixes
+  std::vector<std::vector<int>> seen_slots;   // [view] -> the same clouds as seen (untilted): calibration's queries
+  std::vector<std::shared_ptr<const Model>> fold_models;
+  std::vector<std::vector<int>> fold_to_ours;  // per fold: model category index -> report category index
+  EvalResult r;
+
+  bool tested(size_t v) const { return !views[v].train_only && r.object_fold[static_cast<size_t>(views[v].object)] >= 0; }
+  bool learnt(size_t v) const {
+    const EvalRole role = objects[static_cast<size_t>(views[v].object)].role;
+    return role == EvalRole::kCrossValidate || role == EvalRole::kTrainOnly;
+  }
+  bool unknown(size_t v) const { return r.object_truth[static_cast<size_t>(views[v].object)] < 0; }
+  // The full 3D cloud's size the view's visible fractions refer to, scaled to a sensor view's density.
+  size_t full_points(size_t v) const {
+    const double n = double(full[static_cast<size_t>(views[v].object)].size());
+    const View& w = views[v];
+    return std::max<size_t>(1, size_t(std::llround(w.ideal_points ? n * double(w.cloud.points.size()) / double(w.ideal_points) : n)));
+  }
+  const Cloud& learnt_cloud(size_t v) const { return views[v].learnt.points.empty() ? views[v].cloud : views[v].learnt; }
+  bool tilted(size_t v) const { return !views[v].learnt.points.empty(); }
+  uint64_t object_seed(size_t o) const { return glimpse::object_seed(params.seed, objects[o].category + "/" + objects[o].id); }
+};
+
+void compute_slot(Protocol& P, FeatureSlot& slot, const Cloud& cloud);
+// Phase 9: the robustness matrix (params.matrix) with the trained fold models.
+void robustness_matrix(Protocol& P);
+// The report's sections on a sensor's test views and on the robustness matrix ("" when neither).
+std::string robustness_section(const EvalResult& r);
+// evaluation_report_ablations.cpp: "How much is size", keypoints per view, the keypoint ablation.
+std::string size_section(const EvalResult& r);
+std::string keypoints_section(const EvalResult& r);
+std::string keypoint_ablation_section(const EvalResult& r);
+
+}  // namespace glimpse::eval_internal

@@ -1,0 +1,84 @@
+#!/usr/bin/env bash
+# glimpse-lab end to end.
+#   lab_cli_test.sh LAB zoo            the paper preset and the keypoint ablation on a tiny zoo; flag errors
+#   lab_cli_test.sh LAB shrec DIR      the paper preset on a reduced SHREC 2007 protocol, with floors just
+#                                      under the measured figures (exit 77 = skipped when DIR is absent)
+set -uo pipefail
+LAB=$1
+MODE=$2
+TMP=$(mktemp -d)
+trap 'rm -rf "$TMP"' EXIT
+FAILURES=0
+fail() {
+  echo "FAIL: $*" >&2
+  FAILURES=$((FAILURES + 1))
+}
+# run EXPECTED_RC args...: runs glimpse-lab (bounded), checks the exit code.
+run() {
+  local expected=$1
+  shift
+  timeout 500 "$LAB" "$@" >"$TMP/out" 2>"$TMP/err"
+  local rc=$?
+  ((rc == expected)) || { fail "glimpse-lab $* exited $rc, expected $expected; stderr: $(tail -c 1500 "$TMP/err")"; return 1; }
+}
+has() { grep -qE -- "$2" "$1" || fail "$(basename "$1") lacks /$2/"; }
+
+if [[ $MODE == zoo ]]; then
+  # Flag errors say which flag and what it takes.
+  run 2 eval --zoo 3 --preset nonsense --out "$TMP/x" && has "$TMP/err" "--preset must be 'paper'"
+  run 2 eval --zoo 3 --keypoint-response corner --out "$TMP/x" && has "$TMP/err" "--keypoint-response must be lambda-min or harris"
+  run 2 eval --zoo 3 --boundary-radius 0 --out "$TMP/x" && has "$TMP/err" "--boundary-radius must be positive"
+  run 2 eval --zoo 3 --min-neighbours 4 --out "$TMP/x" && has "$TMP/err" "--min-neighbours must be at least 6"
+  run 2 eval --zoo 3 --methods vfh,ush --keypoint-ablation --out "$TMP/x" && has "$TMP/err" "needs bok, bog or kgh"
+  # The preset: the paper's protocol and decision, written in the report; the ablation beside it.
+  if run 0 eval --zoo 3 --views 2 --preset paper --quick --keypoint-ablation --out "$TMP/zoo"; then
+    R="$TMP/zoo/report.md"
+    has "$R" "\| object cloud \(\`--points\`\) \| mesh vertices"
+    has "$R" "one K-means centre per category|nearest centre"
+    has "$R" "L1 on the histograms \(BoG reduced to 65 dims\)"
+    has "$R" "divided by their count up to 25 keypoints"
+    has "$R" "rho1 uncapped; each claims rho1"
+    has "$R" "## Keypoint ablation"
+    has "$R" "\| rho1 <= 8 r \(full views [0-9.]+ kp"
+    has "$R" "\| Harris response \(local maxima\)"
+    has "$R" "\(paper Table 1\)"
+    has "$TMP/out" "^BoK +[0-9.]+ \(89\)"
+    # Every ablation row has numbers or says why it failed.
+    rows=$(grep -cE "^\| [^|*]+ \| (BoK|BoG|KGH) \|" "$R")
+    ((rows >= 30)) || fail "the keypoint ablation has $rows rows, expected >= 30"
+  fi
+  # A flag given on the command line wins over the preset.
+  if run 0 eval --zoo 3 --preset paper --quick --points 1500 --methods bok --matrix none --out "$TMP/zoo2"; then
+    has "$TMP/zoo2/report.md" "1500 area-weighted surface samples"
+  fi
+elif [[ $MODE == shrec ]]; then
+  DIR=$3
+  if [[ ! -d $DIR ]]; then
+    echo "SKIP: SHREC 2007 not found at $DIR (the paper preset test needs ../shared/data/shrec07)"
+    exit 77
+  fi
+  # 10 objects per category, 3 views, seed 42, the preset as shipped.
+  if run 0 eval --data "$DIR" --preset paper --max-objects 10 --views 3 --out "$TMP/shrec"; then
+    R="$TMP/shrec/report.md"
+    cat "$TMP/out"
+    acc() { awk -v m="$1" -v col="$2" '$1 == m { print $col }' "$TMP/out"; }
+    ge() { awk -v a="$1" -v b="$2" 'BEGIN { exit !(a >= b) }' || fail "$3: $1 < $2"; }
+    # Fields: method, full, (paper), 10kp, (paper), 25kp, (paper), 55kp, 10%, (paper), 20%, (paper).
+    # 150 test views: one is 0.67 points.
+    ge "$(acc BoK 2)" 69 "BoK full"     # measured 71.3 (paper 89)
+    ge "$(acc BoK 4)" 57 "BoK 10 kp"    # measured 59.3 (paper 64)
+    ge "$(acc VFH 2)" 70 "VFH full"     # measured 72.7 (paper 64)
+    # Keypoint stages are real stages: full views with >= 25 keypoints.
+    share=$(grep -E "^\| 25kp \| [0-9]+ \| [0-9.]+ \|" "$R" | awk -F'|' '{ gsub(/ /, "", $4); print $4 }')
+    echo "full views with >= 25 keypoints: ${share:-none} %"
+    ge "${share:-0}" 84 "full views with >= 25 keypoints, %"  # measured 86.0 (issue 19's target: 80)
+  fi
+else
+  echo "unknown mode $MODE" >&2
+  exit 2
+fi
+if ((FAILURES)); then
+  echo "$FAILURES failure(s)" >&2
+  exit 1
+fi
+echo "lab $MODE: all checks passed"
