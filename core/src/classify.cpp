@@ -1,9 +1,11 @@
 // Classification of one cloud, or of a scan fused from several sensor positions: the scan filters the
-// model recorded, the features of its methods, the decision (sec. 4).
+// model recorded, the features of its methods, the decision and whether it is none of the learnt
+// categories (sec. 4).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <string>
 
 #include "features_impl.h"
@@ -14,6 +16,124 @@
 #include "model_impl.h"
 
 namespace glimpse {
+
+// ---- Decision: a method's histograms, its decision stages' scores, and whether it is none of the
+// categories (novelty, unknown) ------------------------------------------------------------------
+
+Eigen::VectorXd method_histogram(const ModelImpl& impl, MethodId method, const CloudFeatures& f) {
+  const TrainParams& p = impl.params;
+  const int up_to = p.normalise_up_to_keypoints;
+  const bool normalise = p.normalise_histograms && up_to <= 0;
+  // sec. 4: counts divided by min(count, count at up_to keypoints).
+  auto early = [&](Eigen::VectorXd h, double count, double count_at_up_to) {
+    if (up_to > 0 && count > 0) h /= std::min(count, count_at_up_to);
+    return h;
+  };
+  const double n = static_cast<double>(up_to);
+  switch (method) {
+    case MethodId::kBoK:
+      return early(p.bok_soft_words > 1
+                       ? soft_bag_of_keypoints(impl.bok, f.descriptors, p.bok_soft_words, normalise)
+                       : bag_of_keypoints(keypoint_words(impl.bok, f.descriptors), p.bok_clusters, normalise),
+                   static_cast<double>(f.descriptors.size()), n);
+    case MethodId::kBoG: {
+      const auto graphs = local_graphs(f.positions, keypoint_words(impl.bog, f.descriptors));
+      return early(bag_of_graphs(graphs, impl.graphs, normalise), static_cast<double>(graphs.size()), n);
+    }
+    case MethodId::kKGH: {
+      const double k = static_cast<double>(f.positions.size());
+      return early(keypoint_global_histogram(f.positions, keypoint_words(impl.kgh, f.descriptors), p.kgh_clusters,
+                                             p.kgh_distance_bins, impl.kgh_max_distance_m, normalise),
+                   k * (k - 1), n * (n - 1));
+    }
+    case MethodId::kVFH: return f.vfh ? Eigen::VectorXd(f.vfh->cast<double>()) : Eigen::VectorXd::Zero(kVfhSize);
+    case MethodId::kESF: return f.esf ? Eigen::VectorXd(f.esf->cast<double>()) : Eigen::VectorXd::Zero(kEsfSize);
+    case MethodId::kUSH:
+      return f.ush ? Eigen::VectorXd(f.ush->cast<double>()) : Eigen::VectorXd::Zero(kUprightHistogramSize);
+    case MethodId::kSize: return f.size ? Eigen::VectorXd(f.size->cast<double>()) : Eigen::VectorXd::Zero(kVisibleSizeSize);
+    case MethodId::kFusion: break;
+  }
+  return {};
+}
+
+MethodDecision method_decision(const ModelImpl& impl, MethodId method, const CloudFeatures& f) {
+  const std::vector<MethodId> parts = component_methods(impl, method);
+  const Calibration& cal = impl.calibration;
+  const bool calibrated = cal.method == method && !cal.novelty_scale.empty() && cal.reference_whole.size() == parts.size();
+  MethodDecision out;
+  std::vector<NearestReferences> nearest;
+  for (size_t j = 0; j < parts.size(); ++j) {
+    const MethodId m = parts[j];
+    // sec. 4: early in the exploration (fewer than normalise_up_to_keypoints keypoints) the words'
+    // proportions are compared, the references' too; later the counts.
+    const int up_to = impl.params.normalise_up_to_keypoints;
+    const bool early = up_to > 0 && (m == MethodId::kBoK || m == MethodId::kKGH) &&
+                       f.descriptors.size() < static_cast<size_t>(up_to);
+    StageScores s = decide_with_distances(*impl.stages[static_cast<int>(m)], method_histogram(impl, m, f), early);
+    out.scores = out.scores.size() ? Eigen::VectorXd(out.scores + s.scores) : s.scores;
+    if (calibrated) nearest.push_back(nearest_references(std::move(s), cal.reference_whole[j]));
+  }
+  out.scores /= static_cast<double>(std::max<size_t>(1, parts.size()));
+  if (calibrated) out.novelty = category_novelty(cal, nearest);
+  return out;
+}
+
+Eigen::VectorXd method_scores(const ModelImpl& impl, MethodId method, const CloudFeatures& f) {
+  return method_decision(impl, method, f).scores;
+}
+
+std::string cannot_judge(MethodId method, const std::vector<MethodId>& components, const CloudFeatures& f) {
+  // A keypoint histogram of too few keypoints is empty (BoG's graphs join 4 keypoints, KGH's pairs 2):
+  // its nearest category is an accident. Fusion judges as long as one component can.
+  auto blind = [&](MethodId m) {
+    const size_t k = f.positions.size();
+    return (m == MethodId::kBoK && k == 0) || (m == MethodId::kBoG && k < 4) || (m == MethodId::kKGH && k < 2);
+  };
+  if (components.empty() || !std::all_of(components.begin(), components.end(), blind)) return {};
+  return std::to_string(f.positions.size()) + " keypoint" + (f.positions.size() == 1 ? "" : "s") + ": " +
+         method_name(method) + " cannot judge this cloud (an empty histogram)";
+}
+
+namespace {
+
+// `unknown` and its reason from the novelty at `threshold` (NaN: no novelty threshold, never unknown).
+void judge_novelty(Classification& c, double threshold, double known_acceptance) {
+  c.unknown = std::isfinite(threshold) && std::isfinite(c.novelty) && c.novelty > threshold;
+  c.unknown_reason.clear();
+  if (!c.unknown) return;
+  char why[200];
+  std::snprintf(why, sizeof why,
+                "novelty %.2f above %.2f, the threshold accepting %.1f %% of known clouds (held out in training)",
+                c.novelty, threshold, 100 * known_acceptance);
+  c.unknown_reason = why;
+}
+
+}  // namespace
+
+void judge_unknown(const Model& model, const MethodDecision& decision, const CloudFeatures& f, Classification& c) {
+  if (std::string why = cannot_judge(c.method, component_methods(*model.impl, c.method), f); !why.empty()) {
+    c.novelty = std::numeric_limits<double>::quiet_NaN();
+    c.unknown = true;
+    c.unknown_reason = std::move(why);
+    return;
+  }
+  c.category_novelty.assign(decision.novelty.data(), decision.novelty.data() + decision.novelty.size());
+  if (decision.novelty.size() && c.winner >= 0) c.novelty = decision.novelty[c.winner];
+  (void)set_known_acceptance(model, c, 0);  // 0 (the default) is always valid
+}
+
+Status set_known_acceptance(const Model& model, Classification& c, double known_acceptance) {
+  if (!(known_acceptance >= 0 && known_acceptance <= 1))
+    return invalid_argument("known acceptance must be in (0, 1] (0: the model's default), not " +
+                            std::to_string(known_acceptance));
+  if (c.unknown && !std::isfinite(c.novelty)) return {};  // the method cannot judge the cloud at all
+  const Calibration& cal = calibration(model);
+  const double a = known_acceptance > 0 ? known_acceptance : cal.known_acceptance;
+  judge_novelty(c, cal.method == c.method ? novelty_threshold(cal, a) : std::numeric_limits<double>::quiet_NaN(), a);
+  return {};
+}
+
+// ---- Classification ----------------------------------------------------------------------------
 
 std::string size_warning(const TrainingSummary& stats, const Cloud& cloud) {
   if (!(stats.max_extent_m > 0) || cloud.points.empty()) return {};
