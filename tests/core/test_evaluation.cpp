@@ -588,10 +588,11 @@ TEST(OpenSet, SummaryOnAHandMadeList) {
 
 // The CI's open-set check: one zoo category is held out of every model and tested as unknown; its views
 // must come out more novel than the known ones' (novelty calibrated on held-out folds of the training
-// views only). Zoo 8 per category, seed 3, 2 folds, 3 views, 3000 points, fusion. Measured: AUROC 0.568
-// on full views, 0.620 at 20 % visible (the zoo's four-legged animals share legs and backs with its
-// chairs and tables: ranked above the known, barely); 81 % of known and 83 % of unknown full views
-// accepted at the default operating point.
+// views only, each decided untilted as a test view comes). Zoo 8 per category, seed 3, 2 folds, 3 views,
+// 3000 points, fusion. Measured: AUROC 0.569 on full views, 0.670 at 20 % visible (0.620 when the held-out
+// views were decided tilted; the zoo's four-legged animals share legs and backs with its chairs and
+// tables: ranked above the known, barely); 81 % of known and 79 % of unknown full views accepted at the
+// default operating point.
 TEST(RunEvaluation, AZooCategoryHeldOutComesOutNovel) {
   std::vector<EvalObject> objects = zoo_objects(8, 3);
   for (EvalObject& o : objects)
@@ -619,7 +620,7 @@ TEST(RunEvaluation, AZooCategoryHeldOutComesOutNovel) {
             << "; known accepted " << rows[0].known_acceptance << " %, unknown accepted " << rows[0].false_acceptance
             << " % (full)\n";
   EXPECT_GE(rows[0].auroc, 0.55);  // measured 0.568
-  EXPECT_GE(rows[1].auroc, 0.60);  // measured 0.620
+  EXPECT_GE(rows[1].auroc, 0.65);  // measured 0.670
   const std::string report = markdown_report(*r);
   EXPECT_NE(report.find("## Open set"), std::string::npos);
   EXPECT_NE(decisions_csv(*r).find(",unknown:fourleg,"), std::string::npos);
