@@ -31,6 +31,7 @@ double median(std::vector<double> v) {
 // method, every category's nearest reference.
 struct HeldOut {
   std::vector<int> winners;
+  std::vector<Eigen::VectorXd> scores;                  // [decision]: the decision's scores (fusion: the mean)
   std::vector<std::vector<NearestReferences>> nearest;  // [decision][component]
 };
 
@@ -71,7 +72,7 @@ void calibrate_novelty(Calibration& c, const HeldOut& h, size_t components, int 
   }
   std::vector<double> known;
   for (size_t i = 0; i < h.winners.size(); ++i) {
-    const Eigen::VectorXd n = category_novelty(c, h.nearest[i]);
+    const Eigen::VectorXd n = category_novelty(c, h.nearest[i], h.scores[i]);
     if (n.size() && std::isfinite(n[h.winners[i]])) known.push_back(n[h.winners[i]]);
   }
   if (known.empty()) return;
@@ -110,7 +111,8 @@ NearestReferences nearest_references(StageScores&& s, const std::vector<uint8_t>
   return n;
 }
 
-Eigen::VectorXd category_novelty(const Calibration& c, const std::vector<NearestReferences>& components) {
+Eigen::VectorXd category_novelty(const Calibration& c, const std::vector<NearestReferences>& components,
+                                 const Eigen::VectorXd& scores) {
   if (c.novelty_scale.empty() || c.novelty_scale.size() != components.size()) return {};
   const Eigen::Index categories = components.front().distance.size();
   const size_t n_cat = static_cast<size_t>(categories);
@@ -126,7 +128,10 @@ Eigen::VectorXd category_novelty(const Calibration& c, const std::vector<Nearest
     }
   }
   // Novel either way: far from every reference of the category, or outside what training histograms span.
-  return near.cwiseMax(outside) / double(components.size());
+  Eigen::VectorXd novelty = near.cwiseMax(outside) / double(components.size());
+  // ... and more so when the decision is torn between categories (its score for this one is low).
+  if (c.novelty_over_score && scores.size() == categories) novelty.array() /= scores.array().max(1e-6);
+  return novelty;
 }
 
 double novelty_threshold(const Calibration& c, double known_acceptance) {
@@ -238,6 +243,7 @@ Calibration calibrate(const ModelImpl& impl, MethodId method, const std::vector<
       decisions.push_back({s[winner] - second, right});
       correct += right;
       held_out.winners.push_back(winner);
+      held_out.scores.push_back(s);
       held_out.nearest.push_back(std::move(nearest[r]));
     }
   }

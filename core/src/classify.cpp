@@ -74,7 +74,7 @@ MethodDecision method_decision(const ModelImpl& impl, MethodId method, const Clo
     if (calibrated) nearest.push_back(nearest_references(std::move(s), cal.reference_whole[j]));
   }
   out.scores /= static_cast<double>(std::max<size_t>(1, parts.size()));
-  if (calibrated) out.novelty = category_novelty(cal, nearest);
+  if (calibrated) out.novelty = category_novelty(cal, nearest, out.scores);
   return out;
 }
 

@@ -121,8 +121,10 @@ struct MethodDecision {
 MethodDecision method_decision(const ModelImpl& impl, MethodId method, const CloudFeatures& f);
 // Per category, the larger of two means over the components, each over its calibrated scale
 // (Calibration::novelty_scale): the distance to the category's nearest reference, and what the stage's
-// PCA leaves out of the histogram. Empty when not calibrated or the sizes differ.
-Eigen::VectorXd category_novelty(const Calibration& c, const std::vector<NearestReferences>& components);
+// PCA leaves out of the histogram; divided by `scores` (the decision's, per category) when
+// Calibration::novelty_over_score. Empty when not calibrated or the sizes differ.
+Eigen::VectorXd category_novelty(const Calibration& c, const std::vector<NearestReferences>& components,
+                                 const Eigen::VectorXd& scores);
 // novelty, unknown and unknown_reason of `c` (its method and winner set) from `decision` on `f`, at the
 // model's default operating point: what classify answers (the lab and sessions' final answer share it).
 void judge_unknown(const Model& model, const MethodDecision& decision, const CloudFeatures& f, Classification& c);

@@ -25,8 +25,9 @@ constexpr char kMagic[8] = {'G', 'L', 'M', 'P', 'S', 'M', 'D', 'L'};
 // 1: stage slots of the first 5 methods. 2: a u8 slot count first (USH is method 6). 3: the size-only
 // baseline (method 7), the calibration after the stages, the feature pipeline version and the training
 // extents after the statistics. 4: the novelty calibration after the settle margin ("none of these";
-// older models read with none: novelty NaN, nothing unknown but what a method cannot judge).
-constexpr uint32_t kFormatVersion = 4;
+// older models read with none: novelty NaN, nothing unknown but what a method cannot judge). 5: a u8
+// after the novelty threshold, novelty_over_score (format 4 reads false: its quantiles are without it).
+constexpr uint32_t kFormatVersion = 5;
 constexpr uint32_t kOldestReadableVersion = 1;
 
 uint32_t crc32(const uint8_t* data, size_t n) {
@@ -337,10 +338,11 @@ void write_novelty(Writer& w, const Calibration& c) {
   for (double v : c.novelty_quantiles) w.f64(v);
   w.f64(c.known_acceptance);
   w.f64(c.novelty_threshold);
+  w.u8(c.novelty_over_score ? 1 : 0);
 }
 
 // `impl`'s stages are read: each component's reference flags must match its stage.
-void read_novelty(Reader& r, Calibration& c, uint32_t ncat, const ModelImpl& impl) {
+void read_novelty(Reader& r, Calibration& c, uint32_t ncat, const ModelImpl& impl, uint32_t version) {
   const uint32_t parts = r.u32("novelty components");
   const std::vector<MethodId> components = component_methods(impl, c.method);
   if (parts != 0 && parts != components.size()) r.fail("novelty components do not match the calibrated method");
@@ -377,6 +379,7 @@ void read_novelty(Reader& r, Calibration& c, uint32_t ncat, const ModelImpl& imp
   }
   c.known_acceptance = r.f64("known acceptance");
   c.novelty_threshold = r.f64("novelty threshold");
+  c.novelty_over_score = version >= 5 && r.u8("novelty over score") != 0;
   if (r.failed()) return;
   if (c.novelty_scale.empty() != c.novelty_quantiles.empty()) r.fail("half a novelty calibration");
   else if (!(c.known_acceptance > 0 && c.known_acceptance <= 1)) r.fail("known acceptance out of range");
@@ -562,7 +565,7 @@ Expected<Model> deserialize(std::span<const uint8_t> bytes) {
       c.settle_margin = r.f64("settle margin");
       c.held_out = r.u64("calibration count");
       c.held_out_accuracy = r.f64("calibration accuracy");
-      if (version >= 4) read_novelty(r, c, ncat, *impl);
+      if (version >= 4) read_novelty(r, c, ncat, *impl, version);
       if (!r.failed() && (!(c.settle_margin >= 0 && c.settle_margin <= 2) ||
                           !(c.held_out_accuracy >= 0 && c.held_out_accuracy <= 1)))
         r.fail("calibration out of range");

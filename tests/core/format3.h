@@ -1,5 +1,6 @@
-// Model bytes of format 3 made from a format-4 model, for tests and benchmarks of models written before
-// novelty existed ("none of these"): format 3 is format 4 without the novelty block that ends the payload.
+// Model bytes of formats 3 and 4 made from a format-5 model, for tests and benchmarks of models written
+// before novelty existed ("none of these"; format 3 has no novelty block) or before novelty was divided
+// by the decision's score (format 4 lacks the byte that ends the payload).
 #pragma once
 
 #include <cstdint>
@@ -19,23 +20,33 @@ inline uint32_t crc32(const uint8_t* data, size_t n) {
   return c ^ 0xFFFFFFFFu;
 }
 
-// Format 3 is format 4 without the novelty block that ends the payload: u32 components, per component a
-// u32 count and its f64 scales, a u32 count and its reference flags (a byte each); u32 quantiles and
-// theirs, f64 known acceptance, f64 threshold.
-inline std::vector<uint8_t> as_format_3(std::vector<uint8_t> bytes, const Calibration& c) {
-  size_t block = 4 + 4 + 8 * c.novelty_quantiles.size() + 16;
-  for (const auto& per : c.novelty_scale) block += 4 + 8 * per.size();
-  for (size_t j = 0; j < c.novelty_scale.size(); ++j) block += 4 + (j < c.reference_whole.size() ? c.reference_whole[j].size() : 0);
-  const size_t payload = bytes.size() - 24;
-  if (payload <= block) return {};
-  bytes.erase(bytes.end() - 4 - static_cast<std::ptrdiff_t>(block), bytes.end() - 4);
-  const uint32_t version = 3;
-  const uint64_t length = payload - block;
+inline std::vector<uint8_t> with_version(std::vector<uint8_t> bytes, uint32_t version, uint64_t length) {
   std::memcpy(bytes.data() + 8, &version, 4);  // little-endian hosts, as the format
   std::memcpy(bytes.data() + 12, &length, 8);
   const uint32_t crc = crc32(bytes.data() + 20, length);
   std::memcpy(bytes.data() + 20 + length, &crc, 4);
   return bytes;
+}
+
+// Format 4 is format 5 without the novelty_over_score byte that ends the payload.
+inline std::vector<uint8_t> as_format_4(std::vector<uint8_t> bytes) {
+  const size_t payload = bytes.size() - 24;
+  if (payload < 1) return {};
+  bytes.erase(bytes.end() - 5);
+  return with_version(std::move(bytes), 4, payload - 1);
+}
+
+// Format 3 is format 5 without the novelty block that ends the payload: u32 components, per component a
+// u32 count and its f64 scales, a u32 count and its reference flags (a byte each); u32 quantiles and
+// theirs, f64 known acceptance, f64 threshold, u8 novelty over score.
+inline std::vector<uint8_t> as_format_3(std::vector<uint8_t> bytes, const Calibration& c) {
+  size_t block = 4 + 4 + 8 * c.novelty_quantiles.size() + 16 + 1;
+  for (const auto& per : c.novelty_scale) block += 4 + 8 * per.size();
+  for (size_t j = 0; j < c.novelty_scale.size(); ++j) block += 4 + (j < c.reference_whole.size() ? c.reference_whole[j].size() : 0);
+  const size_t payload = bytes.size() - 24;
+  if (payload <= block) return {};
+  bytes.erase(bytes.end() - 4 - static_cast<std::ptrdiff_t>(block), bytes.end() - 4);
+  return with_version(std::move(bytes), 3, payload - block);
 }
 
 }  // namespace glimpse::test

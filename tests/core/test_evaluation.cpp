@@ -389,7 +389,7 @@ TEST(RunEvaluation, ReducedProtocolOnTheZooIsWellAboveChance) {
   const SettleRow settled = settle_summary(r->streams, -1);
   // A view settled as "unknown" counts wrong (issue 20: the default operating point accepts 95 % of
   // held-out known clouds); before unknown could settle, 100 % of 40.
-  EXPECT_GE(settled.precision_percent(), 90.0);  // measured 92.5 (37 of the 40 views settled)
+  EXPECT_GE(settled.precision_percent(), 95.0);  // measured 97.5 (39 of the 40 views settled)
   EXPECT_GE(settled.settled_percent(), 60.0);    // measured 66.7
   std::cout << "zoo reduced: full fusion " << accuracy(r->decisions, "full", MethodId::kFusion).percent() << " %, VFH "
             << accuracy(r->decisions, "full", MethodId::kVFH).percent() << " %, 20 % fusion "
@@ -589,10 +589,10 @@ TEST(OpenSet, SummaryOnAHandMadeList) {
 // The CI's open-set check: one zoo category is held out of every model and tested as unknown; its views
 // must come out more novel than the known ones' (novelty calibrated on held-out folds of the training
 // views only, each decided untilted as a test view comes). Zoo 8 per category, seed 3, 2 folds, 3 views,
-// 3000 points, fusion. Measured: AUROC 0.569 on full views, 0.670 at 20 % visible (0.620 when the held-out
-// views were decided tilted; the zoo's four-legged animals share legs and backs with its chairs and
-// tables: ranked above the known, barely); 81 % of known and 79 % of unknown full views accepted at the
-// default operating point.
+// 3000 points, fusion. Measured: AUROC 0.697 on full views, 0.863 at 20 % visible (0.569 / 0.670 before
+// novelty was divided by the decision's score, 0.620 at 20 % when the held-out views were decided tilted;
+// the zoo's four-legged animals share legs and backs with its chairs and tables); 89 % of known and 79 %
+// of unknown full views accepted at the default operating point.
 TEST(RunEvaluation, AZooCategoryHeldOutComesOutNovel) {
   std::vector<EvalObject> objects = zoo_objects(8, 3);
   for (EvalObject& o : objects)
@@ -619,8 +619,8 @@ TEST(RunEvaluation, AZooCategoryHeldOutComesOutNovel) {
   std::cout << "zoo, fourleg unknown: AUROC full " << rows[0].auroc << ", 20 % " << rows[1].auroc
             << "; known accepted " << rows[0].known_acceptance << " %, unknown accepted " << rows[0].false_acceptance
             << " % (full)\n";
-  EXPECT_GE(rows[0].auroc, 0.55);  // measured 0.568
-  EXPECT_GE(rows[1].auroc, 0.65);  // measured 0.670
+  EXPECT_GE(rows[0].auroc, 0.67);  // measured 0.697
+  EXPECT_GE(rows[1].auroc, 0.84);  // measured 0.863
   const std::string report = markdown_report(*r);
   EXPECT_NE(report.find("## Open set"), std::string::npos);
   EXPECT_NE(decisions_csv(*r).find(",unknown:fourleg,"), std::string::npos);
@@ -707,12 +707,13 @@ TEST(RunEvaluation, ReducedProtocolOnShrec) {
   EXPECT_GE(accuracy(r->decisions, "full", MethodId::kBoK).percent(), 48.0);     // measured 50.7
   const SettleRow settled = settle_summary(r->streams, -1);
   // Settling needs the winner to hold a whole window, the newest chunk included: later, righter.
-  // "Unknown" settles like a category and counts wrong here (every view is known): with it 76.7 % settled,
-  // 94.8 % right, at 11.6 % visible; without it 78.7 / 97.5 / 10.6 (86.7 / 97.7 / 10.2 before the
-  // calibration decided held-out clouds untilted, as they come from a sensor).
-  EXPECT_GE(settled.settled_percent(), 74.0);    // measured 76.7 (115 of 150 views)
-  EXPECT_GE(settled.precision_percent(), 93.5);  // measured 94.8
-  EXPECT_LE(settled.mean_visible_percent, 12.5); // measured 11.6
+  // "Unknown" settles like a category and counts wrong here (every view is known): with it 80.7 % settled,
+  // 89.3 % right, at 11.4 % visible (76.7 / 94.8 / 11.6 before novelty was divided by the decision's
+  // score); without it 78.7 / 97.5 / 10.6 (86.7 / 97.7 / 10.2 before the calibration decided held-out
+  // clouds untilted, as they come from a sensor).
+  EXPECT_GE(settled.settled_percent(), 77.0);    // measured 80.7 (121 of 150 views)
+  EXPECT_GE(settled.precision_percent(), 87.5);  // measured 89.3
+  EXPECT_LE(settled.mean_visible_percent, 12.5); // measured 11.4
   std::cout << "shrec reduced: full fusion " << accuracy(r->decisions, "full", MethodId::kFusion).percent()
             << " %, 20 % fusion " << accuracy(r->decisions, "20%", MethodId::kFusion).percent() << " %, full BoK "
             << accuracy(r->decisions, "full", MethodId::kBoK).percent() << " %; streams settled "
@@ -761,8 +762,9 @@ TEST(RunEvaluation, ReducedCrossSourceShrecToPsb) {
   EXPECT_GE(p20, 89.0);   // measured 92.1
   EXPECT_GT(full, size + 15);  // shape adds to what a ruler gets right
   EXPECT_GE(settled.settled_percent(), 96.0);    // measured 98.2 (100 when two chunks could settle)
-  // Settled as "unknown" counts wrong: 91.1 (97.3 before unknown could settle).
-  EXPECT_GE(settled.precision_percent(), 89.5);  // measured 91.1
+  // Settled as "unknown" counts wrong: 86.0 (91.1 before novelty was divided by the decision's score,
+  // 97.3 before unknown could settle).
+  EXPECT_GE(settled.precision_percent(), 84.5);  // measured 86.0
 }
 
 }  // namespace

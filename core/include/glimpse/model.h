@@ -89,6 +89,10 @@ struct Calibration {
   // The held-out known clouds' novelty (of their decided category) at known acceptance 0, 1/(n-1), ...,
   // 1 (n = kNoveltyQuantiles): the threshold accepting a share a of known clouds is its a-quantile.
   std::vector<double> novelty_quantiles;
+  // The novelty of a category is divided by the decision's score of that category (format 5 on): a
+  // cloud both far from what was learnt and torn between categories is more novel than one far but
+  // plainly of one. False: a model of format 4, whose quantiles were taken without it.
+  bool novelty_over_score = true;
   double known_acceptance = 0.95;  // the model's default operating point (TrainParams::known_acceptance)
   double novelty_threshold = std::numeric_limits<double>::quiet_NaN();  // at known_acceptance; NaN: none
 };
