@@ -354,7 +354,6 @@ Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainP
       if (as_seen[i]) q.row(static_cast<Eigen::Index>(i)) = method_histogram(*impl, m, *as_seen[i]).transpose();
       else q.row(static_cast<Eigen::Index>(i)) = h.row(static_cast<Eigen::Index>(i));
     }
-    if (!tilted) q = h;
     DecisionParams dp = params.decision;
     if (m == MethodId::kBoG) {  // 1032 graph types reduced to 65 dims (sec. 4), also without PCA elsewhere
       dp.max_pca_dims = params.bog_pca_dims;
@@ -378,7 +377,8 @@ Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainP
   std::vector<std::string> object_categories(object_index.size());
   for (size_t i = 0; i < labels.size(); ++i)
     object_categories[static_cast<size_t>(object_of[i])] = model.categories[static_cast<size_t>(labels[i])];
-  impl->calibration = calibrate(*impl, model.default_method, histograms, queries, labels, object_of, whole, object_categories,
+  // Nothing learnt tilted: the held-out clouds are decided as they were learnt.
+  impl->calibration = calibrate(*impl, model.default_method, histograms, tilted ? queries : histograms, labels, object_of, whole, object_categories,
                                 static_cast<int>(model.categories.size()), threads);
   report("calibration", 1, 1);
   if (cancelled_now()) return cancelled("training cancelled");

@@ -65,24 +65,21 @@ int run_eval(const EvalOptions& o) {
     }
     objects = std::move(*first);
     source = "meshes in " + (cross ? o.train : o.data);
-    if (!o.also_train.empty()) {
-      auto extra = load_sources(split_list(o.also_train), EvalRole::kTrainOnly, params->seed, max_objects, params->threads);
+    // Sources beside the evaluated ones (--also-train, --unknown): false after printing why they failed.
+    auto add_sources = [&](const std::string& list, EvalRole role, const char* flag) {
+      if (list.empty()) return true;
+      auto extra = load_sources(split_list(list), role, params->seed, max_objects, params->threads);
       if (!extra.ok()) {
-        std::fprintf(stderr, "glimpse-lab eval: --also-train: %s\n", extra.error().message.c_str());
-        return 1;
+        std::fprintf(stderr, "glimpse-lab eval: %s: %s\n", flag, extra.error().message.c_str());
+        return false;
       }
       for (EvalObject& x : *extra) objects.push_back(std::move(x));
-      source += " (also trained on " + o.also_train + ")";
-    }
-    if (!o.unknown.empty()) {
-      auto extra = load_sources(split_list(o.unknown), EvalRole::kUnknown, params->seed, max_objects, params->threads);
-      if (!extra.ok()) {
-        std::fprintf(stderr, "glimpse-lab eval: --unknown: %s\n", extra.error().message.c_str());
-        return 1;
-      }
-      for (EvalObject& x : *extra) objects.push_back(std::move(x));
-      source += " (unknown: " + o.unknown + ")";
-    }
+      return true;
+    };
+    if (!add_sources(o.also_train, EvalRole::kTrainOnly, "--also-train")) return 1;
+    if (!o.also_train.empty()) source += " (also trained on " + o.also_train + ")";
+    if (!add_sources(o.unknown, EvalRole::kUnknown, "--unknown")) return 1;
+    if (!o.unknown.empty()) source += " (unknown: " + o.unknown + ")";
     if (cross) {
       auto second = load_sources(split_list(o.test), EvalRole::kTestOnly, params->seed, max_objects, params->threads);
       if (!second.ok()) {
