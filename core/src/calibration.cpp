@@ -97,11 +97,28 @@ std::vector<uint8_t> whole_references(DecisionRule rule, const std::vector<uint8
   return out;
 }
 
+// Per reference of a stage fitted on `rows`: its training object, numbered 0, 1, ... in the order met
+// (empty for rules whose references are centres).
+std::vector<uint32_t> object_references(DecisionRule rule, const std::vector<int>& objects, const std::vector<Eigen::Index>& rows) {
+  if (rule != DecisionRule::kNearestReference && rule != DecisionRule::kNearestNeighbours) return {};
+  std::map<int, uint32_t> number;
+  std::vector<uint32_t> out;
+  for (Eigen::Index r : rows) {
+    const auto [it, fresh] = number.try_emplace(objects[static_cast<size_t>(r)], static_cast<uint32_t>(number.size()));
+    out.push_back(it->second);
+  }
+  return out;
+}
+
 }  // namespace
 
-NearestReferences nearest_references(StageScores&& s, const std::vector<uint8_t>& reference_whole) {
+NearestReferences nearest_references(const DecisionStage& stage, StageScores&& s,
+                                     const std::vector<uint8_t>& reference_whole,
+                                     const std::vector<uint32_t>& reference_object, const std::vector<int>& objects) {
   NearestReferences n;
   n.distance = std::move(s.nearest_distance);
+  if (std::any_of(objects.begin(), objects.end(), [](int k) { return k > 1; }))
+    if (Eigen::VectorXd d = nearest_objects_distance(stage, s.distance, reference_object, objects); d.size()) n.distance = std::move(d);
   n.residual = s.residual;
   n.whole.assign(static_cast<size_t>(n.distance.size()), 1);
   for (Eigen::Index k = 0; k < s.nearest_reference.size() && k < n.distance.size(); ++k) {
@@ -193,6 +210,21 @@ Calibration calibrate(const ModelImpl& impl, MethodId method, const std::vector<
     if (n < 2) return c;
   const std::vector<int> object_fold = stratified_folds(object_categories, folds, p.seed + 101);
   const std::vector<MethodId> parts = component_methods(impl, method);
+  // Per category, the objects a distance is taken over: no more than any inner training fold holds, so
+  // the held-out distances mean what the model's will.
+  std::vector<int> novelty_objects(static_cast<size_t>(categories), std::max(1, p.novelty_objects));
+  {
+    std::map<int, int> category_of_object;
+    for (size_t i = 0; i < labels.size(); ++i) category_of_object[objects[i]] = labels[i];
+    std::vector<std::vector<int>> per_fold(static_cast<size_t>(folds), std::vector<int>(static_cast<size_t>(categories), 0));
+    std::vector<int> total(static_cast<size_t>(categories), 0);
+    for (const auto& [o, cat] : category_of_object) ++per_fold[static_cast<size_t>(object_fold[static_cast<size_t>(o)])][static_cast<size_t>(cat)], ++total[static_cast<size_t>(cat)];
+    for (int k = 0; k < folds; ++k)
+      for (int cat = 0; cat < categories; ++cat) {
+        const int held = total[static_cast<size_t>(cat)] - per_fold[static_cast<size_t>(k)][static_cast<size_t>(cat)];
+        if (held > 0) novelty_objects[static_cast<size_t>(cat)] = std::min(novelty_objects[static_cast<size_t>(cat)], held);
+      }
+  }
   std::vector<std::pair<double, bool>> decisions;
   HeldOut held_out;
   size_t correct = 0;
@@ -223,11 +255,12 @@ Calibration calibrate(const ModelImpl& impl, MethodId method, const std::vector<
         break;
       }
       const std::vector<uint8_t> reference_whole = whole_references(stage->kind, whole, train_rows);
+      const std::vector<uint32_t> reference_object = object_references(stage->kind, objects, train_rows);
       scores[j].resize(static_cast<Eigen::Index>(test_rows.size()), categories);
       for (size_t r = 0; r < test_rows.size(); ++r) {
         StageScores answer = decide_with_distances(*stage, q.row(test_rows[r]).transpose());
         scores[j].row(static_cast<Eigen::Index>(r)) = answer.scores.transpose();
-        nearest[r].push_back(nearest_references(std::move(answer), reference_whole));
+        nearest[r].push_back(nearest_references(*stage, std::move(answer), reference_whole, reference_object, novelty_objects));
       }
     }
     if (!ok) continue;
@@ -252,12 +285,16 @@ Calibration calibrate(const ModelImpl& impl, MethodId method, const std::vector<
   c.held_out_accuracy = double(correct) / double(decisions.size());
   c.settle_margin = settle_margin(std::move(decisions), p.settle_precision, 20);
   calibrate_novelty(c, held_out, parts.size(), categories, p.known_acceptance);
-  if (!c.novelty_scale.empty())
+  if (!c.novelty_scale.empty()) {
+    c.novelty_objects = novelty_objects;
     for (MethodId m : parts) {  // the model's own stages learnt every row
       std::vector<Eigen::Index> rows(labels.size());
       for (size_t i = 0; i < rows.size(); ++i) rows[i] = static_cast<Eigen::Index>(i);
-      c.reference_whole.push_back(whole_references(impl.stages[static_cast<int>(m)]->kind, whole, rows));
+      const DecisionRule kind = impl.stages[static_cast<int>(m)]->kind;
+      c.reference_whole.push_back(whole_references(kind, whole, rows));
+      c.reference_object.push_back(object_references(kind, objects, rows));
     }
+  }
   return c;
 }
 

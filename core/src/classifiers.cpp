@@ -336,6 +336,8 @@ StageScores decide_with_distances(const DecisionStage& st, const Eigen::VectorXd
       mass += ref.lpNorm<1>();
       d[static_cast<size_t>(i)] = {(unit(ref) - y).lpNorm<1>(), i};
     }
+    out.distance.resize(n);
+    for (Eigen::Index i = 0; i < n; ++i) out.distance[i] = d[static_cast<size_t>(i)].first;
     // Distances between unit-mass histograms: the temperature in the same units.
     if (mass > 0) temperature = st.temperature / (mass / static_cast<double>(n));
   } else {
@@ -343,6 +345,7 @@ StageScores decide_with_distances(const DecisionStage& st, const Eigen::VectorXd
     Eigen::ArrayXd dist;
     l1_to_rows(st.references, y, dist);
     for (Eigen::Index i = 0; i < n; ++i) d[static_cast<size_t>(i)] = {dist[i], i};
+    out.distance = std::move(dist);
     out.residual = (histogram - st.pca.mean - st.pca.basis * y).lpNorm<1>();
   }
   Eigen::VectorXd& best = out.nearest_distance;
@@ -367,6 +370,35 @@ StageScores decide_with_distances(const DecisionStage& st, const Eigen::VectorXd
   // A small floor keeps every category possible (no hard zero), then scores sum to 1.
   scores.array() += 1e-3;
   out.scores = scores / scores.sum();
+  return out;
+}
+
+Eigen::VectorXd nearest_objects_distance(const DecisionStage& st, const Eigen::ArrayXd& distance,
+                                         const std::vector<uint32_t>& reference_object, const std::vector<int>& objects) {
+  const size_t n = static_cast<size_t>(st.references.rows());
+  if (distance.size() != st.references.rows() || reference_object.size() != n || st.labels.size() != n ||
+      objects.size() != static_cast<size_t>(st.categories))
+    return {};
+  // Each training object's nearest reference, then per category its `objects` nearest objects.
+  const uint32_t count = n ? *std::max_element(reference_object.begin(), reference_object.end()) + 1 : 0;
+  std::vector<double> nearest(count, INFINITY);
+  std::vector<int> category(count, -1);
+  for (size_t i = 0; i < n; ++i) {
+    const uint32_t o = reference_object[i];
+    nearest[o] = std::min(nearest[o], distance[static_cast<Eigen::Index>(i)]);
+    category[o] = st.labels[i];
+  }
+  std::vector<std::vector<double>> of(static_cast<size_t>(st.categories));
+  for (uint32_t o = 0; o < count; ++o)
+    if (category[o] >= 0) of[static_cast<size_t>(category[o])].push_back(nearest[o]);
+  Eigen::VectorXd out = Eigen::VectorXd::Constant(st.categories, INFINITY);
+  for (int c = 0; c < st.categories; ++c) {
+    std::vector<double>& v = of[static_cast<size_t>(c)];
+    const size_t k = std::min(v.size(), static_cast<size_t>(std::max(1, objects[static_cast<size_t>(c)])));
+    if (k == 0) continue;
+    std::partial_sort(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
+    out[c] = std::accumulate(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), 0.0) / double(k);
+  }
   return out;
 }
 

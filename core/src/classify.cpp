@@ -71,7 +71,12 @@ MethodDecision method_decision(const ModelImpl& impl, MethodId method, const Clo
                        f.descriptors.size() < static_cast<size_t>(up_to);
     StageScores s = decide_with_distances(*impl.stages[static_cast<int>(m)], method_histogram(impl, m, f), early);
     out.scores = out.scores.size() ? Eigen::VectorXd(out.scores + s.scores) : s.scores;
-    if (calibrated) nearest.push_back(nearest_references(std::move(s), cal.reference_whole[j]));
+    if (calibrated) {
+      const std::vector<uint32_t> none;
+      const std::vector<uint32_t>& objects = j < cal.reference_object.size() ? cal.reference_object[j] : none;
+      nearest.push_back(nearest_references(*impl.stages[static_cast<int>(m)], std::move(s), cal.reference_whole[j],
+                                           objects, cal.novelty_objects));
+    }
   }
   out.scores /= static_cast<double>(std::max<size_t>(1, parts.size()));
   if (calibrated) out.novelty = category_novelty(cal, nearest, out.scores);

@@ -103,14 +103,17 @@ Status check_feature_version(const Model& model);
 // Scores of `method` (fusion: the mean of its components' scores).
 Eigen::VectorXd method_scores(const ModelImpl& impl, MethodId method, const CloudFeatures& f);
 
-// One component's nearest references: per category, the distance to it and whether it is a whole
-// training cloud (1) or a top-down prefix (0), whose typical distances differ (Calibration).
+// One component's nearest references: per category, the cloud's distance to it (over its
+// `objects` nearest training objects, nearest_objects_distance) and whether its nearest reference is a
+// whole training cloud (1) or a top-down prefix (0), whose typical distances differ (Calibration).
 struct NearestReferences {
   Eigen::VectorXd distance;
   std::vector<uint8_t> whole;
   double residual = 0;  // StageScores::residual
 };
-NearestReferences nearest_references(StageScores&& scores, const std::vector<uint8_t>& reference_whole);
+NearestReferences nearest_references(const DecisionStage& stage, StageScores&& scores,
+                                     const std::vector<uint8_t>& reference_whole,
+                                     const std::vector<uint32_t>& reference_object, const std::vector<int>& objects);
 
 // The scores of `method` with the novelty of each category (empty when `method` was not calibrated
 // for novelty: only the model's default method is). The decision's novelty is that of its winner.

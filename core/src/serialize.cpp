@@ -27,7 +27,9 @@ constexpr char kMagic[8] = {'G', 'L', 'M', 'P', 'S', 'M', 'D', 'L'};
 // extents after the statistics. 4: the novelty calibration after the settle margin ("none of these";
 // older models read with none: novelty NaN, nothing unknown but what a method cannot judge). 5: a u8
 // after the novelty threshold, novelty_over_score (format 4 reads false: its quantiles are without it).
-constexpr uint32_t kFormatVersion = 5;
+// 6: after it, the novelty's object count and per component each reference's training object (format 5
+// reads 1 and none: the nearest reference alone).
+constexpr uint32_t kFormatVersion = 6;
 constexpr uint32_t kOldestReadableVersion = 1;
 
 uint32_t crc32(const uint8_t* data, size_t n) {
@@ -180,6 +182,7 @@ void visit_params(TrainParams& p, F&& f) {
   f("calibration_folds", p.calibration_folds);
   f("settle_precision", p.settle_precision);
   f("known_acceptance", p.known_acceptance);
+  f("novelty_objects", p.novelty_objects);
   f("tilt_deg", p.tilt_deg);
   f("seed", p.seed);
   f("filters.enabled", p.filter_scans);
@@ -339,6 +342,13 @@ void write_novelty(Writer& w, const Calibration& c) {
   w.f64(c.known_acceptance);
   w.f64(c.novelty_threshold);
   w.u8(c.novelty_over_score ? 1 : 0);
+  w.u32(static_cast<uint32_t>(c.novelty_objects.size()));
+  for (int k : c.novelty_objects) w.u32(static_cast<uint32_t>(k));
+  w.u32(static_cast<uint32_t>(c.reference_object.size()));
+  for (const std::vector<uint32_t>& objects : c.reference_object) {
+    w.u32(static_cast<uint32_t>(objects.size()));
+    for (uint32_t o : objects) w.u32(o);
+  }
 }
 
 // `impl`'s stages are read: each component's reference flags must match its stage.
@@ -380,6 +390,30 @@ void read_novelty(Reader& r, Calibration& c, uint32_t ncat, const ModelImpl& imp
   c.known_acceptance = r.f64("known acceptance");
   c.novelty_threshold = r.f64("novelty threshold");
   c.novelty_over_score = version >= 5 && r.u8("novelty over score") != 0;
+  c.novelty_objects.clear();
+  if (version >= 6) {
+    const uint32_t counts = r.u32("novelty object counts");
+    if (!r.failed() && counts != 0 && counts != ncat) r.fail("novelty object counts do not match the categories");
+    r.need(size_t{counts} * 4, "novelty object counts");
+    for (uint32_t k = 0; k < counts && !r.failed(); ++k) {
+      c.novelty_objects.push_back(static_cast<int>(r.u32("novelty object count")));
+      if (c.novelty_objects.back() < 1 || c.novelty_objects.back() > 1000000) r.fail("novelty object count out of range");
+    }
+    const uint32_t with_objects = r.u32("components with reference objects");
+    if (!r.failed() && with_objects != 0 && with_objects != parts) r.fail("reference objects do not match the novelty components");
+    for (uint32_t j = 0; j < with_objects && !r.failed(); ++j) {
+      const uint32_t refs = r.u32("reference objects");
+      const Eigen::Index rows = impl.stages[static_cast<int>(components[j])]->references.rows();
+      if (refs != 0 && refs != static_cast<uint64_t>(rows)) r.fail("reference objects do not match the stage");
+      r.need(size_t{refs} * 4, "reference objects");
+      std::vector<uint32_t> objects;
+      for (uint32_t k = 0; k < refs && !r.failed(); ++k) {
+        objects.push_back(r.u32("reference object"));
+        if (objects.back() >= refs) r.fail("reference object out of range");
+      }
+      c.reference_object.push_back(std::move(objects));
+    }
+  }
   if (r.failed()) return;
   if (c.novelty_scale.empty() != c.novelty_quantiles.empty()) r.fail("half a novelty calibration");
   else if (!(c.known_acceptance > 0 && c.known_acceptance <= 1)) r.fail("known acceptance out of range");

@@ -1,6 +1,7 @@
-// Model bytes of formats 3 and 4 made from a format-5 model, for tests and benchmarks of models written
-// before novelty existed ("none of these"; format 3 has no novelty block) or before novelty was divided
-// by the decision's score (format 4 lacks the byte that ends the payload).
+// Model bytes of formats 3, 4 and 5 made from a format-6 model, for tests and benchmarks of models
+// written before novelty existed ("none of these"; format 3 has no novelty block), before novelty was
+// divided by the decision's score (format 4 lacks that byte) or before it was measured over several
+// training objects (format 5 lacks the reference objects that end the payload).
 #pragma once
 
 #include <cstdint>
@@ -28,10 +29,22 @@ inline std::vector<uint8_t> with_version(std::vector<uint8_t> bytes, uint32_t ve
   return bytes;
 }
 
-// Format 4 is format 5 without the novelty_over_score byte that ends the payload.
-inline std::vector<uint8_t> as_format_4(std::vector<uint8_t> bytes) {
+// Format 5 is format 6 without the block that ends the payload: a u32 count and the u32 novelty object
+// count of each category, u32 components, per component a u32 count and the u32 object of each reference.
+inline std::vector<uint8_t> as_format_5(std::vector<uint8_t> bytes, const Calibration& c) {
+  size_t block = 8 + 4 * c.novelty_objects.size();
+  for (const auto& objects : c.reference_object) block += 4 + 4 * objects.size();
   const size_t payload = bytes.size() - 24;
-  if (payload < 1) return {};
+  if (payload <= block) return {};
+  bytes.erase(bytes.end() - 4 - static_cast<std::ptrdiff_t>(block), bytes.end() - 4);
+  return with_version(std::move(bytes), 5, payload - block);
+}
+
+// Format 4 is format 5 without the novelty_over_score byte that ends the payload.
+inline std::vector<uint8_t> as_format_4(std::vector<uint8_t> bytes, const Calibration& c) {
+  bytes = as_format_5(std::move(bytes), c);
+  if (bytes.size() < 25) return {};
+  const size_t payload = bytes.size() - 24;
   bytes.erase(bytes.end() - 5);
   return with_version(std::move(bytes), 4, payload - 1);
 }
@@ -40,9 +53,11 @@ inline std::vector<uint8_t> as_format_4(std::vector<uint8_t> bytes) {
 // u32 count and its f64 scales, a u32 count and its reference flags (a byte each); u32 quantiles and
 // theirs, f64 known acceptance, f64 threshold, u8 novelty over score.
 inline std::vector<uint8_t> as_format_3(std::vector<uint8_t> bytes, const Calibration& c) {
+  bytes = as_format_5(std::move(bytes), c);
   size_t block = 4 + 4 + 8 * c.novelty_quantiles.size() + 16 + 1;
   for (const auto& per : c.novelty_scale) block += 4 + 8 * per.size();
   for (size_t j = 0; j < c.novelty_scale.size(); ++j) block += 4 + (j < c.reference_whole.size() ? c.reference_whole[j].size() : 0);
+  if (bytes.size() < 24) return {};
   const size_t payload = bytes.size() - 24;
   if (payload <= block) return {};
   bytes.erase(bytes.end() - 4 - static_cast<std::ptrdiff_t>(block), bytes.end() - 4);

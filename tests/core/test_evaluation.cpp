@@ -589,10 +589,11 @@ TEST(OpenSet, SummaryOnAHandMadeList) {
 // The CI's open-set check: one zoo category is held out of every model and tested as unknown; its views
 // must come out more novel than the known ones' (novelty calibrated on held-out folds of the training
 // views only, each decided untilted as a test view comes). Zoo 8 per category, seed 3, 2 folds, 3 views,
-// 3000 points, fusion. Measured: AUROC 0.697 on full views, 0.863 at 20 % visible (0.569 / 0.670 before
-// novelty was divided by the decision's score, 0.620 at 20 % when the held-out views were decided tilted;
-// the zoo's four-legged animals share legs and backs with its chairs and tables); 89 % of known and 79 %
-// of unknown full views accepted at the default operating point.
+// 3000 points, fusion. Measured: AUROC 0.751 on full views, 0.902 at 20 % visible with distances over a
+// category's nearest training objects (0.697 / 0.863 from its nearest reference alone, 0.569 / 0.670
+// before novelty was divided by the decision's score, 0.620 at 20 % when the held-out views were decided
+// tilted; the zoo's four-legged animals share legs and backs with its chairs and tables); 95.8 % of known
+// and 79.2 % of unknown full views accepted at the default operating point.
 TEST(RunEvaluation, AZooCategoryHeldOutComesOutNovel) {
   std::vector<EvalObject> objects = zoo_objects(8, 3);
   for (EvalObject& o : objects)
@@ -619,8 +620,8 @@ TEST(RunEvaluation, AZooCategoryHeldOutComesOutNovel) {
   std::cout << "zoo, fourleg unknown: AUROC full " << rows[0].auroc << ", 20 % " << rows[1].auroc
             << "; known accepted " << rows[0].known_acceptance << " %, unknown accepted " << rows[0].false_acceptance
             << " % (full)\n";
-  EXPECT_GE(rows[0].auroc, 0.67);  // measured 0.697
-  EXPECT_GE(rows[1].auroc, 0.84);  // measured 0.863
+  EXPECT_GE(rows[0].auroc, 0.73);  // measured 0.751
+  EXPECT_GE(rows[1].auroc, 0.88);  // measured 0.902
   const std::string report = markdown_report(*r);
   EXPECT_NE(report.find("## Open set"), std::string::npos);
   EXPECT_NE(decisions_csv(*r).find(",unknown:fourleg,"), std::string::npos);

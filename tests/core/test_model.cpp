@@ -481,6 +481,40 @@ TEST(DecisionStage, NearestReferenceTemperatureIsTheMedianDistanceToAnotherObjec
   EXPECT_DOUBLE_EQ(ungrouped->temperature, 2.0);
 }
 
+// A cloud's distance to a category for its novelty: the mean over the category's k nearest training
+// objects of the distance to each one's nearest reference. The same rows as above, objects 0 (two views),
+// 1 (category 0), 2, 3 (category 1); the query (0, 1): L1 to the rows 1, 2, 2, 9, 11, so object 0 is at 1
+// (its nearer view), object 1 at 2, objects 2 and 3 at 9 and 11. k = 1: 1 and 9 (the nearest reference);
+// k = 2: 1.5 and 10; k = 5: all of each category's objects, the same; k per category.
+TEST(DecisionStage, NoveltyDistanceIsTheMeanOverTheNearestObjects) {
+  Eigen::MatrixXd h(5, 2);
+  h << 0, 0, 1, 0, 0, 3, 5, 5, 5, 7;
+  const std::vector<int> labels = {0, 0, 0, 1, 1};
+  const std::vector<uint32_t> objects = {0, 0, 1, 2, 3};
+  DecisionParams p;
+  p.kind = DecisionRule::kNearestReference;
+  p.pca_explained_variance = 0;
+  auto st = fit_decision(h, labels, 2, p, 1, 1, {0, 0, 1, 2, 3});
+  ASSERT_TRUE(st.ok()) << st.error().message;
+  const StageScores s = decide_with_distances(*st, Eigen::Vector2d(0, 1));
+  ASSERT_EQ(s.distance.size(), 5);
+  EXPECT_DOUBLE_EQ(s.distance[4], 11.0);
+  const Eigen::VectorXd one = nearest_objects_distance(*st, s.distance, objects, {1, 1});
+  const Eigen::VectorXd two = nearest_objects_distance(*st, s.distance, objects, {2, 2});
+  const Eigen::VectorXd all = nearest_objects_distance(*st, s.distance, objects, {5, 5});
+  ASSERT_EQ(two.size(), 2);
+  EXPECT_DOUBLE_EQ(one[0], s.nearest_distance[0]);
+  EXPECT_DOUBLE_EQ(one[1], s.nearest_distance[1]);
+  EXPECT_DOUBLE_EQ(two[0], 1.5);
+  EXPECT_DOUBLE_EQ(two[1], 10.0);
+  EXPECT_EQ(all, two);
+  EXPECT_EQ(nearest_objects_distance(*st, s.distance, {0, 0, 1}, {2, 2}).size(), 0);  // objects of other references
+  EXPECT_EQ(nearest_objects_distance(*st, s.distance, objects, {2}).size(), 0);       // a count per category
+  const Eigen::VectorXd mixed = nearest_objects_distance(*st, s.distance, objects, {1, 2});
+  EXPECT_DOUBLE_EQ(mixed[0], 1.0);
+  EXPECT_DOUBLE_EQ(mixed[1], 10.0);
+}
+
 // sec. 4's rule: early in an exploration a view's few keypoints are compared by their proportions.
 // Centres (21, 19, 0) (40 keypoints, words 0 and 1) and (0.5, 1.5, 10) (12 keypoints, word 2). A
 // normalised few-keypoint view of words 0 and 1, (0.5, 0.5, 0): L1 by counts 39 vs 11 (the small

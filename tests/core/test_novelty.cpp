@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <set>
 #include <cstring>
 #include <iostream>
 #include <random>
@@ -70,6 +71,15 @@ TEST(Novelty, IsCalibratedOnHeldOutFoldsOfTheTrainingSet) {
     EXPECT_GT(std::count(flags.begin(), flags.end(), 1), 0);  // the training views
     EXPECT_GT(std::count(flags.begin(), flags.end(), 0), 0);  // and their top-down prefixes
   }
+  // Distances over several training objects of a category: every reference's object, numbered densely.
+  // 6 objects of each category, 4 inner folds: an inner training fold holds 4 or 5 of them.
+  EXPECT_EQ(c.novelty_objects, std::vector<int>(2, 4));
+  ASSERT_EQ(c.reference_object.size(), 2u);
+  for (size_t j = 0; j < 2; ++j) {
+    const std::vector<uint32_t>& o = c.reference_object[j];
+    ASSERT_EQ(o.size(), c.reference_whole[j].size());
+    EXPECT_EQ(*std::max_element(o.begin(), o.end()) + 1, std::set<uint32_t>(o.begin(), o.end()).size());
+  }
   ASSERT_EQ(c.novelty_quantiles.size(), kNoveltyQuantiles);
   EXPECT_TRUE(std::is_sorted(c.novelty_quantiles.begin(), c.novelty_quantiles.end()));
   EXPECT_DOUBLE_EQ(c.known_acceptance, 0.95);
@@ -84,8 +94,9 @@ TEST(Novelty, IsCalibratedOnHeldOutFoldsOfTheTrainingSet) {
 }
 
 // Cans were never learnt: their views must come out more novel than new balls' and boxes'. Measured
-// (6 objects per category, 3 views, seed 1; tested on 5 new objects, 2 views each): AUROC 0.95; 17 of
-// 20 known views accepted at the default operating point (95 % promised), 10 of 10 cans rejected. Before
+// (6 objects per category, 3 views, seed 1; tested on 5 new objects, 2 views each): AUROC 0.955; 16 of
+// 20 known views accepted at the default operating point (95 % promised), 10 of 10 cans rejected. From
+// the nearest reference alone (not a category's 4 nearest objects): 0.95, 17 of 20, 10 of 10. Before
 // novelty was divided by the decision's score: AUROC 0.925, 18 of 20, 8 of 10; before calibration decided
 // the held-out views untilted (as they come, not as they are learnt): 0.975, 10 of 20, 10 of 10.
 TEST(Novelty, TellsACategoryNeverLearntFromTheKnownOnes) {
@@ -106,8 +117,8 @@ TEST(Novelty, TellsACategoryNeverLearntFromTheKnownOnes) {
   const double a = auroc(known, unknown);
   std::cout << "balls and boxes learnt, cans unknown: AUROC " << a << ", known accepted " << accepted << "/"
             << known.size() << ", cans rejected " << rejected << "/" << unknown.size() << "\n";
-  EXPECT_GE(a, 0.93);  // measured 0.95
-  EXPECT_GE(double(accepted) / double(known.size()), 0.8);  // measured 0.85
+  EXPECT_GE(a, 0.93);  // measured 0.955
+  EXPECT_GE(double(accepted) / double(known.size()), 0.75);  // measured 0.8
   EXPECT_GE(double(rejected) / double(unknown.size()), 0.9);  // measured 1.0
 }
 
@@ -207,6 +218,8 @@ TEST(Novelty, SurvivesSerialisation) {
   EXPECT_EQ(calibration(*back).novelty_scale, calibration(s.model).novelty_scale);
   EXPECT_EQ(calibration(*back).novelty_quantiles, calibration(s.model).novelty_quantiles);
   EXPECT_EQ(calibration(*back).novelty_threshold, calibration(s.model).novelty_threshold);
+  EXPECT_EQ(calibration(*back).novelty_objects, calibration(s.model).novelty_objects);
+  EXPECT_EQ(calibration(*back).reference_object, calibration(s.model).reference_object);
   for (const TrainingCloud& t : s.unknown) {
     auto a = classify(s.model, t.cloud), b = classify(*back, t.cloud);
     ASSERT_TRUE(a.ok() && b.ok());
@@ -215,19 +228,51 @@ TEST(Novelty, SurvivesSerialisation) {
   }
 }
 
-// ---- a model of format 4: novelty not yet divided by the decision's score ----
+// ---- models of formats 5 and 4: novelty from the nearest reference alone, not yet over the score ----
 
-// Its quantiles were taken on novelty without the division, so it must keep computing it that way: the
-// same scales, the novelty of every cloud times its winner's score, the same scores and winners.
+// A model of format 5 measured a cloud's distance to a category to its nearest reference alone: its
+// quantiles were taken that way, so it must keep computing it that way.
+TEST(Novelty, AModelOfFormat5KeepsTheNearestReferenceAlone) {
+  const OpenSet& s = open_set();
+  ASSERT_EQ(calibration(s.model).novelty_objects, std::vector<int>(2, 4));
+  ASSERT_FALSE(calibration(s.model).reference_object.empty());
+  auto back = deserialize(test::as_format_5(serialize(s.model), calibration(s.model)));
+  ASSERT_TRUE(back.ok()) << back.error().message;
+  EXPECT_TRUE(calibration(*back).novelty_objects.empty());
+  EXPECT_TRUE(calibration(*back).reference_object.empty());
+  EXPECT_EQ(calibration(*back).novelty_quantiles, calibration(s.model).novelty_quantiles);
+  size_t differ = 0;
+  std::vector<TrainingCloud> clouds = s.known;
+  clouds.insert(clouds.end(), s.unknown.begin(), s.unknown.end());
+  for (const TrainingCloud& t : clouds) {
+    auto a = classify(s.model, t.cloud), b = classify(*back, t.cloud);
+    ASSERT_TRUE(a.ok() && b.ok());
+    EXPECT_EQ(a->scores, b->scores);
+    ASSERT_TRUE(std::isfinite(b->novelty));
+    // Several objects' mean is at least the nearest one's: the nearest reference alone is never farther.
+    ASSERT_EQ(a->category_novelty.size(), b->category_novelty.size());
+    for (size_t k = 0; k < a->category_novelty.size(); ++k) {
+      EXPECT_LE(b->category_novelty[k], a->category_novelty[k] * (1 + 1e-9));
+      differ += b->category_novelty[k] < a->category_novelty[k] * (1 - 1e-6);
+    }
+  }
+  EXPECT_GT(differ, 0u);  // the known clouds' (the cans' are all outside PCA's span: the residual decides)
+}
+
+// Format 4's quantiles were taken on novelty without the division by the score (and from the nearest
+// reference, as format 5): the same scales, the novelty of every cloud that of format 5 times its
+// winner's score, the same scores and winners.
 TEST(Novelty, AModelOfFormat4KeepsItsNoveltyWithoutTheScore) {
   const OpenSet& s = open_set();
   ASSERT_TRUE(calibration(s.model).novelty_over_score);
-  auto back = deserialize(test::as_format_4(serialize(s.model)));
-  ASSERT_TRUE(back.ok()) << back.error().message;
+  const Calibration& c = calibration(s.model);
+  auto five = deserialize(test::as_format_5(serialize(s.model), c));
+  auto back = deserialize(test::as_format_4(serialize(s.model), c));
+  ASSERT_TRUE(back.ok() && five.ok()) << back.error().message;
   EXPECT_FALSE(calibration(*back).novelty_over_score);
   EXPECT_EQ(calibration(*back).novelty_quantiles, calibration(s.model).novelty_quantiles);
   for (const TrainingCloud& t : s.unknown) {
-    auto a = classify(s.model, t.cloud), b = classify(*back, t.cloud);
+    auto a = classify(*five, t.cloud), b = classify(*back, t.cloud);
     ASSERT_TRUE(a.ok() && b.ok());
     EXPECT_EQ(a->scores, b->scores);
     ASSERT_TRUE(std::isfinite(a->novelty) && std::isfinite(b->novelty));

@@ -116,8 +116,15 @@ struct StageScores {
   // L1 norm of what the stage's PCA leaves out of the histogram (histogram - mean - its projection back):
   // large for a cloud unlike every training cloud in a way the kept components cannot show.
   double residual = 0;
+  Eigen::ArrayXd distance;  // to every reference (rows of stage.references), in the same space
 };
 StageScores decide_with_distances(const DecisionStage& stage, const Eigen::VectorXd& histogram, bool by_shape = false);
+
+// Per category c, the mean over its objects[c] nearest training objects of the distance to each one's
+// nearest reference (`distance` from decide_with_distances; `reference_object`: the training object of each
+// reference). A category of fewer objects: over all of them. Empty when the sizes do not match.
+Eigen::VectorXd nearest_objects_distance(const DecisionStage& stage, const Eigen::ArrayXd& distance,
+                                         const std::vector<uint32_t>& reference_object, const std::vector<int>& objects);
 
 int argmax(const Eigen::VectorXd& scores);  // ties: the lowest index
 

@@ -86,6 +86,14 @@ struct Calibration {
   // Per component, per reference of the model's decision stage: 1 a whole training cloud, 0 a prefix
   // (empty: every reference whole, as for decision rules whose references are centres).
   std::vector<std::vector<uint8_t>> reference_whole;
+  // A cloud's distance to a category is the mean over the category's novelty_objects[category] nearest
+  // training objects of its distance to each one's nearest reference: TrainParams::novelty_objects, or
+  // fewer where an inner training fold held fewer objects of the category (the count the quantiles were
+  // taken with). reference_object: per component, per reference of the model's decision stage, its
+  // training object (0, 1, ...). A model of format 5 or older reads none of either: the nearest reference
+  // alone, what its quantiles were taken on.
+  std::vector<int> novelty_objects;
+  std::vector<std::vector<uint32_t>> reference_object;
   // The held-out known clouds' novelty (of their decided category) at known acceptance 0, 1/(n-1), ...,
   // 1 (n = kNoveltyQuantiles): the threshold accepting a share a of known clouds is its a-quantile.
   std::vector<double> novelty_quantiles;

@@ -84,6 +84,10 @@ struct TrainParams {
   // The default operating point of "unknown": the novelty threshold accepts this share of the held-out
   // known decisions (so about 1 - this of known clouds are called unknown).
   double known_acceptance = 0.95;
+  // A cloud's distance to a category, for its novelty: the mean over the category's this many nearest
+  // training objects of the distance to each one's nearest reference (1: the nearest reference alone).
+  // One lucky reference of an odd object says less about belonging than being near several objects.
+  int novelty_objects = 10;
   int kmeans_restarts = 4;
   uint64_t seed = 42;
   int threads = 0;  // 0 = all cores; results do not depend on it
