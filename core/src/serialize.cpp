@@ -16,10 +16,14 @@
 #include "glimpse/train_params.h"
 #include "glimpse/upright_histogram.h"
 #include "model_impl.h"
+#include "serialize_bytes.h"
 
 namespace glimpse {
 
 namespace {
+
+using serial::Reader;
+using serial::Writer;
 
 constexpr char kMagic[8] = {'G', 'L', 'M', 'P', 'S', 'M', 'D', 'L'};
 // 1: stage slots of the first 5 methods. 2: a u8 slot count first (USH is method 6). 3: the size-only
@@ -27,8 +31,8 @@ constexpr char kMagic[8] = {'G', 'L', 'M', 'P', 'S', 'M', 'D', 'L'};
 // extents after the statistics. 4: the novelty calibration after the settle margin ("none of these";
 // older models read with none: novelty NaN, nothing unknown but what a method cannot judge). 5: a u8
 // after the novelty threshold, novelty_over_score (format 4 reads false: its quantiles are without it).
-// 6: after it, the novelty's object count and per component each reference's training object (format 5
-// reads 1 and none: the nearest reference alone).
+// 6: after it, a u32 count and each category's novelty object count, a u32 component count and per
+// component each reference's training object (format 5 reads none: the nearest reference alone).
 constexpr uint32_t kFormatVersion = 6;
 constexpr uint32_t kOldestReadableVersion = 1;
 
@@ -46,96 +50,6 @@ uint32_t crc32(const uint8_t* data, size_t n) {
   for (size_t i = 0; i < n; ++i) c = table[(c ^ data[i]) & 0xFF] ^ (c >> 8);
   return c ^ 0xFFFFFFFFu;
 }
-
-class Writer {
- public:
-  std::vector<uint8_t> bytes;
-  template <class T>
-  void uint(T v) {
-    for (size_t i = 0; i < sizeof(T); ++i) bytes.push_back(static_cast<uint8_t>(static_cast<uint64_t>(v) >> (8 * i)));
-  }
-  void u8(uint8_t v) { uint(v); }
-  void u32(uint32_t v) { uint(v); }
-  void i32(int32_t v) { uint(static_cast<uint32_t>(v)); }
-  void u64(uint64_t v) { uint(v); }
-  void f64(double v) { uint(std::bit_cast<uint64_t>(v)); }
-  void str(const std::string& s) {
-    u32(static_cast<uint32_t>(s.size()));
-    bytes.insert(bytes.end(), s.begin(), s.end());
-  }
-  void vec(const Eigen::VectorXd& v) {
-    u32(static_cast<uint32_t>(v.size()));
-    for (Eigen::Index i = 0; i < v.size(); ++i) f64(v[i]);
-  }
-  void mat(const Eigen::MatrixXd& m) {
-    u32(static_cast<uint32_t>(m.rows()));
-    u32(static_cast<uint32_t>(m.cols()));
-    for (Eigen::Index r = 0; r < m.rows(); ++r)
-      for (Eigen::Index c = 0; c < m.cols(); ++c) f64(m(r, c));
-  }
-};
-
-class Reader {
- public:
-  Reader(const uint8_t* p, size_t n) : p_(p), end_(p + n) {}
-  bool failed() const { return failed_; }
-  const std::string& why() const { return why_; }
-  size_t left() const { return static_cast<size_t>(end_ - p_); }
-  void fail(const std::string& why) {
-    if (!failed_) why_ = why;
-    failed_ = true;
-  }
-  bool need(size_t n, const char* what) {
-    if (failed_) return false;
-    if (left() < n) fail(std::string("truncated while reading ") + what);
-    return !failed_;
-  }
-  template <class T>
-  T uint(const char* what) {
-    if (!need(sizeof(T), what)) return T{};
-    uint64_t v = 0;
-    for (size_t i = 0; i < sizeof(T); ++i) v |= static_cast<uint64_t>(p_[i]) << (8 * i);
-    p_ += sizeof(T);
-    return static_cast<T>(v);
-  }
-  uint8_t u8(const char* w) { return uint<uint8_t>(w); }
-  uint32_t u32(const char* w) { return uint<uint32_t>(w); }
-  int32_t i32(const char* w) { return static_cast<int32_t>(uint<uint32_t>(w)); }
-  uint64_t u64(const char* w) { return uint<uint64_t>(w); }
-  double f64(const char* w) { return std::bit_cast<double>(uint<uint64_t>(w)); }
-  std::string str(const char* what) {
-    const uint32_t n = u32(what);
-    if (!need(n, what)) return {};
-    std::string s(reinterpret_cast<const char*>(p_), n);
-    p_ += n;
-    return s;
-  }
-  Eigen::VectorXd vec(const char* what) {
-    const uint32_t n = u32(what);
-    if (!need(size_t{n} * 8, what)) return {};
-    Eigen::VectorXd v(n);
-    for (uint32_t i = 0; i < n; ++i) v[i] = f64(what);
-    return v;
-  }
-  Eigen::MatrixXd mat(const char* what) {
-    const uint64_t rows = u32(what), cols = u32(what);
-    if (cols && rows > left() / 8 / cols) {
-      fail(std::string("truncated while reading ") + what);
-      return {};
-    }
-    if (!need(rows * cols * 8, what)) return {};
-    Eigen::MatrixXd m(static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(cols));
-    for (uint64_t r = 0; r < rows; ++r)
-      for (uint64_t c = 0; c < cols; ++c) m(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = f64(what);
-    return m;
-  }
-
- private:
-  const uint8_t* p_;
-  const uint8_t* end_;
-  bool failed_ = false;
-  std::string why_;
-};
 
 // ---- Training parameters as (name, value) pairs ---------------------------------------------------
 
@@ -324,103 +238,6 @@ DecisionStage read_stage(Reader& r, int categories, Eigen::Index histogram_size)
 
 }  // namespace
 
-// Format 4: per component a u32 scale count (2 x categories + 2) and its scales, then a u32 reference count
-// and a byte per reference (1: a whole cloud); the quantile table, the default known acceptance and its
-// threshold (NaN when not calibrated).
-void write_novelty(Writer& w, const Calibration& c) {
-  w.u32(static_cast<uint32_t>(c.novelty_scale.size()));
-  for (size_t j = 0; j < c.novelty_scale.size(); ++j) {
-    w.u32(static_cast<uint32_t>(c.novelty_scale[j].size()));
-    for (double v : c.novelty_scale[j]) w.f64(v);
-    const std::vector<uint8_t> none;
-    const std::vector<uint8_t>& whole = j < c.reference_whole.size() ? c.reference_whole[j] : none;
-    w.u32(static_cast<uint32_t>(whole.size()));
-    for (uint8_t b : whole) w.u8(b);
-  }
-  w.u32(static_cast<uint32_t>(c.novelty_quantiles.size()));
-  for (double v : c.novelty_quantiles) w.f64(v);
-  w.f64(c.known_acceptance);
-  w.f64(c.novelty_threshold);
-  w.u8(c.novelty_over_score ? 1 : 0);
-  w.u32(static_cast<uint32_t>(c.novelty_objects.size()));
-  for (int k : c.novelty_objects) w.u32(static_cast<uint32_t>(k));
-  w.u32(static_cast<uint32_t>(c.reference_object.size()));
-  for (const std::vector<uint32_t>& objects : c.reference_object) {
-    w.u32(static_cast<uint32_t>(objects.size()));
-    for (uint32_t o : objects) w.u32(o);
-  }
-}
-
-// `impl`'s stages are read: each component's reference flags must match its stage.
-void read_novelty(Reader& r, Calibration& c, uint32_t ncat, const ModelImpl& impl, uint32_t version) {
-  const uint32_t parts = r.u32("novelty components");
-  const std::vector<MethodId> components = component_methods(impl, c.method);
-  if (parts != 0 && parts != components.size()) r.fail("novelty components do not match the calibrated method");
-  for (uint32_t j = 0; j < parts && !r.failed(); ++j) {
-    if (r.u32("novelty scales") != 2 * ncat + 2) r.fail("novelty scales do not match the categories");
-    r.need(size_t{ncat} * 16 + 16, "novelty scales");
-    std::vector<double> per;
-    for (uint32_t k = 0; k < 2 * ncat + 2 && !r.failed(); ++k) {
-      per.push_back(r.f64("novelty scale"));
-      if (!(per.back() > 0 && std::isfinite(per.back()))) r.fail("novelty scale out of range");
-    }
-    c.novelty_scale.push_back(std::move(per));
-    const uint32_t refs = r.u32("reference flags");
-    const auto& stage = impl.stages[static_cast<int>(components[j])];
-    if (!r.failed() && !stage) r.fail("novelty of a method without a decision stage");
-    const Eigen::Index rows = r.failed() ? 0 : stage->references.rows();
-    if (!r.failed() && refs != 0 && refs != static_cast<uint64_t>(rows)) r.fail("reference flags do not match the stage");
-    r.need(refs, "reference flags");
-    std::vector<uint8_t> whole;
-    for (uint32_t k = 0; k < refs && !r.failed(); ++k) {
-      whole.push_back(r.u8("reference flag"));
-      if (whole.back() > 1) r.fail("reference flag out of range");
-    }
-    c.reference_whole.push_back(std::move(whole));
-  }
-  const uint32_t nq = r.u32("novelty quantiles");
-  if (nq != 0 && nq != kNoveltyQuantiles) r.fail("unexpected novelty quantile count");
-  r.need(size_t{nq} * 8, "novelty quantiles");
-  for (uint32_t q = 0; q < nq && !r.failed(); ++q) {
-    c.novelty_quantiles.push_back(r.f64("novelty quantile"));
-    if (!(c.novelty_quantiles.back() >= 0 && std::isfinite(c.novelty_quantiles.back())) ||
-        (q && c.novelty_quantiles[q] < c.novelty_quantiles[q - 1]))
-      r.fail("novelty quantiles out of range or not ascending");
-  }
-  c.known_acceptance = r.f64("known acceptance");
-  c.novelty_threshold = r.f64("novelty threshold");
-  c.novelty_over_score = version >= 5 && r.u8("novelty over score") != 0;
-  c.novelty_objects.clear();
-  if (version >= 6) {
-    const uint32_t counts = r.u32("novelty object counts");
-    if (!r.failed() && counts != 0 && counts != ncat) r.fail("novelty object counts do not match the categories");
-    r.need(size_t{counts} * 4, "novelty object counts");
-    for (uint32_t k = 0; k < counts && !r.failed(); ++k) {
-      c.novelty_objects.push_back(static_cast<int>(r.u32("novelty object count")));
-      if (c.novelty_objects.back() < 1 || c.novelty_objects.back() > 1000000) r.fail("novelty object count out of range");
-    }
-    const uint32_t with_objects = r.u32("components with reference objects");
-    if (!r.failed() && with_objects != 0 && with_objects != parts) r.fail("reference objects do not match the novelty components");
-    for (uint32_t j = 0; j < with_objects && !r.failed(); ++j) {
-      const uint32_t refs = r.u32("reference objects");
-      const Eigen::Index rows = impl.stages[static_cast<int>(components[j])]->references.rows();
-      if (refs != 0 && refs != static_cast<uint64_t>(rows)) r.fail("reference objects do not match the stage");
-      r.need(size_t{refs} * 4, "reference objects");
-      std::vector<uint32_t> objects;
-      for (uint32_t k = 0; k < refs && !r.failed(); ++k) {
-        objects.push_back(r.u32("reference object"));
-        if (objects.back() >= refs) r.fail("reference object out of range");
-      }
-      c.reference_object.push_back(std::move(objects));
-    }
-  }
-  if (r.failed()) return;
-  if (c.novelty_scale.empty() != c.novelty_quantiles.empty()) r.fail("half a novelty calibration");
-  else if (!(c.known_acceptance > 0 && c.known_acceptance <= 1)) r.fail("known acceptance out of range");
-  else if (!c.novelty_quantiles.empty() && !(c.novelty_threshold >= 0 && std::isfinite(c.novelty_threshold)))
-    r.fail("novelty threshold out of range");
-}
-
 std::vector<uint8_t> serialize(const Model& model) {
   Writer w;
   w.u32(static_cast<uint32_t>(model.categories.size()));
@@ -466,11 +283,7 @@ std::vector<uint8_t> serialize(const Model& model) {
       w.u8(s ? 1 : 0);
       if (s) write_stage(w, *s);
     }
-    w.u8(static_cast<uint8_t>(m.calibration.method));
-    w.f64(m.calibration.settle_margin);
-    w.u64(m.calibration.held_out);
-    w.f64(m.calibration.held_out_accuracy);
-    write_novelty(w, m.calibration);
+    write_calibration(w, m.calibration);
   }
 
   Writer out;
@@ -591,19 +404,7 @@ Expected<Model> deserialize(std::span<const uint8_t> bytes) {
       if (!r.failed() && method != MethodId::kFusion && used(method) != impl->stages[m].has_value())
         r.fail(std::string("decision stage of ") + method_name(method) + " missing or unexpected");
     }
-    if (version >= 3 && !r.failed()) {
-      Calibration& c = impl->calibration;
-      const uint8_t m = r.u8("calibration method");
-      if (m >= kMethodCount) r.fail("unknown calibration method");
-      c.method = static_cast<MethodId>(m);
-      c.settle_margin = r.f64("settle margin");
-      c.held_out = r.u64("calibration count");
-      c.held_out_accuracy = r.f64("calibration accuracy");
-      if (version >= 4) read_novelty(r, c, ncat, *impl, version);
-      if (!r.failed() && (!(c.settle_margin >= 0 && c.settle_margin <= 2) ||
-                          !(c.held_out_accuracy >= 0 && c.held_out_accuracy <= 1)))
-        r.fail("calibration out of range");
-    }
+    if (version >= 3 && !r.failed()) read_calibration(r, impl->calibration, ncat, *impl, version);
     model.impl = std::move(impl);
   }
   if (!r.failed() && r.left() != 0) r.fail(std::to_string(r.left()) + " unexpected trailing bytes");

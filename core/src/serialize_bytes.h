@@ -1,0 +1,113 @@
+// The model format's byte primitives (serialize.cpp, serialize_calibration.cpp): little-endian
+// integers, IEEE-754 binary64 reals, length-prefixed strings, vectors and matrices. Reader checks every
+// length against the bytes left and keeps the first failure, so a corrupt model is an error, never UB.
+#pragma once
+
+#include <Eigen/Core>
+#include <bit>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace glimpse::serial {
+
+class Writer {
+ public:
+  std::vector<uint8_t> bytes;
+  template <class T>
+  void uint(T v) {
+    for (size_t i = 0; i < sizeof(T); ++i) bytes.push_back(static_cast<uint8_t>(static_cast<uint64_t>(v) >> (8 * i)));
+  }
+  void u8(uint8_t v) { uint(v); }
+  void u32(uint32_t v) { uint(v); }
+  void i32(int32_t v) { uint(static_cast<uint32_t>(v)); }
+  void u64(uint64_t v) { uint(v); }
+  void f64(double v) { uint(std::bit_cast<uint64_t>(v)); }
+  void str(const std::string& s) {
+    u32(static_cast<uint32_t>(s.size()));
+    bytes.insert(bytes.end(), s.begin(), s.end());
+  }
+  void vec(const Eigen::VectorXd& v) {
+    u32(static_cast<uint32_t>(v.size()));
+    for (Eigen::Index i = 0; i < v.size(); ++i) f64(v[i]);
+  }
+  void mat(const Eigen::MatrixXd& m) {
+    u32(static_cast<uint32_t>(m.rows()));
+    u32(static_cast<uint32_t>(m.cols()));
+    for (Eigen::Index r = 0; r < m.rows(); ++r)
+      for (Eigen::Index c = 0; c < m.cols(); ++c) f64(m(r, c));
+  }
+};
+
+class Reader {
+ public:
+  Reader(const uint8_t* p, size_t n) : p_(p), end_(p + n) {}
+  bool failed() const { return failed_; }
+  const std::string& why() const { return why_; }
+  size_t left() const { return static_cast<size_t>(end_ - p_); }
+  void fail(const std::string& why) {
+    if (!failed_) why_ = why;
+    failed_ = true;
+  }
+  bool need(size_t n, const char* what) {
+    if (failed_) return false;
+    if (left() < n) fail(std::string("truncated while reading ") + what);
+    return !failed_;
+  }
+  template <class T>
+  T uint(const char* what) {
+    if (!need(sizeof(T), what)) return T{};
+    uint64_t v = 0;
+    for (size_t i = 0; i < sizeof(T); ++i) v |= static_cast<uint64_t>(p_[i]) << (8 * i);
+    p_ += sizeof(T);
+    return static_cast<T>(v);
+  }
+  uint8_t u8(const char* w) { return uint<uint8_t>(w); }
+  uint32_t u32(const char* w) { return uint<uint32_t>(w); }
+  int32_t i32(const char* w) { return static_cast<int32_t>(uint<uint32_t>(w)); }
+  uint64_t u64(const char* w) { return uint<uint64_t>(w); }
+  double f64(const char* w) { return std::bit_cast<double>(uint<uint64_t>(w)); }
+  std::string str(const char* what) {
+    const uint32_t n = u32(what);
+    if (!need(n, what)) return {};
+    std::string s(reinterpret_cast<const char*>(p_), n);
+    p_ += n;
+    return s;
+  }
+  Eigen::VectorXd vec(const char* what) {
+    const uint32_t n = u32(what);
+    if (!need(size_t{n} * 8, what)) return {};
+    Eigen::VectorXd v(n);
+    for (uint32_t i = 0; i < n; ++i) v[i] = f64(what);
+    return v;
+  }
+  Eigen::MatrixXd mat(const char* what) {
+    const uint64_t rows = u32(what), cols = u32(what);
+    if (cols && rows > left() / 8 / cols) {
+      fail(std::string("truncated while reading ") + what);
+      return {};
+    }
+    if (!need(rows * cols * 8, what)) return {};
+    Eigen::MatrixXd m(static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(cols));
+    for (uint64_t r = 0; r < rows; ++r)
+      for (uint64_t c = 0; c < cols; ++c) m(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = f64(what);
+    return m;
+  }
+
+ private:
+  const uint8_t* p_;
+  const uint8_t* end_;
+  bool failed_ = false;
+  std::string why_;
+};
+
+}  // namespace glimpse::serial
+
+namespace glimpse {
+struct Calibration;
+struct ModelImpl;
+// The calibration block (serialize_calibration.cpp); read_calibration needs the model's stages read.
+void write_calibration(serial::Writer& w, const Calibration& c);
+void read_calibration(serial::Reader& r, Calibration& c, uint32_t ncat, const ModelImpl& impl, uint32_t version);
+}  // namespace glimpse
