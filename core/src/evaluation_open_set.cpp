@@ -110,7 +110,7 @@ std::string open_set_section(const EvalResult& r) {
     << " categories no model learns (" << classes << ") is tested too, "
     << (r.cross_source ? "by the one model" : "each object by one fold's model") << ", with "
     << method_name(r.change_method) << ". A model knows nothing of them: its novelty (per component, the "
-    << "distance to the decided category, the mean over its " << r.params.train.novelty_objects
+    << "distance to the decided category, the mean over its (up to) " << r.params.train.novelty_objects
     << " nearest training objects of the distance to each one's nearest reference, over the typical held-out "
     << "distance for that category and kind of reference, a whole view or a top-down prefix, or what the "
     << "stage's PCA leaves out if larger; averaged over the components and divided by the decision's score "

@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <memory>
 #include <numbers>
+#include <set>
 #include <sstream>
 
 #include "glimpse/evaluation.h"
@@ -18,8 +19,6 @@
 namespace glimpse::lab {
 
 namespace {
-
-
 
 // The objects of every folder in `dirs`, each given `role`.
 Expected<std::vector<EvalObject>> load_sources(const std::vector<std::string>& dirs, EvalRole role, uint64_t seed,
@@ -43,6 +42,31 @@ Expected<std::vector<EvalObject>> load_sources(const std::vector<std::string>& d
     }
   }
   return all;
+}
+
+// --hold-out: the named categories' objects become unknown (tested, never learnt; training-only ones
+// are dropped). An open-set evaluation from known data alone: each category in turn plays "none of these".
+Status hold_out(std::vector<EvalObject>& objects, const std::string& list) {
+  std::set<std::string> present, held;
+  for (const EvalObject& x : objects)
+    if (x.role != EvalRole::kUnknown) present.insert(x.category);
+  for (const std::string& c : split_list(list)) {
+    if (!present.count(c)) {
+      std::string names;
+      for (const std::string& p : present) names += (names.empty() ? "" : ", ") + p;
+      return invalid_argument("--hold-out: no object of category '" + c + "' (categories: " + names + ")");
+    }
+    held.insert(c);
+  }
+  std::erase_if(objects, [&](const EvalObject& x) { return x.role == EvalRole::kTrainOnly && held.count(x.category); });
+  std::set<std::string> learnt;
+  for (EvalObject& x : objects) {
+    if (x.role == EvalRole::kUnknown) continue;
+    if (held.count(x.category)) x.role = EvalRole::kUnknown;
+    else if (x.role != EvalRole::kTestOnly) learnt.insert(x.category);
+  }
+  if (learnt.size() < 2) return invalid_argument("--hold-out: at least two learnt categories must remain");
+  return {};
 }
 
 int run_eval(const EvalOptions& o) {
@@ -95,6 +119,13 @@ int run_eval(const EvalOptions& o) {
     std::fprintf(stderr, "making the zoo: %zu objects per category ...\n", n);
     objects = zoo_objects(n, params->seed);
     source = "procedural zoo (make_zoo, seed " + std::to_string(params->seed) + ")";
+  }
+  if (!o.hold_out.empty()) {
+    if (Status s = hold_out(objects, o.hold_out); !s.ok()) {
+      std::fprintf(stderr, "glimpse-lab eval: %s\n", s.error().message.c_str());
+      return 2;
+    }
+    source += " (held out as unknown: " + o.hold_out + ")";
   }
   const double load_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
@@ -168,6 +199,9 @@ void add_eval_command(CLI::App& app) {
   cmd->add_option("--unknown", o->unknown,
                   "objects of categories no model learns DIR[,DIR...] or zoo:N, tested besides the known ones: the "
                   "report's open-set section (AUROC of novelty, false acceptance, known accuracy at the operating point)");
+  cmd->add_option("--hold-out", o->hold_out,
+                  "categories CAT[,CAT...] of the evaluated sources that no model learns: their objects are tested "
+                  "as unknown (the open-set section from known data alone, e.g. each category in turn)");
   cmd->add_option("--train-tilt", o->tilt, "training views turned by a random tilt of up to DEG degrees (default: the recogniser's)");
   cmd->add_option("--size-blind", o->size_blind,
                   "methods of the size-blind ablation (every object 1 m tall, train and test), or 'none'")

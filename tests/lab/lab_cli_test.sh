@@ -30,6 +30,18 @@ if [[ $MODE == zoo ]]; then
   run 2 eval --zoo 3 --boundary-radius 0 --out "$TMP/x" && has "$TMP/err" "--boundary-radius must be positive"
   run 2 eval --zoo 3 --min-neighbours 4 --out "$TMP/x" && has "$TMP/err" "--min-neighbours must be at least 6"
   run 2 eval --zoo 3 --methods vfh,ush --keypoint-ablation --out "$TMP/x" && has "$TMP/err" "needs bok, bog or kgh"
+  run 2 eval --zoo 3 --hold-out dragon --out "$TMP/x" && has "$TMP/err" "--hold-out: no object of category 'dragon' \(categories: chair, fourleg"
+  run 2 eval --zoo 3 --hold-out human,chair,table,mechanic --out "$TMP/x" && has "$TMP/err" "at least two learnt categories must remain"
+  # --hold-out: a learnt category tested as unknown, the open-set section from known data alone.
+  if run 0 eval --zoo 4 --quick --views 2 --methods fusion --stages full --stream-chunk 0 --size-blind none --matrix none \
+      --hold-out fourleg --out "$TMP/ho"; then
+    R="$TMP/ho/report.md"
+    has "$R" "held out as unknown: fourleg"
+    has "$R" "## Open set"
+    has "$R" "^\| full \| [01]\.[0-9]+ \|"
+    has "$R" "^\| fourleg \| [0-9]+ \|"
+    has "$R" "\| 32 / 8 \|$"  # 4 learnt categories x 4 objects x 2 views known, 4 fourlegs x 2 views unknown
+  fi
   # The preset: the paper's protocol and decision, written in the report; the ablation beside it.
   if run 0 eval --zoo 3 --views 2 --preset paper --quick --keypoint-ablation --out "$TMP/zoo"; then
     R="$TMP/zoo/report.md"
