@@ -111,6 +111,18 @@ struct Protocol {
 };
 
 void compute_slot(Protocol& P, FeatureSlot& slot, const Cloud& cloud);
+
+// The protocol's phases before training (evaluation_views.cpp, evaluation_features.cpp), in the order
+// run_evaluation calls them.
+Status validate(const std::vector<EvalObject>& objects, const EvalParams& p);
+void assign_folds(Protocol& P);        // 0. categories, folds, sources
+void make_object_clouds(Protocol& P);  // 1. full 3D clouds (sec. 3.4)
+void make_views(Protocol& P);          // 2. single views by HPR from the paper's viewpoints
+void trained_densities(Protocol& P);   // 2b. the density each model learns
+void sensor_test_views(Protocol& P);   // 2b. test views of a non-ideal condition (--sensor), filtered
+void full_view_features(Protocol& P);  // 3. full-view features and the keypoint cut margin
+void prefix_features(Protocol& P);     // 4. stage cuts and training prefixes
+void stage_statistics(Protocol& P);    // over the tested views
 // Phase 9: the robustness matrix (params.matrix) with the trained fold models.
 void robustness_matrix(Protocol& P);
 // The report's sections on a sensor's test views and on the robustness matrix ("" when neither).
