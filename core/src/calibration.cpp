@@ -110,6 +110,24 @@ std::vector<uint32_t> object_references(DecisionRule rule, const std::vector<int
   return out;
 }
 
+// Per category, how many of its nearest training objects a distance is taken over: `wanted`, or fewer
+// where an inner training fold holds fewer objects of it, so held-out distances mean what the model's will.
+std::vector<int> objects_per_category(const std::vector<int>& labels, const std::vector<int>& objects,
+                                      const std::vector<int>& object_fold, int folds, int categories, int wanted) {
+  std::map<int, int> category_of;
+  for (size_t i = 0; i < labels.size(); ++i) category_of[objects[i]] = labels[i];
+  std::vector<int> total(static_cast<size_t>(categories), 0), out(static_cast<size_t>(categories), wanted);
+  std::vector<std::vector<int>> in_fold(static_cast<size_t>(folds), total);
+  for (const auto& [o, c] : category_of) {
+    ++total[static_cast<size_t>(c)];
+    ++in_fold[static_cast<size_t>(object_fold[static_cast<size_t>(o)])][static_cast<size_t>(c)];
+  }
+  for (const std::vector<int>& held_out : in_fold)
+    for (size_t c = 0; c < out.size(); ++c)
+      if (const int learnt = total[c] - held_out[c]; learnt > 0) out[c] = std::min(out[c], learnt);
+  return out;
+}
+
 }  // namespace
 
 NearestReferences nearest_references(const DecisionStage& stage, StageScores&& s,
@@ -210,21 +228,8 @@ Calibration calibrate(const ModelImpl& impl, MethodId method, const std::vector<
     if (n < 2) return c;
   const std::vector<int> object_fold = stratified_folds(object_categories, folds, p.seed + 101);
   const std::vector<MethodId> parts = component_methods(impl, method);
-  // Per category, the objects a distance is taken over: no more than any inner training fold holds, so
-  // the held-out distances mean what the model's will.
-  std::vector<int> novelty_objects(static_cast<size_t>(categories), std::max(1, p.novelty_objects));
-  {
-    std::map<int, int> category_of_object;
-    for (size_t i = 0; i < labels.size(); ++i) category_of_object[objects[i]] = labels[i];
-    std::vector<std::vector<int>> per_fold(static_cast<size_t>(folds), std::vector<int>(static_cast<size_t>(categories), 0));
-    std::vector<int> total(static_cast<size_t>(categories), 0);
-    for (const auto& [o, cat] : category_of_object) ++per_fold[static_cast<size_t>(object_fold[static_cast<size_t>(o)])][static_cast<size_t>(cat)], ++total[static_cast<size_t>(cat)];
-    for (int k = 0; k < folds; ++k)
-      for (int cat = 0; cat < categories; ++cat) {
-        const int held = total[static_cast<size_t>(cat)] - per_fold[static_cast<size_t>(k)][static_cast<size_t>(cat)];
-        if (held > 0) novelty_objects[static_cast<size_t>(cat)] = std::min(novelty_objects[static_cast<size_t>(cat)], held);
-      }
-  }
+  const std::vector<int> novelty_objects =
+      objects_per_category(labels, objects, object_fold, folds, categories, std::max(1, p.novelty_objects));
   std::vector<std::pair<double, bool>> decisions;
   HeldOut held_out;
   size_t correct = 0;
