@@ -131,5 +131,8 @@ std::string robustness_section(const EvalResult& r);
 std::string size_section(const EvalResult& r);
 std::string keypoints_section(const EvalResult& r);
 std::string keypoint_ablation_section(const EvalResult& r);
+// evaluation_report_streams.cpp: category changes along the exploration, streams' settling.
+std::string changes_section(const EvalResult& r);
+std::string streams_section(const EvalResult& r);
 
 }  // namespace glimpse::eval_internal

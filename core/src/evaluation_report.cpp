@@ -1,5 +1,6 @@
 // The evaluation report a person reads: the markdown sections in the order they appear (the CSV, SVG and
-// terminal writers and the report folder are evaluation_writers.cpp's).
+// terminal writers and the report folder are evaluation_writers.cpp's; the exploration's category changes
+// and the streams' settling are evaluation_report_streams.cpp's).
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -293,76 +294,6 @@ void write_confusions(std::ostringstream& o, const EvalResult& r) {
   }
 }
 
-void write_changes(std::ostringstream& o, const EvalResult& r) {
-  static const std::map<size_t, std::pair<double, double>> kPaper = {{10, {0.41, 0.46}}, {25, {1.3, 1.6}}, {55, {2.8, 3.9}}};
-  o << "## Category changes along the exploration (sec. 4)\n\n";
-  o << "Method: **" << method_label(r.change_method) << "** (the recogniser's default, fixed before testing). For each test "
-       "view, the decisions at keypoint counts ";
-  for (size_t i = 0; i < r.grid.size(); ++i) o << (i ? ", " : "") << r.grid[i];
-  o << "; a view is finally correct when its full-view decision is. A stage whose k exceeds the view's keypoints is the "
-       "full view, so the sequence stops changing there.\n\n";
-  o << "| up to | changes, finally correct | finally incorrect | views correct / incorrect | paper correct / incorrect |\n";
-  o << "|---|---:|---:|---:|---:|\n";
-  for (const ChangeRow& c : r.changes) {
-    auto p = kPaper.find(c.up_to_keypoints);
-    o << "| " << c.up_to_keypoints << " kp | " << fmt("%.2f", c.mean_correct) << " | " << fmt("%.2f", c.mean_incorrect)
-      << " | " << c.views_correct << " / " << c.views_incorrect << " | "
-      << (p != kPaper.end() ? fmt("%.2f", p->second.first) + " / " + fmt("%.2f", p->second.second) : "–") << " |\n";
-  }
-  o << "\nEvolution curves (decided category against visible % of the full cloud, one line per view, as the paper's "
-       "Figures 5-6): [finally correct](evolution_correct.svg), [finally incorrect](evolution_incorrect.svg).\n\n";
-}
-
-void write_streams(std::ostringstream& o, const EvalResult& r) {
-  if (r.streams.empty()) return;
-  const SessionParams& sp = r.params.session;
-  const size_t min_kp = uses_keypoints(r.change_method) ? sp.min_keypoints : 0;
-  o << "## Streaming: when the decision settles (ScanSession)\n\n";
-  o << "Every view streamed top to bottom through a ScanSession of its fold's model (method **"
-    << method_label(r.change_method) << "**), in chunks of " << pct(100 * r.params.stream_chunk_fraction, 1)
-    << " % of the full 3D cloud's points. A view counts at its first settled decision: precision = share of those "
-       "that name the true category, visible % = how much of the full cloud had been seen then. Goal: precision >= 95 % "
-       "with settlement before 30 % visible on average.\n\n";
-  if (r.settle_margins.empty())
-    o << "| settled when | views settled | precision | mean visible % | median visible % |\n|---|---:|---:|---:|---:|\n";
-  auto row = [&](const std::string& label, const SettleRow& s) {
-    o << "| " << label << " | " << s.settled_views << " / " << s.views << " (" << pct(s.settled_percent(), 1) << " %) | "
-      << pct(s.precision_percent(), 1) << " % | " << pct(s.mean_visible_percent, 1) << " | "
-      << pct(s.median_visible_percent, 1) << " |\n";
-  };
-  if (!r.settle_margins.empty()) {
-    o << "Each model calibrated where its decisions settle on held-out folds of its own training objects ("
-      << r.params.train.calibration_folds << " inner folds by object; nothing of the test views): the smallest margin "
-         "between the best two scores at which held-out decisions were " << pct(100 * r.params.train.settle_precision)
-      << " % right. Settle margin per model:";
-    for (size_t i = 0; i < r.settle_margins.size(); ++i)
-      o << (i ? "," : "") << " " << fmt("%.3f", r.settle_margins[i]) << " (held out "
-        << pct(100 * r.calibration_accuracy[i], 1) << " % right)";
-    o << ". The sweep below recomputes settling at fixed confidences from the recorded ones (without the session's "
-         "hold rule), for comparison only.\n\n";
-    o << "| settled when | views settled | precision | mean visible % | median visible % |\n|---|---:|---:|---:|---:|\n";
-  }
-  const SettleRow session = settle_summary(r.streams, -1);
-  row("**session default** (calibrated margin, confidence >= " + fmt("%.2f", sp.settle_confidence) + ", the winner held " +
-          std::to_string(sp.stability_window) + " chunks, the newest included" +
-          (session.unknown ? "; " + std::to_string(session.unknown) + " settled as unknown, counted wrong" : std::string()) + ")",
-      session);
-  for (double t : r.params.settle_sweep) row("confidence >= " + fmt("%.2f", t), settle_summary(r.streams, t, min_kp));
-  o << "\nPer category, the session's own flag:\n\n| category | views settled | precision | mean visible % |\n"
-       "|---|---:|---:|---:|\n";
-  for (size_t c = 0; c < r.categories.size(); ++c) {
-    const SettleRow s = settle_summary(r.streams, -1, 0, static_cast<int>(c));
-    o << "| " << r.categories[c] << " | " << s.settled_views << " / " << s.views << " | " << pct(s.precision_percent(), 1)
-      << " % | " << pct(s.mean_visible_percent, 1) << " |\n";
-  }
-  size_t final_correct = 0, decided = 0;
-  for (const StreamTrace& t : r.streams)
-    if (!t.winners.empty()) ++decided, final_correct += t.winners.back() == t.truth;
-  o << "\nLast decision of each stream (the whole view seen): " << final_correct << " / " << decided << " correct ("
-    << pct(decided ? 100.0 * double(final_correct) / double(decided) : 0, 1) << " %). Every chunk is in "
-    << "[streams.csv](streams.csv).\n\n";
-}
-
 }  // namespace
 
 double paper_accuracy(MethodId method, std::string_view stage) {
@@ -386,8 +317,8 @@ std::string markdown_report(const EvalResult& r) {
   o << eval_internal::keypoint_ablation_section(r);
   o << "## Confusion tables\n\n";
   write_confusions(o, r);
-  write_changes(o, r);
-  write_streams(o, r);
+  o << eval_internal::changes_section(r);
+  o << eval_internal::streams_section(r);
   o << open_set_section(r);
   o << "## Things that look wrong\n\n";
   if (r.notes.empty()) o << "Nothing flagged.\n";
