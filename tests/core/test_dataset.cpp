@@ -183,8 +183,9 @@ TEST_F(DatasetTest, LoadStandsScalesAndGroundsDeterministically) {
     EXPECT_NEAR(measured, object_size_m(o, 11), 1e-5f);
     EXPECT_GE(measured, o.size.min_m - 1e-5f);
     EXPECT_LE(measured, o.size.max_m + 1e-5f);
-    if (o.size.measure == CategorySize::kHeight)  // the 2 m y side now points up
+    if (o.size.measure == CategorySize::kHeight) {  // the 2 m y side now points up
       EXPECT_GT(b.extent().z(), 3 * b.extent().x());
+    }
     Expected<Mesh> again = load_object(o, 11);
     ASSERT_TRUE(again.ok());
     EXPECT_EQ(again->vertices, m->vertices);
@@ -229,8 +230,9 @@ TEST(Shrec07, AllHundredLoadUprightAtRealLifeSize) {
     const float measured = o.size.measure == CategorySize::kHeight ? b.extent().z() : b.extent().maxCoeff();
     EXPECT_GE(measured, o.size.min_m - 1e-4f);
     EXPECT_LE(measured, o.size.max_m + 1e-4f);
-    if (o.category == "human")  // upright people are taller than they are wide
+    if (o.category == "human") {  // upright people are taller than they are wide
       EXPECT_GT(b.extent().z(), 0.8f * std::max(b.extent().x(), b.extent().y()));
+    }
   }
   EXPECT_EQ(not_y, 19u);
 }
@@ -258,8 +260,9 @@ TEST(Psb, All150LoadUprightIncludingTiltedOnesAndBinaryStl) {
     ASSERT_TRUE(m.ok()) << m.error().message;
     const Bounds b = bounds(m->vertices);
     EXPECT_NEAR(b.min.z(), 0.f, 1e-5f);
-    if (o.category == "human")  // upright people are taller than they are wide
+    if (o.category == "human") {  // upright people are taller than they are wide
       EXPECT_GT(b.extent().z(), 0.8f * std::max(b.extent().x(), b.extent().y()));
+    }
     if (o.category == "mechanic") {
       ++parts;
       EXPECT_TRUE(o.size.any_pose);

@@ -429,7 +429,9 @@ TEST(ConditionView, IdealIsTheProtocolsViewAndSensorsSeeTheSameObjectFromTheSame
     // Same azimuth (120 deg for view 1 of 3) and elevation: the sensors sit on one ray from the object.
     const Vec3 to_ideal = (*ideal.sensor - bounds(full).centre()).normalized();
     const Vec3 to_depth = (*d.sensor - bounds(o.any_pose ? d.points : full).centre()).normalized();
-    if (!o.any_pose) EXPECT_GT(to_ideal.dot(to_depth), 0.99f) << o.category;
+    if (!o.any_pose) {
+      EXPECT_GT(to_ideal.dot(to_depth), 0.99f) << o.category;
+    }
     // The depth camera's points lie on the object (noise of a few mm at 2.5 m), within its bounds.
     const Bounds m = bounds(o.any_pose ? ideal.points : o.mesh.vertices);
     if (!o.any_pose)
@@ -459,7 +461,9 @@ TEST(RunEvaluation, SensorTestViewsAndTheRobustnessMatrix) {
   ASSERT_EQ(r->trained_density.size(), 2u);
   for (double d : r->trained_density) EXPECT_GT(d, 100.0);
   for (const StageDecision& d : r->decisions)
-    if (d.stage == "10%") EXPECT_NEAR(d.visible_fraction, 0.10, 5e-3);  // rounding on small parts
+    if (d.stage == "10%") {
+      EXPECT_NEAR(d.visible_fraction, 0.10, 5e-3);  // rounding on small parts
+    }
   const double full = accuracy(r->decisions, "full", MethodId::kFusion).percent();
   // The matrix: one row per condition, one view per object; the floor is found and removed.
   ASSERT_EQ(r->robustness.size(), 2u);
