@@ -7,6 +7,7 @@
 #include <bit>
 #include <cstddef>
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -107,6 +108,12 @@ class Reader {
 namespace glimpse {
 struct Calibration;
 struct ModelImpl;
+struct TrainParams;
+// The training parameters as (name, value) pairs (serialize_params.cpp). read_train_params sets every
+// parameter it knows from the pairs read (a value the parameter cannot hold fails the reader) and
+// returns all the pairs read, so the caller can tell which a model's writer knew.
+void write_train_params(serial::Writer& w, const TrainParams& p);
+std::map<std::string, double> read_train_params(serial::Reader& r, TrainParams& p);
 // The calibration block (serialize_calibration.cpp); read_calibration needs the model's stages read.
 void write_calibration(serial::Writer& w, const Calibration& c);
 void read_calibration(serial::Reader& r, Calibration& c, uint32_t ncat, const ModelImpl& impl, uint32_t version);
