@@ -1,5 +1,8 @@
 #include "store.h"
 
+#include "sqlite.h"
+#include "store_schema.h"
+
 #include <openssl/sha.h>
 #include <sqlite3.h>
 
@@ -14,65 +17,11 @@
 namespace glimpse::server {
 namespace {
 
-// Schema migrations: entry i takes `PRAGMA user_version` from i to i + 1. Append, never edit.
-constexpr const char* kMigrations[] = {
-    // 1: models (a name and its pinned default), immutable versions, categories, training stats.
-    R"sql(
-    CREATE TABLE models (
-      name            TEXT PRIMARY KEY,
-      default_version INTEGER,                  -- NULL: serve the latest version
-      next_version    INTEGER NOT NULL DEFAULT 1 -- versions are never reused, even after a delete
-    );
-    CREATE TABLE versions (
-      id              INTEGER PRIMARY KEY AUTOINCREMENT,
-      name            TEXT NOT NULL REFERENCES models(name) ON DELETE CASCADE,
-      version         INTEGER NOT NULL,
-      created_unix_ms INTEGER NOT NULL,
-      description     TEXT NOT NULL DEFAULT '',
-      methods         TEXT NOT NULL,            -- comma-separated method names
-      default_method  TEXT NOT NULL,
-      params          TEXT NOT NULL DEFAULT '', -- TrainParameters as JSON
-      blob            BLOB NOT NULL,
-      size_bytes      INTEGER NOT NULL,
-      sha256          TEXT NOT NULL,
-      UNIQUE (name, version)
-    );
-    CREATE TABLE categories (
-      version_id INTEGER NOT NULL REFERENCES versions(id) ON DELETE CASCADE,
-      position   INTEGER NOT NULL,
-      name       TEXT NOT NULL,
-      clouds     INTEGER NOT NULL DEFAULT 0,
-      PRIMARY KEY (version_id, position)
-    );
-    CREATE TABLE training_stats (
-      version_id INTEGER PRIMARY KEY REFERENCES versions(id) ON DELETE CASCADE,
-      clouds     INTEGER NOT NULL,
-      objects    INTEGER NOT NULL,
-      keypoints  INTEGER NOT NULL,
-      seconds    REAL NOT NULL
-    );
-    -- The version each name serves by default: the pinned one while it exists, else the latest.
-    CREATE VIEW served AS
-      SELECT m.name AS name,
-             COALESCE((SELECT v.version FROM versions v
-                        WHERE v.name = m.name AND v.version = m.default_version),
-                      (SELECT MAX(v.version) FROM versions v WHERE v.name = m.name)) AS version
-        FROM models m;
-    )sql",
-    // 2: versions are immutable: the database refuses updates, not just the code.
-    R"sql(
-    CREATE TRIGGER versions_immutable BEFORE UPDATE ON versions
-      BEGIN SELECT RAISE(ABORT, 'model versions are immutable'); END;
-    )sql",
-    // 3: the feature pipeline version a model was trained with (0: stored before it was recorded), and
-    // the extents of the clouds it learnt (0: unknown).
-    R"sql(
-    ALTER TABLE versions ADD COLUMN feature_version INTEGER NOT NULL DEFAULT 0;
-    ALTER TABLE training_stats ADD COLUMN min_extent_m REAL NOT NULL DEFAULT 0;
-    ALTER TABLE training_stats ADD COLUMN max_extent_m REAL NOT NULL DEFAULT 0;
-    )sql",
-};
-constexpr int kSchemaVersion = static_cast<int>(std::size(kMigrations));
+using sql::Exec;
+using sql::PragmaInt;
+using sql::SqlError;
+using sql::Stmt;
+using sql::WriteTxn;
 
 std::string MethodToken(MethodId m) { return method_name(m); }
 
@@ -101,143 +50,6 @@ Expected<std::vector<MethodId>> SplitMethods(const std::string& text) {
     out.push_back(*m);
   }
   return out;
-}
-
-Error SqlError(sqlite3* db, int rc, std::string_view what) {
-  std::string message = std::string(what) + ": " + (db ? sqlite3_errmsg(db) : sqlite3_errstr(rc));
-  switch (rc & 0xff) {
-    case SQLITE_BUSY:
-    case SQLITE_LOCKED: return resource_exhausted("model store busy: " + message);
-    case SQLITE_FULL: return resource_exhausted("model store full: " + message);
-    case SQLITE_CORRUPT:
-    case SQLITE_NOTADB: return data_loss("model store corrupt: " + message);
-    case SQLITE_READONLY:
-    case SQLITE_CANTOPEN:
-    case SQLITE_PERM: return failed_precondition("model store not writable: " + message);
-    default: return internal_error("model store: " + message);
-  }
-}
-
-// A prepared statement, finalized on scope exit.
-class Stmt {
- public:
-  Stmt(sqlite3* db, std::string_view sql) : db_(db) {
-    rc_ = sqlite3_prepare_v2(db, sql.data(), static_cast<int>(sql.size()), &stmt_, nullptr);
-  }
-  ~Stmt() { sqlite3_finalize(stmt_); }
-  Stmt(const Stmt&) = delete;
-  Stmt& operator=(const Stmt&) = delete;
-
-  Status prepared() const {
-    if (rc_ != SQLITE_OK) return SqlError(db_, rc_, "prepare");
-    return {};
-  }
-  Stmt& bind(int i, std::string_view s) {
-    sqlite3_bind_text(stmt_, i, s.data(), static_cast<int>(s.size()), SQLITE_TRANSIENT);
-    return *this;
-  }
-  Stmt& bind(int i, int64_t v) {
-    sqlite3_bind_int64(stmt_, i, v);
-    return *this;
-  }
-  Stmt& bind(int i, double v) {
-    sqlite3_bind_double(stmt_, i, v);
-    return *this;
-  }
-  Stmt& bind_null(int i) {
-    sqlite3_bind_null(stmt_, i);
-    return *this;
-  }
-  Stmt& bind_blob(int i, std::span<const uint8_t> b) {
-    sqlite3_bind_blob64(stmt_, i, b.data(), b.size(), SQLITE_STATIC);
-    return *this;
-  }
-  // true: a row is ready; false: done. Errors (including a failed prepare) as values.
-  Expected<bool> step() {
-    if (rc_ != SQLITE_OK) return SqlError(db_, rc_, "prepare");
-    int rc = sqlite3_step(stmt_);
-    if (rc == SQLITE_ROW) return true;
-    if (rc == SQLITE_DONE) return false;
-    return SqlError(db_, rc, "step");
-  }
-  Status run() {
-    auto r = step();
-    if (!r) return r.error();
-    return {};
-  }
-  int64_t i64(int col) const { return sqlite3_column_int64(stmt_, col); }
-  double f64(int col) const { return sqlite3_column_double(stmt_, col); }
-  bool null(int col) const { return sqlite3_column_type(stmt_, col) == SQLITE_NULL; }
-  std::string text(int col) const {
-    auto* p = reinterpret_cast<const char*>(sqlite3_column_text(stmt_, col));
-    return p ? std::string(p, static_cast<size_t>(sqlite3_column_bytes(stmt_, col))) : std::string();
-  }
-  std::vector<uint8_t> blob(int col) const {
-    auto* p = static_cast<const uint8_t*>(sqlite3_column_blob(stmt_, col));
-    return p ? std::vector<uint8_t>(p, p + sqlite3_column_bytes(stmt_, col)) : std::vector<uint8_t>();
-  }
-
- private:
-  sqlite3* db_;
-  sqlite3_stmt* stmt_ = nullptr;
-  int rc_ = SQLITE_OK;
-};
-
-Status Exec(sqlite3* db, const char* sql) {
-  char* msg = nullptr;
-  int rc = sqlite3_exec(db, sql, nullptr, nullptr, &msg);
-  if (rc == SQLITE_OK) return {};
-  std::string what = msg ? msg : sqlite3_errstr(rc);
-  sqlite3_free(msg);
-  return SqlError(nullptr, rc, what);
-}
-
-// BEGIN IMMEDIATE takes the write lock up front (no upgrade deadlocks between processes); anything
-// not committed is rolled back when the transaction goes out of scope.
-class WriteTxn {
- public:
-  explicit WriteTxn(sqlite3* db) : db_(db), begun_(Exec(db, "BEGIN IMMEDIATE")) {}
-  ~WriteTxn() {
-    if (begun_.ok() && !committed_) (void)Exec(db_, "ROLLBACK");
-  }
-  const Status& begun() const { return begun_; }
-  Status commit() {
-    Status s = Exec(db_, "COMMIT");
-    committed_ = s.ok();
-    return s;
-  }
-
- private:
-  sqlite3* db_;
-  Status begun_;
-  bool committed_ = false;
-};
-
-Expected<int64_t> PragmaInt(sqlite3* db, const char* pragma) {
-  Stmt s(db, pragma);
-  auto row = s.step();
-  if (!row) return row.error();
-  return *row ? s.i64(0) : 0;
-}
-
-Status Migrate(sqlite3* db) {
-  WriteTxn txn(db);
-  if (!txn.begun().ok()) return txn.begun();
-  auto current = PragmaInt(db, "PRAGMA user_version");
-  if (!current) return current.error();
-  if (*current > kSchemaVersion)
-    return failed_precondition("model store schema version " + std::to_string(*current) +
-                               " is newer than this server's (" + std::to_string(kSchemaVersion) +
-                               "); upgrade the server");
-  for (int v = static_cast<int>(*current); v < kSchemaVersion; ++v) {
-    if (Status s = Exec(db, kMigrations[v]); !s.ok())
-      return Error{s.error().code, "migration to schema " + std::to_string(v + 1) + ": " + s.error().message};
-  }
-  if (*current != kSchemaVersion) {
-    std::string set = "PRAGMA user_version = " + std::to_string(kSchemaVersion);
-    if (Status s = Exec(db, set.c_str()); !s.ok()) return s;
-  }
-  return txn.commit();
 }
 
 constexpr const char* kSelectRecord = R"sql(
@@ -298,7 +110,7 @@ Expected<std::unique_ptr<ModelStore>> ModelStore::Open(const std::string& path, 
     if (!*row || wal.text(0) != "wal")
       return failed_precondition(path + ": cannot switch to WAL journal mode (got '" + (*row ? wal.text(0) : "") + "')");
   }
-  if (Status s = Migrate(db); !s.ok()) return fail(s.error());
+  if (Status s = MigrateStore(db); !s.ok()) return fail(s.error());
   return store;
 }
 
@@ -306,7 +118,7 @@ ModelStore::ModelStore(sqlite3* db, StoreOptions options) : db_(db), options_(st
 
 ModelStore::~ModelStore() { sqlite3_close_v2(db_); }
 
-int ModelStore::LatestSchemaVersion() { return kSchemaVersion; }
+int ModelStore::LatestSchemaVersion() { return LatestStoreSchema(); }
 
 int ModelStore::SchemaVersion() const {
   std::lock_guard lock(mutex_);
