@@ -50,7 +50,7 @@ Status train_and_classify(Protocol& P) {
       for (size_t k = 0; k < P.train_slots[v].size(); ++k) {  // the whole (learnt) view, then its prefixes
         const FeatureSlot& slot = P.slots[static_cast<size_t>(P.train_slots[v][k])];
         if (!slot.ok) continue;
-        samples.push_back({object.category, id, slot.features, k == 0});
+        samples.push_back({object.category, id, slot.features, k == 0, std::nullopt});
         const FeatureSlot& seen = P.slots[static_cast<size_t>(P.seen_slots[v][k])];
         if (&seen != &slot && seen.ok) samples.back().as_seen = seen.features;
       }

@@ -228,7 +228,7 @@ Expected<Model> train(const std::vector<TrainingCloud>& data, const TrainParams&
                                               (jobs[j].prefix ? ", top " + std::to_string(jobs[j].prefix) + " points" : "") +
                                               ": " + feats[j].error().message};
     }
-    samples.push_back({d.category, d.object_id, std::move(*feats[j]), jobs[j].prefix == 0});
+    samples.push_back({d.category, d.object_id, std::move(*feats[j]), jobs[j].prefix == 0, std::nullopt});
     if (tilted && as_seen[j].ok()) samples.back().as_seen = std::move(*as_seen[j]);
   }
   feats.clear();

@@ -238,8 +238,11 @@ TEST(KeypointOptions, HarrisResponseKeypointsAreLocalMaximaAtTheCubeCorners) {
     const float response = f.surfaces[k.index].harris_response;
     EXPECT_GT(response, 0.f);
     tree.radius(k.position, r, near);
-    for (const Neighbour& q : near)
-      if (f.surfaces[q.index].valid) EXPECT_LE(f.surfaces[q.index].harris_response, response);
+    for (const Neighbour& q : near) {
+      if (f.surfaces[q.index].valid) {
+        EXPECT_LE(f.surfaces[q.index].harris_response, response);
+      }
+    }
     int best = 0;
     float best_d = 1e9f;
     for (int i = 0; i < 8; ++i) {

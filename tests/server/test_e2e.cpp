@@ -50,7 +50,8 @@ std::vector<Field> Parse(const std::string& message) {
   std::vector<Field> fields;
   for (int i = 0; i < set.field_count(); ++i) {
     const auto& f = set.field(i);
-    Field out{f.number()};
+    Field out;
+    out.number = f.number();
     if (f.type() == google::protobuf::UnknownField::TYPE_VARINT) out.varint = f.varint();
     if (f.type() == google::protobuf::UnknownField::TYPE_LENGTH_DELIMITED) out.bytes = f.length_delimited();
     fields.push_back(out);
