@@ -1,8 +1,5 @@
 #include "store.h"
 
-#include "sqlite.h"
-#include "store_schema.h"
-
 #include <openssl/sha.h>
 #include <sqlite3.h>
 
@@ -13,6 +10,9 @@
 #include <cstdio>
 #include <filesystem>
 #include <sstream>
+
+#include "sqlite.h"
+#include "store_schema.h"
 
 namespace glimpse::server {
 namespace {

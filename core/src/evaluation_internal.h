@@ -80,15 +80,15 @@ struct Protocol {
   int threads = 1;
   TrainParams tp{};
   std::vector<MethodId> base{};
-  int folds = 1;                 // models trained: the CV folds, or 1 for a cross-source evaluation
-  std::vector<Points> full{};      // full 3D cloud per object (sec. 3.4)
+  int folds = 1;  // models trained: the CV folds, or 1 for a cross-source evaluation
+  std::vector<Points> full{};  // full 3D cloud per object (sec. 3.4)
   std::vector<View> views{};
   std::vector<FeatureSlot> slots{};  // [0, views.size()): the full views; then the distinct prefixes
-  std::vector<float> margin{};       // keypoint cut margin per view
-  std::vector<Stage> stages{};       // the main stages, then the exploration grid's
-  std::vector<std::vector<int>> stage_slot{};   // [view][stage] -> slot, -1 none
+  std::vector<float> margin{};  // keypoint cut margin per view
+  std::vector<Stage> stages{};  // the main stages, then the exploration grid's
+  std::vector<std::vector<int>> stage_slot{};  // [view][stage] -> slot, -1 none
   std::vector<std::vector<int>> train_slots{};  // [view] -> slots trained on: the full view, then prefixes
-  std::vector<std::vector<int>> seen_slots{};   // [view] -> the same clouds as seen (untilted): calibration's queries
+  std::vector<std::vector<int>> seen_slots{};  // [view] -> the same clouds as seen (untilted): calibration's queries
   std::vector<std::shared_ptr<const Model>> fold_models{};
   std::vector<std::vector<int>> fold_to_ours{};  // per fold: model category index -> report category index
   EvalResult r{};
