@@ -503,6 +503,38 @@ TEST(DecisionTrack, UnknownSettlesLikeACategory) {
   EXPECT_FALSE(plain.decision.unknown);
 }
 
+// "Unknown" settles only when the newest chunk's own novelty agrees, as a category needs the newest
+// chunk's own scores to: a smoothed novelty the scan has left behind is not a settled "none of these".
+TEST(DecisionTrack, UnknownSettlesOnlyWhenTheNewestChunkIsNovelToo) {
+  SessionParams p;
+  p.smoothing = 0.5;
+  p.stability_window = 2;
+  p.full_margin = 0.4;
+  p.settle_confidence = 0.6;
+  p.unknown_full_excess = 0.5;
+  const double threshold = 2.0;
+  DecisionTrack t;
+  auto step = [&](std::vector<double> novelty) {
+    ChunkEvidence e;
+    e.scores = {0.9, 0.1};
+    e.novelty = std::move(novelty);
+    e.keypoints = 20;
+    track_decision(t, e, false, threshold, p);
+    return t.decision;
+  };
+  StreamDecision d = step({6.0, 6.0});  // smoothed 6: unknown, held 1 of 2
+  EXPECT_TRUE(d.unknown);
+  EXPECT_FALSE(d.settled);
+  d = step({1.0, 6.0});  // smoothed 0.5 * 1 + 0.5 * 6 = 3.5: still unknown, held 2 of 2, confidence 1
+  EXPECT_TRUE(d.unknown);
+  EXPECT_DOUBLE_EQ(d.novelty, 3.5);
+  EXPECT_NEAR(d.confidence, 1.0, 1e-12);  // (3.5 / 2 - 1) / 0.5 = 1.5, clamped
+  EXPECT_FALSE(d.settled) << "the newest chunk (novelty 1) looks like category 0";
+  d = step({6.0, 6.0});  // smoothed 4.75, the newest chunk novel too
+  EXPECT_TRUE(d.unknown);
+  EXPECT_TRUE(d.settled);
+}
+
 TEST(DecisionTrack, SettlingNeedsTheWholeWindowAndTheNewestChunkToAgree) {
   SessionParams p;
   p.smoothing = 0.5;

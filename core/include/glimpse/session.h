@@ -42,7 +42,8 @@ struct SessionParams {
   double full_margin = 0.3;
   bool use_model_calibration = true;
   // Settled at or above this, once the winner has won each of the last stability_window decisions,
-  // the newest chunk's own raw scores included (a single lucky chunk never settles).
+  // the newest chunk's own raw scores included (a single lucky chunk never settles); "unknown" likewise
+  // needs the newest chunk's own novelty above the threshold.
   double settle_confidence = 0.5;
   // A settled decision stays settled while its winner holds and its confidence stays within this of
   // settle_confidence: more of the object narrows the margin a little (the top of a human and of a
