@@ -448,24 +448,36 @@ TEST(DecisionTrack, ASettledWinnerStaysSettledThroughASmallDip) {
   EXPECT_FALSE(step({0.2, 0.8}).settled);
 }
 
-// "Unknown" is one more category: it changes, holds and settles like one; the winner stays the nearest.
-TEST(DecisionTrack, UnknownSettlesLikeACategory) {
+// A decision track over two categories with a novelty threshold of 2: a window of 2 chunks, a full margin
+// of 0.4, settling at confidence 0.6, "unknown" fully confident at 1.5 x the threshold.
+struct NoveltyTrack {
   SessionParams p;
-  p.smoothing = 1.0;
-  p.stability_window = 2;
-  p.full_margin = 0.4;
-  p.settle_confidence = 0.6;
-  p.unknown_full_excess = 0.5;
-  const double threshold = 2.0;
   DecisionTrack t;
-  auto step = [&](std::vector<double> s, std::vector<double> novelty, std::string cannot = {}) {
+  static constexpr double kThreshold = 2.0;
+  explicit NoveltyTrack(double smoothing) {
+    p.smoothing = smoothing;
+    p.stability_window = 2;
+    p.full_margin = 0.4;
+    p.settle_confidence = 0.6;
+    p.unknown_full_excess = 0.5;
+  }
+  StreamDecision step(std::vector<double> scores, std::vector<double> novelty, std::string cannot = {}) {
     ChunkEvidence e;
-    e.scores = std::move(s);
+    e.scores = std::move(scores);
     e.novelty = std::move(novelty);
     e.keypoints = 20;
     e.cannot_judge = std::move(cannot);
-    track_decision(t, e, false, threshold, p);
+    track_decision(t, e, false, kThreshold, p);
     return t.decision;
+  }
+};
+
+// "Unknown" is one more category: it changes, holds and settles like one; the winner stays the nearest.
+TEST(DecisionTrack, UnknownSettlesLikeACategory) {
+  NoveltyTrack track(1.0);
+  const SessionParams& p = track.p;
+  auto step = [&](std::vector<double> s, std::vector<double> novelty, std::string cannot = {}) {
+    return track.step(std::move(s), std::move(novelty), std::move(cannot));
   };
   StreamDecision d = step({0.9, 0.1}, {1.0, 3.0});
   EXPECT_FALSE(d.unknown);
@@ -506,22 +518,8 @@ TEST(DecisionTrack, UnknownSettlesLikeACategory) {
 // "Unknown" settles only when the newest chunk's own novelty agrees, as a category needs the newest
 // chunk's own scores to: a smoothed novelty the scan has left behind is not a settled "none of these".
 TEST(DecisionTrack, UnknownSettlesOnlyWhenTheNewestChunkIsNovelToo) {
-  SessionParams p;
-  p.smoothing = 0.5;
-  p.stability_window = 2;
-  p.full_margin = 0.4;
-  p.settle_confidence = 0.6;
-  p.unknown_full_excess = 0.5;
-  const double threshold = 2.0;
-  DecisionTrack t;
-  auto step = [&](std::vector<double> novelty) {
-    ChunkEvidence e;
-    e.scores = {0.9, 0.1};
-    e.novelty = std::move(novelty);
-    e.keypoints = 20;
-    track_decision(t, e, false, threshold, p);
-    return t.decision;
-  };
+  NoveltyTrack track(0.5);
+  auto step = [&](std::vector<double> novelty) { return track.step({0.9, 0.1}, std::move(novelty)); };
   StreamDecision d = step({6.0, 6.0});  // smoothed 6: unknown, held 1 of 2
   EXPECT_TRUE(d.unknown);
   EXPECT_FALSE(d.settled);
