@@ -361,9 +361,9 @@ void track_decision(DecisionTrack& t, const ChunkEvidence& e, bool keypoints_mat
   // smoothed novelty the scan had already left behind; with it, 96 (first settled right 82.0 -> 83.6 %;
   // SHREC CV 16 of 600 -> 7, 96.0 -> 97.5 %; PSB -> SHREC unchanged, 11 and 96.2 %).
   const int raw_winner = e.scores.empty() ? -1 : static_cast<int>(std::max_element(e.scores.begin(), e.scores.end()) - e.scores.begin());
-  const bool raw_novel = !e.cannot_judge.empty() ||
-                         (winner >= 0 && static_cast<size_t>(winner) < e.novelty.size() &&
-                          e.novelty[static_cast<size_t>(winner)] > threshold);
+  // (A scan a method cannot judge has confidence 0 and never settles, so it needs no case here.)
+  const bool raw_novel = winner >= 0 && static_cast<size_t>(winner) < e.novelty.size() &&
+                         e.novelty[static_cast<size_t>(winner)] > threshold;
   const bool steady = held == static_cast<std::ptrdiff_t>(window) && t.winners.size() >= window &&
                       (d.unknown ? raw_novel : raw_winner == winner);
   d.settled = enough && steady && d.confidence >= params.settle_confidence;
