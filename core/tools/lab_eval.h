@@ -43,6 +43,8 @@ struct EvalOptions {
   std::string out = "out/eval";
   bool quick = false;
   size_t max_objects = 0;
+  size_t pick_objects = 0;         // N objects per category drawn by the seed (0: all)
+  std::string poses = "dataset";   // dataset: categories without a natural up in a random pose; given: as the file has it
   size_t explore_step = 5;
   float cut_margin = 1.5f;
   std::string stages = "full,10kp,25kp,55kp,10%,20%";

@@ -18,6 +18,7 @@ Status apply_preset(EvalOptions& o, const std::function<bool(const char* flag)>&
   if (unset("--default-method")) o.default_method = "bok";        // the category-change figures are BoK's
   if (unset("--train-on")) o.train_on = "full";                   // trained on whole views
   if (unset("--train-tilt")) o.tilt = 0;                          // as given
+  if (unset("--poses")) o.poses = "given";                        // sec. 3.4: every object as its mesh has it
   if (unset("--decision")) o.decision = "nearest-centre";         // sec. 4: one centre per category, L1
   if (unset("--pca-variance")) o.pca_variance = -1;               // ... on the histograms (BoG: 65 dims)
   if (unset("--normalise-up-to")) o.normalise_up_to = 25;         // sec. 4: normalise early, not later
