@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "glimpse/classifiers.h"
+#include "glimpse/decision.h"
 #include "glimpse/features.h"
 #include "glimpse/model.h"
 #include "glimpse/train_params.h"

@@ -8,8 +8,8 @@
 #include <cmath>
 #include <random>
 
-#include "glimpse/classifiers.h"
 #include "glimpse/codebook.h"
+#include "glimpse/decision.h"
 
 using namespace glimpse;
 

@@ -9,6 +9,7 @@
 #include <map>
 
 #include "glimpse/classifiers.h"
+#include "glimpse/decision.h"
 #include "glimpse/model.h"
 #include "glimpse/train_params.h"
 #include "synthetic.h"
