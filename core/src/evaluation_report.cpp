@@ -101,12 +101,9 @@ void write_protocol(std::ostringstream& o, const EvalResult& r) {
     std::string train, test;
     for (const std::string& x : r.train_sources) train += (train.empty() ? "" : ", ") + x;
     for (const std::string& x : r.test_sources) test += (test.empty() ? "" : ", ") + x;
-    bool learnt_tested = false;  // a folder on both sides: the test objects were learnt (resubstitution)
-    for (const std::string& x : r.test_sources)
-      learnt_tested |= std::find(r.train_sources.begin(), r.train_sources.end(), x) != r.train_sources.end();
     o << "| cross-source | one model trained on every object of **" << train << "** (" << count(false)
       << "), tested on every view of **" << test << "** (" << count(true) << "); "
-      << (learnt_tested ? "**the tested objects were learnt too** (a source on both sides: resubstitution, not a held-out figure)"
+      << (tests_learnt_objects(r) ? "**the tested objects were learnt too** (a source on both sides: resubstitution, not a held-out figure)"
                         : "nothing of the test collections is learnt or calibrated on")
       << " | – |\n";
   }

@@ -106,6 +106,13 @@ std::string evolution_svg(const std::vector<ExplorationTrace>& traces, const std
   return o.str();
 }
 
+bool tests_learnt_objects(const EvalResult& r) {
+  if (!r.cross_source) return false;
+  for (const std::string& x : r.test_sources)
+    if (std::find(r.train_sources.begin(), r.train_sources.end(), x) != r.train_sources.end()) return true;
+  return false;
+}
+
 std::string summary_table(const EvalResult& r) {
   const std::vector<std::string> stages = main_stage_names(r);
   std::ostringstream o;

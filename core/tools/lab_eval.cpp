@@ -192,9 +192,10 @@ int run_eval(const EvalOptions& o) {
   for (const PhaseTiming& t : result->timings)
     std::fprintf(stderr, "  %-24s %7.1f s  %s\n", t.phase.c_str(), t.seconds, t.detail.c_str());
   if (result->cross_source)
-    std::printf("accuracy %% (paper in brackets), trained on %s, tested on %zu objects of %s:\n%s", o.train.c_str(),
-                tested_known_objects(*result),
-                o.test.c_str(), summary_table(*result).c_str());
+    std::printf("accuracy %% (paper in brackets), trained on %s, tested on %zu objects of %s%s:\n%s", o.train.c_str(),
+                tested_known_objects(*result), o.test.c_str(),
+                tests_learnt_objects(*result) ? " (learnt too: resubstitution, not a held-out figure)" : "",
+                summary_table(*result).c_str());
   else
     std::printf("accuracy %% (paper in brackets), %zu objects, %d folds:\n%s", objects.size(), params->folds,
                 summary_table(*result).c_str());

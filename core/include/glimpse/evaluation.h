@@ -284,6 +284,9 @@ std::string evolution_svg(const std::vector<ExplorationTrace>& traces, const std
 std::string open_set_section(const EvalResult& result);
 // A short plain-text accuracy table (method x main stage) for a terminal.
 std::string summary_table(const EvalResult& result);
+// A cross-source run whose test sources include a training one (--train X --test X): the tested objects
+// were learnt too, so its figures are resubstitution, not held out.
+bool tests_learnt_objects(const EvalResult& result);
 
 // report.md, decisions.csv, evolution_correct.svg, evolution_incorrect.svg, streams.csv in `dir` (created).
 Status write_report(const EvalResult& result, const std::string& dir);
