@@ -13,8 +13,8 @@
 #include <numbers>
 #include <random>
 #include <set>
-#include <tuple>
 #include <sstream>
+#include <tuple>
 
 #include "glimpse/evaluation.h"
 #include "lab_eval.h"
@@ -74,7 +74,7 @@ Status hold_out(std::vector<EvalObject>& objects, const std::string& list) {
 
 // --pick-objects N: N objects of each category of each source, drawn by the seed. The draw depends on
 // the source, the category and the ids alone, so a folder given on both sides (--train X --test X) tests
-// the very objects it learnt, as the paper's tables appear to (every figure is a multiple of 1/18: 3
+// the very objects it learnt, as the paper's tables appear to (57 of their 60 figures are k/18: 3
 // objects x 6 views per category).
 void pick_objects(std::vector<EvalObject>& objects, size_t n, uint64_t seed) {
   std::map<std::pair<std::string, std::string>, std::vector<std::string>> ids;  // (source, category) -> ids
