@@ -2,6 +2,7 @@
 // shared by train, classify and ScanSession.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <limits>
@@ -28,6 +29,9 @@ struct ModelImpl {
 };
 
 inline bool uses_keypoints(MethodId m) { return m == MethodId::kBoK || m == MethodId::kBoG || m == MethodId::kKGH; }
+inline bool needs(const std::vector<MethodId>& methods, MethodId m) {  // `methods` lists m
+  return std::find(methods.begin(), methods.end(), m) != methods.end();
+}
 
 // What the methods of a model need from one cloud.
 struct CloudFeatures {
