@@ -10,6 +10,8 @@
 #include <cctype>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <map>
 #include <set>
 
@@ -27,6 +29,40 @@ namespace {
 using namespace eval_internal;
 
 // ---- 5. per fold: train on the other folds' (or the training sources') views, classify its test views ----
+// --export-histograms: one row per cloud and method, the histogram the fold's model decides on
+// (method_histogram): its training clouds (whole views, then their prefixes) and every tested stage.
+// Objects are named as in decisions.csv.
+Status export_histograms(const Protocol& P, int fold, const ModelImpl& impl, const std::vector<size_t>& test_views) {
+  const std::filesystem::path path = std::filesystem::path(P.params.export_histograms_dir) / ("fold" + std::to_string(fold) + ".csv");
+  std::ofstream o(path);
+  if (!o) return invalid_argument("--export-histograms: cannot write " + path.string());
+  o << "set,category,object,view,stage,keypoints,method,histogram...\n";
+  auto rows = [&](const char* set, size_t v, const std::string& stage, const FeatureSlot& slot) {
+    const size_t object = static_cast<size_t>(P.views[v].object);
+    for (MethodId m : P.params.methods) {
+      if (m == MethodId::kFusion || !impl.stages[static_cast<int>(m)]) continue;
+      const Eigen::VectorXd h = method_histogram(impl, m, slot.features);
+      o << set << ',' << P.objects[object].category << ',' << P.r.object_ids[object] << ',' << P.views[v].view << ','
+        << stage << ',' << slot.features.positions.size() << ',' << method_name(m);
+      for (Eigen::Index i = 0; i < h.size(); ++i) o << ',' << h[i];
+      o << '\n';
+    }
+  };
+  for (size_t v = 0; v < P.views.size(); ++v) {
+    if (P.r.object_fold[static_cast<size_t>(P.views[v].object)] == fold || !P.learnt(v)) continue;
+    for (size_t k = 0; k < P.train_slots[v].size(); ++k)
+      if (const FeatureSlot& slot = P.slots[static_cast<size_t>(P.train_slots[v][k])]; slot.ok)
+        rows(k == 0 ? "train" : "train-prefix", v, k == 0 ? "full" : "prefix", slot);
+  }
+  for (size_t v : test_views)
+    for (size_t s = 0; s < P.stages.size(); ++s)
+      if (const int id = P.stage_slot[v][s]; id >= 0 && P.slots[static_cast<size_t>(id)].ok)
+        rows("test", v, stage_name(P.stages[s]), P.slots[static_cast<size_t>(id)]);
+  o.flush();
+  if (!o) return invalid_argument("--export-histograms: writing " + path.string() + " failed");
+  return {};
+}
+
 Status train_and_classify(Protocol& P) {
   EvalResult& r = P.r;
   const size_t n_cat = r.categories.size();
@@ -68,6 +104,8 @@ Status train_and_classify(Protocol& P) {
     train_seconds += seconds_since(t0);
     if (P.progress) P.progress({tag + ": train", 1, 1});
 
+    if (!P.params.export_histograms_dir.empty())
+      if (Status s = export_histograms(P, fold, *model->impl, test_views); !s.ok()) return s;
     t0 = Clock::now();
     std::vector<int> to_ours;
     for (const std::string& c : model->categories)

@@ -165,6 +165,14 @@ int run_eval(const EvalOptions& o) {
   }
   const double load_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
+  if (!o.export_histograms.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(o.export_histograms, ec);
+    if (ec) {
+      std::fprintf(stderr, "glimpse-lab eval: --export-histograms: cannot create %s: %s\n", o.export_histograms.c_str(), ec.message().c_str());
+      return 2;
+    }
+  }
   ProgressBar bar;
   auto result = run_evaluation(objects, *params, source, [&bar](const EvalProgress& p) { bar(p); });
   if (!result.ok()) {
@@ -274,6 +282,9 @@ void add_eval_command(CLI::App& app) {
   cmd->add_option("--pick-objects", o->pick_objects,
                   "N objects per category of every source, drawn by --seed; a folder given as both --train and "
                   "--test then tests the objects it learnt (the paper's tables hold 18 views, 3 objects, per category)");
+  cmd->add_option("--export-histograms", o->export_histograms,
+                  "folder: every fold's model writes the histograms it decides on (its training clouds and every "
+                  "tested stage, one row per cloud and method) to DIR/fold<k>.csv, to try other classifiers on them");
   cmd->add_option("--poses", o->poses,
                   "dataset: categories without a natural up (sizes.csv 'any-pose', by default mechanic) seen in a "
                   "random pose per view; given: every object as its file has it (the paper)")

@@ -116,6 +116,7 @@ Expected<EvalParams> params_from(const EvalOptions& o) {
     p.explore_max_keypoints = 0;
   if (!(o.stream_chunk >= 0 && o.stream_chunk < 1)) return invalid_argument("--stream-chunk must be in [0, 1)");
   p.stream_chunk_fraction = o.stream_chunk;
+  p.export_histograms_dir = o.export_histograms;
   p.cut_margin_supports = o.cut_margin;
   auto sensor = parse_sensor(o.sensor);
   if (!sensor.ok()) return Error{sensor.error().code, "--sensor: " + sensor.error().message};

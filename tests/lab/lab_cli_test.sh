@@ -34,8 +34,9 @@ if [[ $MODE == zoo ]]; then
   run 2 eval --zoo 3 --hold-out human,chair,table,mechanic --out "$TMP/x" && has "$TMP/err" "at least two learnt categories must remain"
   run 105 eval --zoo 3 --poses upright --out "$TMP/x" && has "$TMP/err" "--poses: upright not in \{dataset,given\}"
   # --pick-objects: N objects per category drawn by the seed; --poses given: no object turned.
+  # (and --export-histograms: what every fold's model decides on, as CSV)
   if run 0 eval --zoo 5 --pick-objects 2 --poses given --views 2 --methods ush --stages full --stream-chunk 0 \
-      --size-blind none --matrix none --out "$TMP/pick"; then
+      --size-blind none --matrix none --export-histograms "$TMP/hist" --out "$TMP/pick"; then
     has "$TMP/pick/report.md" "2 objects per category drawn by seed 42\) \(10 objects: human 2, chair 2, table 2, mechanic 2, fourleg 2\)"
     grep -q "turned to a random pose" "$TMP/pick/report.md" && fail "--poses given: the report says objects were turned"
     # Drawn, not the first two of each category (seed 42 draws human 3 and 4, chair 3 and 4, ...).
@@ -43,6 +44,24 @@ if [[ $MODE == zoo ]]; then
     [[ $picked == "chair/3 chair/4 fourleg/2 fourleg/3 human/3 human/4 mechanic/1 mechanic/3 table/0 table/3 " ]] ||
       fail "--pick-objects 2 --seed 42 picked $picked"
   fi
+  # --export-histograms: one file per fold; its test rows are that fold's tested views (2 objects x 2
+  # views, stage full), its training rows the other folds' objects only; USH rows hold 152 values.
+  for k in 0 1 2 3 4; do
+    F="$TMP/hist/fold$k.csv"
+    [[ -s $F ]] || { fail "--export-histograms wrote no $F"; continue; }
+    [[ $(head -1 "$F") == "set,category,object,view,stage,keypoints,method,histogram..." ]] || fail "$F header: $(head -1 "$F")"
+    tested=$(awk -F, -v k=$k '$1 == k && $5 == "ush" {print $2}' "$TMP/pick/decisions.csv" | sort -u | tr '\n' ' ')
+    exported=$(awk -F, '$1 == "test" {print $3}' "$F" | sort -u | tr '\n' ' ')
+    [[ -n $tested && $tested == "$exported" ]] || fail "fold $k: decisions test '$tested', the export '$exported'"
+    (($(awk -F, '$1 == "test" && $5 == "full" && $7 == "ush"' "$F" | wc -l) == 4)) || fail "fold $k: not 4 test rows"
+    learnt=$(awk -F, '$1 ~ /^train/ {print $3}' "$F" | sort -u | tr '\n' ' ')
+    for o in $tested; do [[ " $learnt" == *" $o "* ]] && fail "fold $k learns its tested object $o"; done
+    (($(awk -F, '$1 ~ /^train/' "$F" | wc -l) >= 16)) || fail "fold $k: fewer than 16 training rows (8 objects x 2 views)"
+    bad=$(awk -F, 'NR > 1 && NF != 7 + 152' "$F" | wc -l)
+    ((bad == 0)) || fail "fold $k: $bad rows without 152 USH values"
+  done
+  touch "$TMP/plain"
+  run 2 eval --zoo 3 --export-histograms "$TMP/plain/sub" --out "$TMP/x" && has "$TMP/err" "--export-histograms: cannot create .*plain/sub"
   # --hold-out: a learnt category tested as unknown, the open-set section from known data alone.
   if run 0 eval --zoo 4 --quick --views 2 --methods fusion --stages full --stream-chunk 0 --size-blind none --matrix none \
       --hold-out fourleg --out "$TMP/ho"; then

@@ -168,6 +168,10 @@ struct EvalParams {
   size_t matrix_views_per_object = 2;
   int threads = 0;  // 0 = all cores; results do not depend on it
   uint64_t seed = 42;
+  // Non-empty: every fold's model writes the histograms it computes, of its training clouds and of
+  // every tested stage, to DIR/fold<k>.csv (other classifiers can then be tried on exactly what the
+  // decision stages see). The folder must exist.
+  std::string export_histograms_dir;
   // threads and seed are taken from the fields above; train.partial_prefixes (fractions of each
   // training VIEW's points) are the top-down prefixes trained on besides the views.
   TrainParams train;
