@@ -28,7 +28,6 @@ namespace {
 
 using namespace eval_internal;
 
-// ---- 5. per fold: train on the other folds' (or the training sources') views, classify its test views ----
 // --export-histograms: one row per cloud and method, the histogram the fold's model decides on
 // (method_histogram): its training clouds (whole views, then their prefixes) and every tested stage.
 // Objects are named as in decisions.csv.
@@ -63,6 +62,7 @@ Status export_histograms(const Protocol& P, int fold, const ModelImpl& impl, con
   return {};
 }
 
+// ---- 5. per fold: train on the other folds' (or the training sources') views, classify its test views ----
 Status train_and_classify(Protocol& P) {
   EvalResult& r = P.r;
   const size_t n_cat = r.categories.size();

@@ -32,6 +32,7 @@ Status size_blind_ablation(EvalResult& result, const std::vector<EvalObject>& ob
   p.stream_chunk_fraction = 0;
   p.explore_max_keypoints = 0;
   p.matrix.clear();
+  p.export_histograms_dir.clear();  // --export-histograms holds the main run's histograms only
   const bool keypoints = std::any_of(p.methods.begin(), p.methods.end(), [](MethodId m) {
     return m == MethodId::kBoK || m == MethodId::kBoG || m == MethodId::kKGH;
   });
@@ -154,6 +155,7 @@ Status keypoint_ablation(EvalResult& result, const std::vector<EvalObject>& obje
   base.stream_chunk_fraction = 0;
   base.explore_max_keypoints = 0;
   base.matrix.clear();
+  base.export_histograms_dir.clear();  // --export-histograms holds the main run's histograms only
   const auto t0 = std::chrono::steady_clock::now();
   size_t decisions = 0;
   for (const Variant& v : keypoint_variants(base)) {

@@ -35,8 +35,9 @@ if [[ $MODE == zoo ]]; then
   run 105 eval --zoo 3 --poses upright --out "$TMP/x" && has "$TMP/err" "--poses: upright not in \{dataset,given\}"
   # --pick-objects: N objects per category drawn by the seed; --poses given: no object turned.
   # (and --export-histograms: what every fold's model decides on, as CSV)
-  if run 0 eval --zoo 5 --pick-objects 2 --poses given --views 2 --methods ush --stages full --stream-chunk 0 \
-      --size-blind none --matrix none --export-histograms "$TMP/hist" --out "$TMP/pick"; then
+  # (its size-blind re-run, of USH alone, must not overwrite them: VFH rows stay)
+  if run 0 eval --zoo 5 --pick-objects 2 --poses given --views 2 --methods ush,vfh --stages full --stream-chunk 0 \
+      --size-blind ush --matrix none --export-histograms "$TMP/hist" --out "$TMP/pick"; then
     has "$TMP/pick/report.md" "2 objects per category drawn by seed 42\) \(10 objects: human 2, chair 2, table 2, mechanic 2, fourleg 2\)"
     grep -q "turned to a random pose" "$TMP/pick/report.md" && fail "--poses given: the report says objects were turned"
     # Drawn, not the first two of each category (seed 42 draws human 3 and 4, chair 3 and 4, ...).
@@ -57,8 +58,9 @@ if [[ $MODE == zoo ]]; then
     learnt=$(awk -F, '$1 ~ /^train/ {print $3}' "$F" | sort -u | tr '\n' ' ')
     for o in $tested; do [[ " $learnt" == *" $o "* ]] && fail "fold $k learns its tested object $o"; done
     (($(awk -F, '$1 ~ /^train/' "$F" | wc -l) >= 16)) || fail "fold $k: fewer than 16 training rows (8 objects x 2 views)"
-    bad=$(awk -F, 'NR > 1 && NF != 7 + 152' "$F" | wc -l)
+    bad=$(awk -F, 'NR > 1 && $7 == "ush" && NF != 7 + 152' "$F" | wc -l)
     ((bad == 0)) || fail "fold $k: $bad rows without 152 USH values"
+    (($(awk -F, '$1 == "test" && $7 == "vfh"' "$F" | wc -l) == 4)) || fail "fold $k: not 4 VFH test rows (overwritten?)"
   done
   touch "$TMP/plain"
   run 2 eval --zoo 3 --export-histograms "$TMP/plain/sub" --out "$TMP/x" && has "$TMP/err" "--export-histograms: cannot create .*plain/sub"
