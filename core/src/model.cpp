@@ -1,18 +1,14 @@
 // Training (sec. 3.2.5-3.3.3, 4): features of every training cloud -> keypoint codebooks -> per-method
 // global histograms -> Bag-of-Features decision stages -> calibration on held-out folds.
 #include <algorithm>
-#include <atomic>
-#include <cctype>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <map>
 #include <set>
 #include <string>
 
 #include "glimpse/model.h"
 #include "glimpse/train_params.h"
-#include "glimpse/upright_histogram.h"
 #include "glimpse/views.h"
 #include "model_impl.h"
 #include "parallel.h"
