@@ -7,7 +7,7 @@ set -euo pipefail
 
 build_pkgs=(
   build-essential cmake ninja-build pkg-config git ca-certificates
-  libeigen3-dev libpcl-dev libnanoflann-dev libqhull-dev libembree-dev
+  libeigen3-dev libpcl-dev libnanoflann-dev libqhull-dev libembree-dev liblinear-dev
   libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc
   libsqlite3-dev sqlite3
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev
@@ -15,7 +15,7 @@ build_pkgs=(
   python3 python3-grpcio python3-grpc-tools python3-yaml
 )
 runtime_pkgs=(
-  libgrpc++1.51 libprotobuf32 libsqlite3-0 libqhull-r8.0 libgomp1 libembree3-3
+  libgrpc++1.51 libprotobuf32 libsqlite3-0 libqhull-r8.0 libgomp1 libembree3-3 liblinear4
   libpcl-common1.13 libpcl-features1.13 libpcl-search1.13 libpcl-kdtree1.13
   libpcl-filters1.13 libpcl-segmentation1.13 libpcl-sample-consensus1.13 libpcl-octree1.13
   libprometheus-cpp-core1.0 libprometheus-cpp-pull1.0 ca-certificates

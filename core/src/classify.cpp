@@ -56,6 +56,40 @@ Eigen::VectorXd method_histogram(const ModelImpl& impl, MethodId method, const C
   return {};
 }
 
+std::vector<MethodId> fusion_head_methods(const ModelImpl& impl) {
+  std::vector<MethodId> parts = component_methods(impl, MethodId::kFusion);
+  std::erase(parts, MethodId::kSize);
+  return parts;
+}
+
+Eigen::VectorXd fusion_head_features(const ModelImpl& impl, const std::function<Eigen::VectorXd(MethodId)>& histogram) {
+  std::vector<Eigen::VectorXd> histograms;
+  for (MethodId m : fusion_head_methods(impl)) histograms.push_back(histogram(m));
+  return additive_chi2_features(histograms, impl.params.fusion_head.sample_steps, impl.params.fusion_head.sample_interval);
+}
+
+Eigen::MatrixXd fusion_head_rows(const ModelImpl& impl, const std::vector<Eigen::MatrixXd>& histograms,
+                                 const std::vector<Eigen::Index>& rows) {
+  const std::vector<MethodId> parts = fusion_head_methods(impl);
+  if (parts.empty()) return {};
+  const Eigen::Index n = rows.empty() ? histograms[static_cast<size_t>(parts.front())].rows() : static_cast<Eigen::Index>(rows.size());
+  Eigen::MatrixXd out;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const Eigen::Index r = rows.empty() ? i : rows[static_cast<size_t>(i)];
+    const Eigen::VectorXd x = fusion_head_features(impl, [&](MethodId m) {
+      return Eigen::VectorXd(histograms[static_cast<size_t>(m)].row(r).transpose());
+    });
+    if (i == 0) out.resize(n, x.size());
+    out.row(i) = x.transpose();
+  }
+  return out;
+}
+
+Eigen::VectorXd fused_scores(const Eigen::VectorXd& mean, const Eigen::VectorXd& probabilities, double share) {
+  if (!(share > 0) || probabilities.size() != mean.size()) return mean;
+  return (1 - share) * mean + share * probabilities;
+}
+
 MethodDecision method_decision(const ModelImpl& impl, MethodId method, const CloudFeatures& f) {
   const std::vector<MethodId> parts = component_methods(impl, method);
   const Calibration& cal = impl.calibration;
@@ -79,7 +113,14 @@ MethodDecision method_decision(const ModelImpl& impl, MethodId method, const Clo
     }
   }
   out.scores /= static_cast<double>(std::max<size_t>(1, parts.size()));
+  // Novelty from the nearest references and their scores alone: the logistic decision is as sure of a
+  // cloud far from everything learnt as of a known one (a logistic score grows away from the boundary).
   if (calibrated) out.novelty = category_novelty(cal, nearest, out.scores);
+  if (method == MethodId::kFusion && impl.fusion_head && cal.fusion_head_share > 0) {
+    const Eigen::VectorXd features =
+        fusion_head_features(impl, [&](MethodId m) { return method_histogram(impl, m, f); });
+    out.scores = fused_scores(out.scores, chi2_logistic_probabilities(*impl.fusion_head, features), cal.fusion_head_share);
+  }
   return out;
 }
 

@@ -100,6 +100,7 @@ Status train_and_classify(Protocol& P) {
     P.fold_models.push_back(model);
     r.settle_margins.push_back(model->impl->calibration.settle_margin);
     r.calibration_accuracy.push_back(model->impl->calibration.held_out_accuracy);
+    r.fusion_head_shares.push_back(model->impl->fusion_head ? model->impl->calibration.fusion_head_share : 0.0);
     r.novelty_thresholds.push_back(model->impl->calibration.novelty_threshold);
     train_seconds += seconds_since(t0);
     if (P.progress) P.progress({tag + ": train", 1, 1});

@@ -201,6 +201,17 @@ void write_protocol(std::ostringstream& o, const EvalResult& r) {
                                                            : "on the histograms (BoG reduced to " + std::to_string(t.bog_pca_dims) +
                                                                  " dims)")
     << " | one K-means centre per category, L1 |\n";
+  if (needs(p.methods, MethodId::kFusion) && t.fusion_head.c > 0) {
+    o << "| fusion's logistic decision | (1 - w) x the mean of the components' scores + w x a one-vs-rest logistic "
+         "regression (LIBLINEAR, C " << fmt("%g", t.fusion_head.c) << ") over each histogram's additive chi2 map ("
+      << t.fusion_head.sample_steps << " steps, interval " << fmt("%g", t.fusion_head.sample_interval)
+      << "); w of ";
+    for (size_t i = 0; i < t.fusion_head_shares.size(); ++i) o << (i ? ", " : "") << fmt("%g", t.fusion_head_shares[i]);
+    o << ", the one most often right on held-out folds of the model's own training objects (" << t.calibration_folds
+      << " inner folds); w per model:";
+    for (size_t i = 0; i < r.fusion_head_shares.size(); ++i) o << (i ? "," : "") << " " << fmt("%g", r.fusion_head_shares[i]);
+    o << " | – |\n";
+  }
   o << "| exploration grid (category changes) | keypoint counts ";
   for (size_t i = 0; i < r.grid.size(); ++i) o << (i ? ", " : "") << r.grid[i];
   o << (p.explore_step > 1 ? " (coarser than the paper's every keypoint: changes between grid points are not seen)" : "")

@@ -289,6 +289,14 @@ Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainP
   if (needs(model.methods, MethodId::kFusion) && component_methods(*impl, MethodId::kFusion).empty())
     return invalid_argument("fusion needs at least one of its component methods (fusion_of)");
   model.default_method = needs(model.methods, params.default_method) ? params.default_method : model.methods.front();
+  // 3b. The fusion's logistic decision over its components' histograms (its share is calibrated below).
+  if (needs(model.methods, MethodId::kFusion) && params.fusion_head.c > 0 && model.categories.size() >= 2 &&
+      !fusion_head_methods(*impl).empty()) {
+    auto head = fit_chi2_logistic(fusion_head_rows(*impl, histograms), labels, static_cast<int>(model.categories.size()),
+                                  params.fusion_head);
+    if (!head.ok()) return with_method(MethodId::kFusion, head.error());
+    impl->fusion_head = std::move(*head);
+  }
   // 4. Calibration of the default method on held-out folds of the training objects.
   report("calibration", 0, 1);
   std::vector<std::string> object_categories(object_index.size());

@@ -8,6 +8,7 @@
 #include <limits>
 #include <optional>
 
+#include "glimpse/chi2_logistic.h"
 #include "glimpse/classifiers.h"
 #include "glimpse/decision.h"
 #include "glimpse/features.h"
@@ -26,6 +27,10 @@ struct ModelImpl {
   GraphVocabulary graphs;
   float kgh_max_distance_m = 1;
   std::array<std::optional<DecisionStage>, kMethodCount> stages;  // indexed by MethodId; never kFusion
+  // The fusion's logistic decision over its components' histograms (fusion_head_methods), its share of
+  // the fusion's scores in calibration.fusion_head_share. None: a model of format 6 or older, or trained
+  // without one.
+  std::optional<Chi2Logistic> fusion_head;
 };
 
 inline bool uses_keypoints(MethodId m) { return m == MethodId::kBoK || m == MethodId::kBoG || m == MethodId::kKGH; }
@@ -105,7 +110,18 @@ Calibration calibrate(const ModelImpl& impl, MethodId method, const std::vector<
 // A failed precondition naming both versions when the model's features were computed differently.
 Status check_feature_version(const Model& model);
 
-// Scores of `method` (fusion: the mean of its components' scores).
+// The components of the fusion its logistic decision reads (every one but the size-only baseline),
+// and a cloud's mapped features from their histograms (`histogram(m)` of each).
+std::vector<MethodId> fusion_head_methods(const ModelImpl& impl);
+Eigen::VectorXd fusion_head_features(const ModelImpl& impl, const std::function<Eigen::VectorXd(MethodId)>& histogram);
+// The mapped features of every row of `histograms` (indexed by MethodId, rows aligned; `rows` empty: all).
+Eigen::MatrixXd fusion_head_rows(const ModelImpl& impl, const std::vector<Eigen::MatrixXd>& histograms,
+                                 const std::vector<Eigen::Index>& rows = {});
+// The fusion's scores: the mean of its components' scores, with `share` of the head's probabilities
+// (`probabilities` empty or share 0: the mean alone).
+Eigen::VectorXd fused_scores(const Eigen::VectorXd& mean, const Eigen::VectorXd& probabilities, double share);
+
+// Scores of `method` (fusion: the mean of its components' scores, with the head's share).
 Eigen::VectorXd method_scores(const ModelImpl& impl, MethodId method, const CloudFeatures& f);
 
 // One component's nearest references: per category, the cloud's distance to it (over its

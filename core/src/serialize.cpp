@@ -31,7 +31,9 @@ constexpr char kMagic[8] = {'G', 'L', 'M', 'P', 'S', 'M', 'D', 'L'};
 // after the novelty threshold, novelty_over_score (format 4 reads false: its quantiles are without it).
 // 6: after it, a u32 count and each category's novelty object count, a u32 component count and per
 // component each reference's training object (format 5 reads none: the nearest reference alone).
-constexpr uint32_t kFormatVersion = 6;
+// 7: after the calibration, a u8 (1: the fusion's logistic decision follows: i32 feature map steps, f64
+// its interval, its weights and biases, f64 its share of the fusion's scores; format 6 reads none).
+constexpr uint32_t kFormatVersion = 7;
 constexpr uint32_t kOldestReadableVersion = 1;
 
 uint32_t crc32(const uint8_t* data, size_t n) {
@@ -180,6 +182,14 @@ std::vector<uint8_t> serialize(const Model& model) {
       if (s) write_stage(w, *s);
     }
     write_calibration(w, m.calibration);
+    w.u8(m.fusion_head ? 1 : 0);
+    if (m.fusion_head) {
+      w.i32(m.fusion_head->sample_steps);
+      w.f64(m.fusion_head->sample_interval);
+      w.mat(m.fusion_head->weights);
+      w.vec(m.fusion_head->bias);
+      w.f64(m.calibration.fusion_head_share);
+    }
   }
 
   Writer out;
@@ -290,6 +300,26 @@ Expected<Model> deserialize(std::span<const uint8_t> bytes) {
         r.fail(std::string("decision stage of ") + method_name(method) + " missing or unexpected");
     }
     if (version >= 3 && !r.failed()) read_calibration(r, impl->calibration, ncat, *impl, version);
+    if (version >= 7 && !r.failed() && r.u8("fusion head flag") == 1) {
+      Chi2Logistic head;
+      head.sample_steps = r.i32("fusion head steps");
+      head.sample_interval = r.f64("fusion head interval");
+      head.weights = r.mat("fusion head weights");
+      head.bias = r.vec("fusion head bias");
+      const double share = r.f64("fusion head share");
+      Eigen::Index mapped = 0;
+      for (MethodId m : fusion_head_methods(*impl)) mapped += sizes[static_cast<int>(m)];
+      mapped *= 2 * static_cast<Eigen::Index>(head.sample_steps) - 1;
+      if (!r.failed() && (head.sample_steps < 1 || head.sample_steps > 16 || !(head.sample_interval > 0) ||
+                          head.weights.rows() != static_cast<Eigen::Index>(ncat) || head.weights.cols() != mapped ||
+                          head.bias.size() != static_cast<Eigen::Index>(ncat) || !(share >= 0 && share <= 1) ||
+                          !head.weights.allFinite() || !head.bias.allFinite()))
+        r.fail("inconsistent fusion logistic decision");
+      impl->params.fusion_head.sample_steps = head.sample_steps;
+      impl->params.fusion_head.sample_interval = head.sample_interval;
+      impl->calibration.fusion_head_share = share;
+      impl->fusion_head = std::move(head);
+    }
     model.impl = std::move(impl);
   }
   if (!r.failed() && r.left() != 0) r.fail(std::to_string(r.left()) + " unexpected trailing bytes");

@@ -35,6 +35,7 @@ struct EvalOptions {
   std::string train_elevations;  // extra training-only views, degrees above the horizon
   std::string decision = "nearest";
   std::string fusion_of;
+  double fusion_head_c = -1;  // < 0: the recogniser's; 0: no logistic decision in the fusion
   int neighbours = 0;
   double pca_variance = 0;
   int pca_dims = 0;

@@ -91,6 +91,7 @@ Expected<EvalParams> params_from(const EvalOptions& o) {
       p.train.fusion_of.push_back(*m);
     }
   }
+  if (o.fusion_head_c >= 0) p.train.fusion_head.c = o.fusion_head_c;
   if (o.neighbours > 0) p.train.decision.neighbours = o.neighbours;
   if (o.tilt >= 0) p.train.tilt_deg = o.tilt;
   if (o.pca_variance > 0) p.train.decision.pca_explained_variance = o.pca_variance;

@@ -1,4 +1,4 @@
-// Model bytes of formats 3, 4 and 5 made from a format-6 model, for tests and benchmarks of models
+// Model bytes of formats 3, 4, 5 and 6 made from a format-7 model, for tests and benchmarks of models
 // written before novelty existed ("none of these"; format 3 has no novelty block), before novelty was
 // divided by the decision's score (format 4 lacks that byte) or before it was measured over several
 // training objects (format 5 lacks the reference objects that end the payload).
@@ -8,7 +8,9 @@
 #include <cstring>
 #include <vector>
 
+#include "glimpse/global_descriptors.h"
 #include "glimpse/model.h"
+#include "glimpse/upright_histogram.h"
 
 namespace glimpse::test {
 
@@ -29,11 +31,36 @@ inline std::vector<uint8_t> with_version(std::vector<uint8_t> bytes, uint32_t ve
   return bytes;
 }
 
+// Format 6 is format 7 without the fusion's logistic decision that ends the payload (serialize.cpp): its
+// flag byte and, when the flag is 1, the decision of a USH + VFH fusion (the only kind tests train): i32
+// steps (2), f64 interval, the weights (u32 rows = categories, u32 cols, values), the biases, the share.
+inline std::vector<uint8_t> as_format_6(std::vector<uint8_t> bytes, size_t categories) {
+  if (bytes.size() < 25) return {};
+  const size_t payload = bytes.size() - 24;
+  const size_t features = 3 * static_cast<size_t>(kUprightHistogramSize + kVfhSize);
+  const size_t head = 1 + 4 + 8 + 8 + 8 * categories * features + 4 + 8 * categories + 8;
+  auto u32_at = [&](size_t at) {
+    uint32_t v;
+    std::memcpy(&v, bytes.data() + at, 4);
+    return v;
+  };
+  size_t block = 1;
+  if (const size_t at = 20 + payload - head; payload > head && bytes[at] == 1 && u32_at(at + 1) == 2 &&
+                                              u32_at(at + 13) == categories && u32_at(at + 17) == features)
+    block = head;
+  else if (bytes[20 + payload - 1] != 0)
+    return {};
+  bytes.erase(bytes.end() - 4 - static_cast<std::ptrdiff_t>(block), bytes.end() - 4);
+  return with_version(std::move(bytes), 6, payload - block);
+}
+
 // Format 5 is format 6 without the block that ends the payload: a u32 count and the u32 novelty object
 // count of each category, u32 components, per component a u32 count and the u32 object of each reference.
 inline std::vector<uint8_t> as_format_5(std::vector<uint8_t> bytes, const Calibration& c) {
+  bytes = as_format_6(std::move(bytes), c.novelty_objects.size());
   size_t block = 8 + 4 * c.novelty_objects.size();
   for (const auto& objects : c.reference_object) block += 4 + 4 * objects.size();
+  if (bytes.size() < 24) return {};
   const size_t payload = bytes.size() - 24;
   if (payload <= block) return {};
   bytes.erase(bytes.end() - 4 - static_cast<std::ptrdiff_t>(block), bytes.end() - 4);

@@ -244,6 +244,7 @@ struct EvalResult {
   std::vector<StreamTrace> streams;         // of change_method, every tested view
   std::vector<double> settle_margins;       // per model: calibrated on held-out folds of its training set
   std::vector<double> calibration_accuracy; // per model: its held-out decisions' share right
+  std::vector<double> fusion_head_shares;   // per model: the logistic decision's share in the fusion (Calibration)
   std::vector<PhaseTiming> timings;
   double total_seconds = 0;
   int threads = 1;

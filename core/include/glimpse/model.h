@@ -103,6 +103,9 @@ struct Calibration {
   bool novelty_over_score = true;
   double known_acceptance = 0.95;  // the model's default operating point (TrainParams::known_acceptance)
   double novelty_threshold = std::numeric_limits<double>::quiet_NaN();  // at known_acceptance; NaN: none
+  // The share of the fusion's logistic decision in its scores (TrainParams::fusion_head_shares), chosen
+  // on the held-out decisions above; 0: none (a model of format 6 or older, or no head).
+  double fusion_head_share = 0;
 };
 
 struct ModelImpl;  // codebooks, bases, centres: defined in core/src (model_impl.h)

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "glimpse/chi2_logistic.h"
 #include "glimpse/features.h"
 #include "glimpse/global_descriptors.h"
 #include "glimpse/model.h"
@@ -59,6 +60,12 @@ struct TrainParams {
   // functions follow how a collection is modelled); the keypoint methods, far weaker on partial
   // views, pull the mean down.
   std::vector<MethodId> fusion_of = {MethodId::kUSH, MethodId::kVFH};
+  // Beside the nearest-reference mean, the fusion's scores take a share of a logistic decision over its
+  // components' histograms (chi2_logistic.h; the size-only baseline is not a histogram and stays out):
+  // (1 - w) x mean + w x probabilities, w the share of fusion_head_shares whose held-out decisions
+  // (calibration_folds) are most often right, the smallest on a tie; 0 there: none. c <= 0: no head.
+  Chi2LogisticParams fusion_head;
+  std::vector<double> fusion_head_shares = {0, 0.05, 0.1, 0.15, 0.2, 0.3};
 
   // Train on what will be seen: besides each training cloud, its top-down prefixes holding these
   // fractions of its points (sec. 4's exploration order), as samples of the same object. A scan is

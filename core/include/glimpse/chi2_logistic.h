@@ -1,0 +1,41 @@
+// A learnt decision over the fusion's histograms, beside its nearest-reference scores: the histograms
+// mapped so that a dot product approximates the additive chi-squared kernel (Vedaldi & Zisserman 2012,
+// "Efficient additive kernels via explicit feature maps"), then one-vs-rest L2-regularised logistic
+// regression (LIBLINEAR). Nearest references remember every training view; this weighs every bin over
+// all of them, so it holds up where an object of another modeller has no close neighbour.
+#pragma once
+
+#include <vector>
+
+#include "glimpse/expected.h"
+#include <Eigen/Core>
+
+namespace glimpse {
+
+struct Chi2LogisticParams {
+  double c = 10;             // inverse regularisation strength (LIBLINEAR's C)
+  int sample_steps = 2;      // terms of the feature map per bin: 2 x steps - 1
+  double sample_interval = 0.5;
+};
+
+struct Chi2Logistic {
+  int sample_steps = 2;
+  double sample_interval = 0.5;
+  Eigen::MatrixXd weights;  // categories x mapped features
+  Eigen::VectorXd bias;     // per category
+};
+
+// Each histogram divided by its L1 mass (negative bins as 0), mapped, and the maps concatenated. A
+// histogram of no mass maps to zeros.
+Eigen::VectorXd additive_chi2_features(const std::vector<Eigen::VectorXd>& histograms, int sample_steps,
+                                       double sample_interval);
+
+// Rows of `features` (additive_chi2_features) with `labels` in [0, categories), every category present.
+// Deterministic (LIBLINEAR's primal trust-region solver draws nothing at random).
+Expected<Chi2Logistic> fit_chi2_logistic(const Eigen::MatrixXd& features, const std::vector<int>& labels, int categories,
+                                         const Chi2LogisticParams& params);
+
+// Per category, its one-vs-rest probability, normalised to sum to 1 (LIBLINEAR's predict_probability).
+Eigen::VectorXd chi2_logistic_probabilities(const Chi2Logistic& head, const Eigen::VectorXd& features);
+
+}  // namespace glimpse

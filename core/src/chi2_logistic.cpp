@@ -1,0 +1,110 @@
+#include "glimpse/chi2_logistic.h"
+
+#include <linear.h>
+
+#include <cmath>
+#include <memory>
+#include <mutex>
+#include <numbers>
+#include <string>
+
+namespace glimpse {
+
+Eigen::VectorXd additive_chi2_features(const std::vector<Eigen::VectorXd>& histograms, int sample_steps,
+                                       double sample_interval) {
+  const int steps = std::max(1, sample_steps);
+  Eigen::Index total = 0;
+  for (const Eigen::VectorXd& h : histograms) total += h.size() * (2 * steps - 1);
+  Eigen::VectorXd out = Eigen::VectorXd::Zero(total);
+  Eigen::Index at = 0;
+  for (const Eigen::VectorXd& h : histograms) {
+    const Eigen::Index d = h.size();
+    const double mass = h.cwiseMax(0.0).sum();
+    for (Eigen::Index i = 0; i < d && mass > 0; ++i) {
+      const double x = std::max(h[i], 0.0) / mass;
+      if (x <= 0) continue;
+      const double L = sample_interval;
+      out[at + i] = std::sqrt(x * L);  // the kernel's spectrum at 0
+      for (int j = 1; j < steps; ++j) {  // and at j L: sqrt(2 x L sech(pi j L)) (cos, sin)(j L log x)
+        const double factor = std::sqrt(2 * x * L / std::cosh(std::numbers::pi * j * L));
+        out[at + (2 * j - 1) * d + i] = factor * std::cos(j * L * std::log(x));
+        out[at + 2 * j * d + i] = factor * std::sin(j * L * std::log(x));
+      }
+    }
+    at += d * (2 * steps - 1);
+  }
+  return out;
+}
+
+namespace {
+void quiet(const char*) {}
+}  // namespace
+
+Expected<Chi2Logistic> fit_chi2_logistic(const Eigen::MatrixXd& features, const std::vector<int>& labels, int categories,
+                                         const Chi2LogisticParams& params) {
+  if (categories < 2) return invalid_argument("a logistic decision needs at least 2 categories");
+  if (features.rows() != static_cast<Eigen::Index>(labels.size()) || features.rows() < 2 || features.cols() < 1)
+    return invalid_argument("the logistic decision needs at least 2 labelled training rows");
+  if (!(params.c > 0)) return invalid_argument("the logistic decision's C must be positive");
+  std::vector<int> seen(static_cast<size_t>(categories), 0);
+  for (int l : labels) {
+    if (l < 0 || l >= categories) return internal_error("a training label is out of range");
+    seen[static_cast<size_t>(l)] = 1;
+  }
+  for (int c = 0; c < categories; ++c)
+    if (!seen[static_cast<size_t>(c)]) return invalid_argument("category " + std::to_string(c) + " has no training row");
+  static std::once_flag silenced;
+  std::call_once(silenced, [] { set_print_string_function(&quiet); });
+
+  // The problem in LIBLINEAR's sparse rows: 1-based indices, a bias feature (value 1) last, -1 ends a row.
+  const int n = static_cast<int>(features.cols());
+  std::vector<feature_node> nodes;
+  std::vector<size_t> starts;
+  for (Eigen::Index r = 0; r < features.rows(); ++r) {
+    starts.push_back(nodes.size());
+    for (int c = 0; c < n; ++c)
+      if (features(r, c) != 0) nodes.push_back({c + 1, features(r, c)});
+    nodes.push_back({n + 1, 1.0});
+    nodes.push_back({-1, 0.0});
+  }
+  std::vector<feature_node*> rows;
+  for (size_t s : starts) rows.push_back(nodes.data() + s);
+  std::vector<double> y(labels.begin(), labels.end());
+  problem prob{};
+  prob.l = static_cast<int>(features.rows());
+  prob.n = n + 1;
+  prob.y = y.data();
+  prob.x = rows.data();
+  prob.bias = 1;
+  parameter param{};
+  param.solver_type = L2R_LR;
+  param.eps = 1e-4;
+  param.C = params.c;
+  if (const char* why = check_parameter(&prob, &param)) return internal_error(std::string("LIBLINEAR: ") + why);
+  std::unique_ptr<model, void (*)(model*)> fitted(train(&prob, &param), [](model* m) { free_and_destroy_model(&m); });
+  if (!fitted) return internal_error("LIBLINEAR trained no model");
+
+  Chi2Logistic head;
+  head.sample_steps = params.sample_steps;
+  head.sample_interval = params.sample_interval;
+  head.weights = Eigen::MatrixXd::Zero(categories, n);
+  head.bias = Eigen::VectorXd::Zero(categories);
+  std::vector<int> label(static_cast<size_t>(get_nr_class(fitted.get())));
+  get_labels(fitted.get(), label.data());
+  for (size_t k = 0; k < label.size(); ++k) {
+    const int c = label[k];
+    for (int f = 0; f < n; ++f) head.weights(c, f) = get_decfun_coef(fitted.get(), f + 1, static_cast<int>(k));
+    head.bias[c] = get_decfun_bias(fitted.get(), static_cast<int>(k));
+  }
+  return head;
+}
+
+Eigen::VectorXd chi2_logistic_probabilities(const Chi2Logistic& head, const Eigen::VectorXd& features) {
+  if (features.size() != head.weights.cols() || head.weights.rows() == 0) return {};
+  const Eigen::VectorXd decision = head.weights * features + head.bias;
+  Eigen::VectorXd p = (1.0 + (-decision.array()).exp()).inverse().matrix();
+  const double total = p.sum();
+  return total > 0 ? Eigen::VectorXd(p / total) : Eigen::VectorXd::Constant(p.size(), 1.0 / double(p.size()));
+}
+
+}  // namespace glimpse
