@@ -373,11 +373,10 @@ TEST(RunEvaluation, ReducedProtocolOnTheZooIsWellAboveChance) {
   }
   // Chance is 20 %. Measured (zoo 4 per category, seed 3, 2 folds, 3 views, 3000 points; parts in random
   // poses, training views tilted up to 5 degrees, fusion of USH and VFH, VFH over the surfaces' normals):
-  // full view fusion 95.0 %, VFH 55.0 %, 20 % visible fusion 93.3 % (83.3 / 83.3 before the fusion's
-  // logistic decision); streams: 71.7 % settle, at 11.7 % visible on average, all right. 60 test views:
-  // one view is 1.7 points.
-  EXPECT_GE(accuracy(r->decisions, "full", MethodId::kFusion).percent(), 93.0);  // measured 95.0
-  EXPECT_GE(accuracy(r->decisions, "20%", MethodId::kFusion).percent(), 91.0);   // measured 93.3
+  // full view fusion 83.3 %, VFH 55.0 %, 20 % visible fusion 83.3 %; streams: 66.7 % settle, at 9.8 %
+  // visible on average, all right. 60 test views: one view is 1.7 points.
+  EXPECT_GE(accuracy(r->decisions, "full", MethodId::kFusion).percent(), 80.0);  // measured 83.3
+  EXPECT_GE(accuracy(r->decisions, "20%", MethodId::kFusion).percent(), 80.0);   // measured 83.3
   EXPECT_GE(accuracy(r->decisions, "full", MethodId::kVFH).percent(), 51.0);     // measured 55.0
   EXPECT_FALSE(markdown_report(*r).empty());
   // Every test view streamed once, top to bottom, one entry per chunk, visible fraction growing.
@@ -391,8 +390,8 @@ TEST(RunEvaluation, ReducedProtocolOnTheZooIsWellAboveChance) {
   // A view settled as "unknown" counts wrong (issue 20: the default operating point accepts 95 % of
   // held-out known clouds); before unknown could settle, 100 % of 40. Since "unknown" needs the newest
   // chunk's own novelty too: 39 of 39 settled views right (was 39 of 40 settled, 97.5 % right).
-  EXPECT_GE(settled.precision_percent(), 97.0);  // measured 100 (43 of the 60 views settled; 39 before the logistic decision)
-  EXPECT_GE(settled.settled_percent(), 68.0);    // measured 71.7
+  EXPECT_GE(settled.precision_percent(), 97.0);  // measured 100 (39 of the 60 views settled)
+  EXPECT_GE(settled.settled_percent(), 62.0);    // measured 65.0
   std::cout << "zoo reduced: full fusion " << accuracy(r->decisions, "full", MethodId::kFusion).percent() << " %, VFH "
             << accuracy(r->decisions, "full", MethodId::kVFH).percent() << " %, 20 % fusion "
             << accuracy(r->decisions, "20%", MethodId::kFusion).percent() << " %; streams settled "
@@ -485,13 +484,12 @@ TEST(RunEvaluation, SensorTestViewsAndTheRobustnessMatrix) {
   std::cout << "zoo, depth camera test views: fusion full " << full << " %; matrix ideal full " << ideal.accuracy[0]
             << " %, 20 % " << ideal.accuracy[2] << " %; floor + outliers full " << residue.accuracy[0] << " %, 20 % "
             << residue.accuracy[2] << " % (ground on " << residue.ground_views << " of " << residue.views << ")\n";
-  // Measured (zoo 4 per category, seed 3, 2 folds, 3 views, 3000 points): depth camera test views 86.7 %
-  // full (60 views, one is 1.7 points); matrix (20 views, one is 5 points): ideal 90 / 90 (full / 20 %),
-  // depth camera with floor and 2 % outliers 85 / 85 (81.7, 80 / 75, 80 / 80 before the fusion's logistic
-  // decision).
-  EXPECT_GE(full, 84.0);                      // measured 86.7
-  EXPECT_GE(residue.accuracy[0], 80.0);       // measured 85
-  EXPECT_GE(residue.accuracy[2], 80.0);       // measured 85
+  // Measured (zoo 4 per category, seed 3, 2 folds, 3 views, 3000 points): depth camera test views 81.7 %
+  // full (60 views, one is 1.7 points); matrix (20 views, one is 5 points): ideal 80 / 75 (full / 20 %),
+  // depth camera with floor and 2 % outliers 80 / 80.
+  EXPECT_GE(full, 78.0);                      // measured 81.7
+  EXPECT_GE(residue.accuracy[0], 75.0);       // measured 80
+  EXPECT_GE(residue.accuracy[2], 75.0);       // measured 80
   // Same answers on one thread.
   EvalParams one = p;
   one.threads = 1;
@@ -532,15 +530,14 @@ TEST(RunEvaluation, CrossSourceTrainsOneModelOnOneSourceAndTestsOnlyTheOther) {
   EXPECT_NE(report.find("cross-source"), std::string::npos);
   EXPECT_NE(report.find("How much is size"), std::string::npos);
   // Chance is 20 %: a model of 4 zoo objects per category on 3 others of another seed (45 views, one is
-  // 2.2 points). Measured: fusion full / 20 % 86.7 / 95.6 (86.7 / 86.7 before the fusion's logistic
-  // decision), USH full 91.1, size only full 60.0.
+  // 2.2 points). Measured: fusion full / 20 % 86.7 / 86.7, USH full 91.1, size only full 60.0.
   const double fusion_full = accuracy(r->decisions, "full", MethodId::kFusion).percent();
   const double fusion_20 = accuracy(r->decisions, "20%", MethodId::kFusion).percent();
   std::cout << "two zoos: fusion full " << fusion_full << " %, 20 % " << fusion_20 << " %, size only full "
             << accuracy(r->decisions, "full", MethodId::kSize).percent() << " %, USH full "
             << accuracy(r->decisions, "full", MethodId::kUSH).percent() << " %\n";
   EXPECT_GE(fusion_full, 82.0);  // measured 86.7
-  EXPECT_GE(fusion_20, 93.0);    // measured 95.6
+  EXPECT_GE(fusion_20, 82.0);    // measured 86.7
   // Cross-validated and test-only objects do not mix; training-only ones may join a cross-validation.
   std::vector<EvalObject> mixed = with_role(zoo_objects(2, 3), EvalRole::kCrossValidate, "zoo-a");
   mixed.push_back(test.front());
@@ -628,8 +625,8 @@ TEST(RunEvaluation, AZooCategoryHeldOutComesOutNovel) {
   std::cout << "zoo, fourleg unknown: AUROC full " << rows[0].auroc << ", 20 % " << rows[1].auroc
             << "; known accepted " << rows[0].known_acceptance << " %, unknown accepted " << rows[0].false_acceptance
             << " % (full)\n";
-  EXPECT_GE(rows[0].auroc, 0.73);  // measured 0.744 (0.751 before the fusion's logistic decision)
-  EXPECT_GE(rows[1].auroc, 0.88);  // measured 0.898 (0.902)
+  EXPECT_GE(rows[0].auroc, 0.73);  // measured 0.751
+  EXPECT_GE(rows[1].auroc, 0.88);  // measured 0.902
   const std::string report = markdown_report(*r);
   EXPECT_NE(report.find("## Open set"), std::string::npos);
   EXPECT_NE(decisions_csv(*r).find(",unknown:fourleg,"), std::string::npos);
@@ -711,8 +708,8 @@ TEST(RunEvaluation, ReducedProtocolOnShrec) {
   ASSERT_TRUE(r.ok()) << r.error().message;
   // Floors just under what was measured (10 objects per category, 2 folds, 3 views, 3000 points, seed 42;
   // 150 test views, one is 0.7 points); raise them as recognition improves.
-  EXPECT_GE(accuracy(r->decisions, "full", MethodId::kFusion).percent(), 95.5);  // measured 97.3 (95.3 before the logistic decision)
-  EXPECT_GE(accuracy(r->decisions, "20%", MethodId::kFusion).percent(), 96.0);   // measured 98.0 (96.0)
+  EXPECT_GE(accuracy(r->decisions, "full", MethodId::kFusion).percent(), 93.0);  // measured 95.3
+  EXPECT_GE(accuracy(r->decisions, "20%", MethodId::kFusion).percent(), 93.0);   // measured 96.0
   EXPECT_GE(accuracy(r->decisions, "full", MethodId::kBoK).percent(), 48.0);     // measured 50.7
   const SettleRow settled = settle_summary(r->streams, -1);
   // Settling needs the winner to hold a whole window, the newest chunk included: later, righter.
@@ -720,10 +717,9 @@ TEST(RunEvaluation, ReducedProtocolOnShrec) {
   // right, at 11.5 % visible once "unknown" needs the newest chunk's own novelty too; 80.7 % settled,
   // 89.3 % right, at 11.4 % visible before (76.7 / 94.8 / 11.6 before novelty was divided by the decision's
   // score); without it 78.7 / 97.5 / 10.6 (86.7 / 97.7 / 10.2 before the calibration decided held-out
-  // clouds untilted, as they come from a sensor). With the fusion's logistic decision: 97.3 % settled,
-  // 95.9 % right, at 11.4 % visible.
-  EXPECT_GE(settled.settled_percent(), 95.0);    // measured 97.3 (146 of 150 views)
-  EXPECT_GE(settled.precision_percent(), 93.5);  // measured 95.9
+  // clouds untilted, as they come from a sensor).
+  EXPECT_GE(settled.settled_percent(), 77.0);    // measured 79.3 (119 of 150 views)
+  EXPECT_GE(settled.precision_percent(), 89.5);  // measured 90.8
   EXPECT_LE(settled.mean_visible_percent, 12.5); // measured 11.5
   std::cout << "shrec reduced: full fusion " << accuracy(r->decisions, "full", MethodId::kFusion).percent()
             << " %, 20 % fusion " << accuracy(r->decisions, "20%", MethodId::kFusion).percent() << " %, full BoK "
@@ -766,17 +762,16 @@ TEST(RunEvaluation, ReducedCrossSourceShrecToPsb) {
             << " %, size only full " << size << " %; streams settled " << settled.settled_percent() << " % at "
             << settled.mean_visible_percent << " % visible, precision " << settled.precision_percent() << " %\n";
   // 10 SHREC objects per category -> 8 PSB objects per category (6 parts), 3 views, 3000 points, seed 42:
-  // 114 test views, one is 0.9 points. Measured: fusion 94.7 / 97.4 / 95.6 (full / 10 % / 20 %; 92.1 / 93.0 /
-  // 92.1 before the fusion's logistic decision), size only 71.1 on full views; streams settle on all views
-  // at 11.6 % visible, 93.9 % of them right.
-  EXPECT_GE(full, 92.0);  // measured 94.7
-  EXPECT_GE(p10, 95.0);   // measured 97.4
-  EXPECT_GE(p20, 93.0);   // measured 95.6
+  // 114 test views, one is 0.9 points. Measured: fusion 92.1 / 93.0 / 92.1 (full / 10 % / 20 %), size only
+  // 71.1 on full views; streams settle on all views at 6.4 % visible, 94.7 % of them right.
+  EXPECT_GE(full, 89.0);  // measured 92.1
+  EXPECT_GE(p10, 90.0);   // measured 93.0
+  EXPECT_GE(p20, 89.0);   // measured 92.1
   EXPECT_GT(full, size + 15);  // shape adds to what a ruler gets right
-  EXPECT_GE(settled.settled_percent(), 97.0);    // measured 100 (99.1 before the logistic decision, 98.2 before "unknown" needed the newest chunk's novelty)
+  EXPECT_GE(settled.settled_percent(), 97.0);    // measured 99.1 (98.2 before "unknown" needed the newest chunk's novelty)
   // Settled as "unknown" counts wrong: 92.0 since "unknown" needs the newest chunk's own novelty too
   // (86.0 before; 91.1 before novelty was divided by the decision's score, 97.3 before unknown could settle).
-  EXPECT_GE(settled.precision_percent(), 92.0);  // measured 93.9 (92.0 before the logistic decision)
+  EXPECT_GE(settled.precision_percent(), 90.5);  // measured 92.0
 }
 
 }  // namespace
