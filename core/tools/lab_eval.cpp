@@ -271,8 +271,8 @@ void add_eval_command(CLI::App& app) {
   cmd->add_option("--decision", o->decision, "nearest-centre (the paper), centres, knn or nearest (every training vector a reference)")->capture_default_str();
   cmd->add_option("--fusion-of", o->fusion_of, "comma-separated components of fusion (default: the recogniser's)");
   cmd->add_option("--fusion-head-c", o->fusion_head_c,
-                  "C of the fusion's logistic decision (its share is calibrated per model); 0: none, the nearest references "
-                  "alone (default: the recogniser's, 10)");
+                  "C of the fusion's logistic decision (its share is calibrated per model; measured with 10); 0: none, the "
+                  "nearest references alone (default: the recogniser's, none)");
   cmd->add_option("--neighbours", o->neighbours, "k of the k-NN decision (0: the recogniser's default)");
   cmd->add_option("--pca-variance", o->pca_variance,
                   "explained variance the decision stage's PCA keeps (0: default; negative: no PCA, L1 on the histograms)");

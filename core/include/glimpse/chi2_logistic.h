@@ -13,7 +13,7 @@
 namespace glimpse {
 
 struct Chi2LogisticParams {
-  double c = 10;             // inverse regularisation strength (LIBLINEAR's C)
+  double c = 10;             // inverse regularisation strength (LIBLINEAR's C); TrainParams turns it off (0)
   int sample_steps = 2;      // terms of the feature map per bin: 2 x steps - 1
   double sample_interval = 0.5;
 };
