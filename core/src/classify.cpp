@@ -146,7 +146,11 @@ namespace {
 void judge_novelty(Classification& c, double threshold, double known_acceptance) {
   c.unknown = std::isfinite(threshold) && std::isfinite(c.novelty) && c.novelty > threshold;
   c.unknown_reason.clear();
-  if (!c.unknown) return;
+  if (!c.unknown && c.outside_learnt_sizes) {
+    c.unknown = true;
+    c.unknown_reason = "size far outside what the model learnt: " + c.warning;
+  }
+  if (!c.unknown || !c.unknown_reason.empty()) return;
   char why[200];
   std::snprintf(why, sizeof why,
                 "novelty %.2f above %.2f, the threshold accepting %.1f %% of known clouds (held out in training)",
@@ -290,10 +294,11 @@ Expected<Classification> classify_filtered(const Model& model, const Cloud& clou
   c.categories = model.categories;
   c.scores.assign(scores.data(), scores.data() + scores.size());
   c.winner = argmax(scores);
+  c.warning = size_warning(model.stats, cloud);
+  c.outside_learnt_sizes = !c.warning.empty();
   judge_unknown(model, decision, *f, c);
   c.points = f->points;
   c.keypoints = f->positions.size();
-  c.warning = size_warning(model.stats, cloud);
   c.filters = report;
   return c;
 }

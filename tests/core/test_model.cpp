@@ -252,6 +252,19 @@ TEST(Classify, WarnsWhenTheCloudIsFarOutsideTheSizesLearnt) {
   ASSERT_TRUE(big.ok()) << big.error().message;
   EXPECT_NE(big->warning.find("millimetres"), std::string::npos) << big->warning;
   EXPECT_NE(big->warning.find("the model knows"), std::string::npos) << big->warning;
+  // ... and it is unknown whatever its novelty, at every operating point, the winner still the closest.
+  EXPECT_FALSE(c->outside_learnt_sizes);
+  EXPECT_TRUE(big->outside_learnt_sizes);
+  EXPECT_TRUE(big->unknown);
+  EXPECT_GE(big->winner, 0);
+  EXPECT_FALSE(big->unknown_reason.empty());
+  Classification accepting = *big;
+  ASSERT_TRUE(set_known_acceptance(t.model, accepting, 1.0).ok());
+  EXPECT_TRUE(accepting.unknown);
+  if (!(accepting.novelty > novelty_threshold(calibration(t.model), 1.0))) {
+    EXPECT_EQ(accepting.unknown_reason.find("size far outside what the model learnt: the cloud spans"), 0u)
+        << accepting.unknown_reason;
+  }
   TrainingSummary stats;
   stats.min_extent_m = 0.1f, stats.max_extent_m = 2.f;
   Cloud tiny;

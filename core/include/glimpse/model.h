@@ -140,6 +140,9 @@ struct Classification {
   std::vector<double> category_novelty;  // per category (a stream smooths them); empty: not calibrated
   bool unknown = false;
   std::string unknown_reason;
+  // The cloud spans more than 4 x the largest or less than a quarter of the smallest extent the model
+  // learnt (`warning` says which): unknown at every operating point, whatever its novelty.
+  bool outside_learnt_sizes = false;
 };
 
 // The novelty above which a decision is "unknown" when `known_acceptance` (in (0, 1]) of the held-out
