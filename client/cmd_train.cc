@@ -130,6 +130,12 @@ int RunTrain(const ConnectionOptions& conn, const TrainOptions& o) {
                                                     std::to_string(o.protocol.points) + " surface samples, seed " +
                                                     std::to_string(o.protocol.seed)
                                               : "whole sampled clouds, no views");
+    if (o.protocol.views && !o.protocol.train_sensors.empty()) {
+      std::string sensors;
+      for (const ScanCondition& c : o.protocol.train_sensors) sensors += (sensors.empty() ? "" : "; ") + describe(c);
+      folder.applied.push_back("and the same azimuths seen by a simulated " + sensors +
+                               ", filtered to the views' density (--sensor-views none: not)");
+    }
     for (const std::string& line : folder.applied) std::fprintf(stderr, "train: %s\n", line.c_str());
   }
   auto stub = ConnectGlimpse(conn, what);

@@ -33,6 +33,8 @@ const CLI::Validator kMethod = Checked(ParseMethod, "METHOD");
 const CLI::Validator kMethodList = Checked(ParseMethodList, "M1,M2,..");
 const CLI::Validator kOrder = Checked(ParseRevealOrder, "top-down|random|sweep");
 const CLI::Validator kSensor = Checked(ParseSensor, "X,Y,Z");
+// The training sensors of the recipe (core's default_training_sensors).
+const std::string kSensorViews = glimpse::training_sensors_spec(glimpse::default_training_sensors());
 
 void AddConnectionOptions(CLI::App& app, ConnectionOptions& conn) {
   app.add_option("--server", conn.server, "server address host:port")->envname("GLIMPSE_SERVER")
@@ -136,6 +138,7 @@ int Main(int argc, char** argv) {
                                             "DIR/up_axis.csv and DIR/sizes.csv; without them +z up and metres (--up, --unit,\n"
                                             "--height); each cut into the protocol's single views. Cloud files go as they are.");
   TrainOptions t;
+  t.protocol.train_sensors = glimpse::default_training_sensors();
   train->add_option("DIR", t.dir, "folder of category folders of .off .obj .ply .stl meshes or .pcd .xyz clouds")
                   ->check(CLI::ExistingDirectory);
   train->add_flag("--zoo", t.zoo, "train on the core's procedural shape zoo (" + std::to_string(glimpse::zoo_categories().size()) +
@@ -157,6 +160,15 @@ int Main(int argc, char** argv) {
                     "paper's 30), as glimpse-lab's --train-elevations: for cameras mounted low or high (0,15 "
                     "measured in the README; training takes several times longer)")
       ->delimiter(',')->check(CLI::Range(-90.f, 90.f))->group("Meshes");
+  train->add_option_function<std::string>(
+           "--sensor-views",
+           [&t](const std::string& text) { t.protocol.train_sensors = *glimpse::parse_training_sensors(text); },
+           "more training views of each mesh taken by simulated sensors, SENSOR:METRES:DEGREES[,...] (depth or "
+           "lidar, from that distance and elevation, filtered to the views' density), as glimpse-lab's "
+           "--train-sensors; 'none': the paper's views alone (default: " + kSensorViews + ", the recipe the README "
+           "measures; training takes about 3 times longer)")
+      ->check(Checked([](const std::string& s) { return glimpse::parse_training_sensors(s); }, "LIST"))
+      ->group("Meshes");
   train->add_flag("--no-scan-filters", t.no_scan_filters,
                   "the model classifies every point sent as it is (default: it removes stray returns and a floor and "
                   "thins dense scans to its training density)");

@@ -13,6 +13,7 @@
 
 #include "client/inputs.h"
 #include "glimpse/dataset.h"
+#include "glimpse/evaluation.h"
 #include "glimpse/expected.h"
 
 namespace glimpse::client {
@@ -35,6 +36,9 @@ struct ProtocolOptions {
   // Training only: more views of the same azimuths from these elevations (deg above the horizon), as
   // glimpse-lab's --train-elevations, so the model learns cameras mounted low or high.
   std::vector<float> train_elevations_deg;
+  // Training only: more views of the same azimuths taken by these simulated sensors, filtered down to the
+  // ideal views' density, as glimpse-lab's --train-sensors (evaluation.h: sensor_training_view).
+  std::vector<ScanCondition> train_sensors;
 };
 
 // A folder DIR/<category>/<files>: its meshes (.off .obj .ply .stl; a .ply without faces gives its

@@ -215,7 +215,8 @@ double settle_margin(std::vector<std::pair<double, bool>> decisions, double prec
 Calibration calibrate(const ModelImpl& impl, MethodId method, const std::vector<Eigen::MatrixXd>& histograms,
                       const std::vector<Eigen::MatrixXd>& queries, const std::vector<int>& labels,
                       const std::vector<int>& objects, const std::vector<uint8_t>& whole,
-                      const std::vector<std::string>& object_categories, int categories, int threads) {
+                      const std::vector<std::string>& object_categories, int categories, int threads,
+                      const CancelFn& cancel) {
   const TrainParams& p = impl.params;
   Calibration c;
   c.method = method;
@@ -238,6 +239,7 @@ Calibration calibrate(const ModelImpl& impl, MethodId method, const std::vector<
   const bool with_head = method == MethodId::kFusion && impl.fusion_head.has_value() && !p.fusion_head_shares.empty();
   size_t correct = 0;
   for (int k = 0; k < folds; ++k) {
+    if (cancel && cancel()) return c;  // the caller sees the cancel and stores nothing
     std::vector<Eigen::Index> train_rows, test_rows;
     for (size_t i = 0; i < labels.size(); ++i)
       (object_fold[static_cast<size_t>(objects[i])] == k ? test_rows : train_rows).push_back(static_cast<Eigen::Index>(i));
@@ -275,7 +277,7 @@ Calibration calibrate(const ModelImpl& impl, MethodId method, const std::vector<
     if (!ok) continue;
     // The fusion's logistic decision, learnt on this fold's training rows like the stages.
     Eigen::MatrixXd probabilities;
-    if (with_head) {
+    if (with_head && !(cancel && cancel())) {
       auto head = fit_chi2_logistic(fusion_head_rows(impl, histograms, train_rows), train_labels, categories, p.fusion_head);
       if (head.ok()) {
         const Eigen::MatrixXd x = fusion_head_rows(impl, queries, test_rows);

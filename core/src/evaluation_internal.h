@@ -52,7 +52,8 @@ void parallel_for(size_t n, int threads, const std::string& phase, const EvalPro
 struct View {
   int object = 0;
   int view = 0;  // index among the object's evaluated viewpoints
-  bool train_only = false;  // a training view from another elevation (train_elevations_deg): never tested
+  bool train_only = false;  // a training view from another elevation or sensor: never tested
+  int train_condition = -1;  // >= 0: taken by EvalParams::train_conditions[this] (made in sensor_training_views)
   Cloud cloud;   // as the sensor saw it: what is tested
   Cloud learnt;  // as training learns it (training_view: tilted); empty when that is `cloud` itself
   // The ideal view's size when `cloud` was taken by another sensor (0: `cloud` is the ideal view): the
@@ -119,6 +120,7 @@ void assign_folds(Protocol& P);        // 0. categories, folds, sources
 void make_object_clouds(Protocol& P);  // 1. full 3D clouds (sec. 3.4)
 void make_views(Protocol& P);          // 2. single views by HPR from the paper's viewpoints
 void trained_densities(Protocol& P);   // 2b. the density each model learns
+void sensor_training_views(Protocol& P);  // 2b. training-only views of simulated sensors, filtered
 void sensor_test_views(Protocol& P);   // 2b. test views of a non-ideal condition (--sensor), filtered
 void full_view_features(Protocol& P);  // 3. full-view features and the keypoint cut margin
 void prefix_features(Protocol& P);     // 4. stage cuts and training prefixes

@@ -309,6 +309,7 @@ Expected<EvalResult> run_evaluation(const std::vector<EvalObject>& objects, cons
   make_object_clouds(P);
   make_views(P);
   trained_densities(P);
+  sensor_training_views(P);
   sensor_test_views(P);
   full_view_features(P);
   prefix_features(P);

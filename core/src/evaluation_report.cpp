@@ -143,6 +143,11 @@ void write_protocol(std::ostringstream& o, const EvalResult& r) {
   if (p.train.tilt_deg > 0)
     trained_on += "; each training view (and its prefixes) turned by a random tilt of up to " + pct(p.train.tilt_deg) +
                   " deg (seeded), test views as seen";
+  for (float e : p.train_elevations_deg)
+    trained_on += "; plus the same azimuths from " + pct(e) + " deg elevation (training only)";
+  for (const ScanCondition& c : p.train_conditions)
+    trained_on += "; plus the same azimuths seen by a " + describe(c) +
+                  " (`--train-sensors`, training only), through the scan filters down to the ideal views' density";
   {
     std::map<std::string, size_t> extra;
     if (!r.cross_source)
@@ -151,7 +156,7 @@ void write_protocol(std::ostringstream& o, const EvalResult& r) {
     for (const auto& [source, n] : extra)
       trained_on += "; plus every object of " + source + " (" + std::to_string(n) + ", training only, never tested)";
   }
-  o << "| training clouds (`--train-on`, `--train-prefixes`) | " << trained_on
+  o << "| training clouds (`--train-on`, `--train-prefixes`, `--train-elevations`, `--train-sensors`) | " << trained_on
     << " | full views |\n";
   const TrainParams& t = p.train;
   o << "| methods | " << join_methods(p.methods) << " (fusion = mean scores of " << join_methods(t.fusion_of)

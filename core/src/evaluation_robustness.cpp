@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <set>
+#include <sstream>
 
 #include "evaluation_format.h"
 #include "evaluation_internal.h"
@@ -26,6 +27,31 @@ Expected<SensorKind> parse_sensor(std::string_view name) {
   return invalid_argument("unknown sensor '" + std::string(name) + "' (valid: ideal, depth, lidar)");
 }
 
+Expected<std::vector<ScanCondition>> parse_training_sensors(std::string_view text) {
+  std::vector<ScanCondition> out;
+  if (text == "none") return out;
+  std::string list(text);
+  std::stringstream items(list);
+  for (std::string item; std::getline(items, item, ',');) {
+    const std::string usage = "training sensors are SENSOR:METRES:DEGREES items (e.g. depth:2:30) or 'none', not '" + item + "'";
+    const size_t a = item.find(':'), b = a == std::string::npos ? a : item.find(':', a + 1);
+    if (b == std::string::npos) return invalid_argument(usage);
+    auto sensor = parse_sensor(item.substr(0, a));
+    if (!sensor.ok() || *sensor == SensorKind::kIdeal) return invalid_argument(usage + ": the sensor is depth or lidar");
+    char* end = nullptr;
+    const std::string ds = item.substr(a + 1, b - a - 1), es = item.substr(b + 1);
+    const double d = std::strtod(ds.c_str(), &end);
+    if (ds.empty() || *end || !(d > 0 && d <= 100)) return invalid_argument(usage + ": metres in (0, 100]");
+    const double e = std::strtod(es.c_str(), &end);
+    if (es.empty() || *end || !(e >= -90 && e <= 90)) return invalid_argument(usage + ": degrees in [-90, 90]");
+    ScanCondition c;
+    c.sensor = *sensor, c.distance_m = float(d), c.elevation_deg = float(e);
+    out.push_back(c);
+  }
+  if (out.empty()) return invalid_argument("no training sensor given (e.g. depth:2:30, or 'none')");
+  return out;
+}
+
 namespace {
 
 std::string number(double v) {
@@ -33,6 +59,17 @@ std::string number(double v) {
   std::snprintf(buf, sizeof buf, "%g", v);
   return buf;
 }
+
+}  // namespace
+
+std::string training_sensors_spec(const std::vector<ScanCondition>& sensors) {
+  std::string out;
+  for (const ScanCondition& c : sensors)
+    out += (out.empty() ? "" : ",") + std::string(sensor_name(c.sensor)) + ":" + number(c.distance_m) + ":" + number(c.elevation_deg);
+  return out.empty() ? "none" : out;
+}
+
+namespace {
 
 }  // namespace
 
@@ -123,6 +160,26 @@ Cloud condition_view(const EvalObject& object, const Points& full, size_t view, 
   if (c.outliers > 0) cloud = add_outliers(cloud, c.outliers, view_seed + 1);
   if (c.tilt_deg > 0) cloud = rotate_about_centroid(cloud, random_tilt(view_seed + 2, c.tilt_deg));
   return cloud;
+}
+
+Cloud sensor_training_view(const EvalObject& object, const Points& full, size_t view, size_t views, uint64_t seed,
+                           const ScanCondition& condition, size_t points_per_object, double hpr_radius_factor,
+                           const std::vector<Cloud>& ideal_views, ScanFilterParams filters) {
+  std::vector<double> d;
+  for (const Cloud& c : ideal_views)
+    if (const double x = relative_density(c.points); x > 0) d.push_back(x);
+  std::sort(d.begin(), d.end());
+  filters.relative_density = d.empty() ? 0.0 : d[d.size() / 2];
+  return filter_scan(condition_view(object, full, view, views, seed, condition, points_per_object, hpr_radius_factor),
+                     filters);
+}
+
+std::vector<ScanCondition> default_training_sensors() {
+  ScanCondition near, far;
+  near.sensor = far.sensor = SensorKind::kDepthCamera;
+  near.distance_m = 1.5f, near.elevation_deg = 15.f;
+  far.distance_m = 3.f, far.elevation_deg = 45.f;
+  return {near, far};
 }
 
 namespace eval_internal {

@@ -141,8 +141,21 @@ void eval_internal::make_views(Protocol& P) {
           P.views.back().train_only = true;
           elevation.push_back(e);
         }
+  // Training-only views of simulated sensors follow; sensor_training_views takes them once the density
+  // of the ideal training views is known.
+  for (size_t c = 0; c < P.params.train_conditions.size(); ++c)
+    for (size_t o = 0; o < P.objects.size(); ++o)
+      if (P.objects[o].role == EvalRole::kCrossValidate || P.objects[o].role == EvalRole::kTrainOnly)
+        for (size_t v = 0; v < n; ++v) {
+          P.views.push_back({});
+          P.views.back().object = static_cast<int>(o), P.views.back().view = static_cast<int>(v);
+          P.views.back().train_only = true;
+          P.views.back().train_condition = static_cast<int>(c);
+          elevation.push_back(kPaperElevationDeg);
+        }
   parallel_for(P.views.size(), P.threads, "HPR views", P.progress, [&](size_t j) {
     if (j < P.objects.size() * n) P.views[j].object = static_cast<int>(j / n), P.views[j].view = static_cast<int>(j % n);
+    if (P.views[j].train_condition >= 0) return;
     const size_t o = size_t(P.views[j].object), v = size_t(P.views[j].view);
     const EvalObject& object = P.objects[o];
     P.views[j].cloud =
@@ -174,6 +187,29 @@ void eval_internal::trained_densities(Protocol& P) {
     std::sort(d.begin(), d.end());
     P.r.trained_density.push_back(d.empty() ? 0.0 : d[d.size() / 2]);
   }
+}
+
+void eval_internal::sensor_training_views(Protocol& P) {
+  if (P.params.train_conditions.empty()) return;
+  const auto t0 = Clock::now();
+  const size_t n = std::clamp<size_t>(P.params.views_per_object, 1, 6);
+  std::vector<std::vector<Cloud>> ideal(P.objects.size());  // each object's ideal views at the paper's elevation
+  for (size_t v = 0; v < P.objects.size() * n; ++v) ideal[size_t(P.views[v].object)].push_back(P.views[v].cloud);
+  parallel_for(P.views.size(), P.threads, "sensor training views", P.progress, [&](size_t v) {
+    View& view = P.views[v];
+    if (view.train_condition < 0) return;
+    const size_t o = size_t(view.object);
+    view.cloud = sensor_training_view(P.objects[o], P.full[o], size_t(view.view), n, P.object_seed(o),
+                                      P.params.train_conditions[size_t(view.train_condition)],
+                                      P.params.points_per_object, P.params.hpr_radius_factor, ideal[o], P.params.filters);
+    if (P.tp.tilt_deg > 0 && !view.cloud.points.empty())
+      view.learnt = training_view(view.cloud, P.tp, P.object_seed(o) + 1000 * size_t(view.train_condition + 1) + size_t(view.view));
+  });
+  size_t taken = 0;
+  for (const View& view : P.views) taken += view.train_condition >= 0;
+  std::string detail;
+  for (const ScanCondition& c : P.params.train_conditions) detail += (detail.empty() ? "" : "; ") + describe(c);
+  P.r.timings.push_back({"sensor training views", seconds_since(t0), std::to_string(taken) + " views: " + detail + ", filtered"});
 }
 
 void eval_internal::sensor_test_views(Protocol& P) {

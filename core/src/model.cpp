@@ -290,6 +290,7 @@ Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainP
     return invalid_argument("fusion needs at least one of its component methods (fusion_of)");
   model.default_method = needs(model.methods, params.default_method) ? params.default_method : model.methods.front();
   // 3b. The fusion's logistic decision over its components' histograms (its share is calibrated below).
+  if (cancelled_now()) return cancelled("training cancelled");
   if (needs(model.methods, MethodId::kFusion) && params.fusion_head.c > 0 && model.categories.size() >= 2 &&
       !fusion_head_methods(*impl).empty()) {
     auto head = fit_chi2_logistic(fusion_head_rows(*impl, histograms), labels, static_cast<int>(model.categories.size()),
@@ -304,7 +305,7 @@ Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainP
     object_categories[static_cast<size_t>(object_of[i])] = model.categories[static_cast<size_t>(labels[i])];
   // Nothing learnt tilted: the held-out clouds are decided as they were learnt.
   impl->calibration = calibrate(*impl, model.default_method, histograms, tilted ? queries : histograms, labels, object_of, whole, object_categories,
-                                static_cast<int>(model.categories.size()), threads);
+                                static_cast<int>(model.categories.size()), threads, cancel);
   report("calibration", 1, 1);
   if (cancelled_now()) return cancelled("training cancelled");
   model.stats.clouds = data.size();

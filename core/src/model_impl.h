@@ -102,10 +102,12 @@ Expected<Model> train_on_features(std::vector<TrainingSample> samples, const Tra
 // training rows of base method m (what the stages learn), queries[m] the same rows as a sensor gives
 // them (what a held-out row is decided on; the same matrix when nothing is tilted), `whole` per row: a
 // whole cloud (1) or a top-down prefix (0). The codebooks are the model's own (fitted without labels).
+// A cancel stops it between inner folds with what it has (the caller then stores nothing).
 Calibration calibrate(const ModelImpl& impl, MethodId method, const std::vector<Eigen::MatrixXd>& histograms,
                       const std::vector<Eigen::MatrixXd>& queries, const std::vector<int>& labels,
                       const std::vector<int>& objects, const std::vector<uint8_t>& whole,
-                      const std::vector<std::string>& object_categories, int categories, int threads);
+                      const std::vector<std::string>& object_categories, int categories, int threads,
+                      const CancelFn& cancel = {});
 
 // A failed precondition naming both versions when the model's features were computed differently.
 Status check_feature_version(const Model& model);

@@ -260,6 +260,13 @@ void add_eval_command(CLI::App& app) {
                   "training-only views besides the tested ones: the same azimuths from these elevations, degrees "
                   "above the horizon, comma-separated (tested views stay at the paper's 30; e.g. 0,15 for cameras "
                   "mounted low)");
+  o->train_sensors = training_sensors_spec(default_training_sensors());
+  cmd->add_option("--train-sensors", o->train_sensors,
+                  "training-only views of simulated sensors besides the ideal ones: SENSOR:METRES:DEGREES[,...] "
+                  "(depth or lidar, from that distance and elevation, the same azimuths, through the scan filters "
+                  "down to the ideal views' density), or 'none' (the recipe's: off the 2 m, 30 deg camera the "
+                  "robustness matrix tests)")
+      ->capture_default_str();
   cmd->add_option("--folds", o->folds, "cross-validation folds (by object, stratified)")->capture_default_str();
   cmd->add_option("--methods", o->methods, "comma-separated: bok,bog,kgh,vfh,esf,ush,size,fusion")->capture_default_str();
   cmd->add_option("--train-on", o->train_on,

@@ -33,6 +33,7 @@ struct EvalOptions {
   std::string train_on = "partial";
   std::string train_prefixes = "0.15,0.25,0.35,0.5,0.7";
   std::string train_elevations;  // extra training-only views, degrees above the horizon
+  std::string train_sensors;     // extra training-only views of simulated sensors: SENSOR:METRES:DEGREES,...
   std::string decision = "nearest";
   std::string fusion_of;
   double fusion_head_c = -1;  // < 0: the recogniser's; 0: no logistic decision in the fusion

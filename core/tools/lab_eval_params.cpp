@@ -32,6 +32,7 @@ Status apply_preset(EvalOptions& o, const std::function<bool(const char* flag)>&
   if (unset("--descriptor-scale")) o.descriptor_scale = 8;        // described at rho1 (up to 8 r), not at r
   if (unset("--stream-chunk")) o.stream_chunk = 0;                // no streams in the paper
   if (unset("--matrix")) o.matrix = "none";
+  if (unset("--train-sensors")) o.train_sensors = "none";           // the paper's views alone
   if (unset("--size-blind")) o.size_blind = "none";
   return {};
 }
@@ -56,6 +57,11 @@ Expected<EvalParams> params_from(const EvalOptions& o) {
         return invalid_argument("--train-elevations takes degrees in [-90, 90], not '" + item + "'");
       p.train_elevations_deg.push_back(float(e));
     }
+  }
+  {
+    auto sensors = parse_training_sensors(o.train_sensors);
+    if (!sensors.ok()) return Error{sensors.error().code, "--train-sensors: " + sensors.error().message};
+    p.train_conditions = *sensors;
   }
   p.folds = o.folds;
   p.methods.clear();

@@ -100,6 +100,21 @@ std::vector<ScanCondition> robustness_conditions(std::string_view matrix);  // "
 // elevation. `full` is the object's full 3D cloud at the protocol's density (ideal views only).
 Cloud condition_view(const EvalObject& object, const Points& full, size_t view, size_t views, uint64_t object_seed,
                      const ScanCondition& condition, size_t points_per_object, double hpr_radius_factor);
+// A training-only view of a simulated sensor: condition_view through `filters` down to the median
+// relative density of `ideal_views` (the object's ideal views), as a test view of that sensor is filtered
+// down to the density the model learnt; then learnt like any view. Lab and client make them alike.
+Cloud sensor_training_view(const EvalObject& object, const Points& full, size_t view, size_t views,
+                           uint64_t object_seed, const ScanCondition& condition, size_t points_per_object,
+                           double hpr_radius_factor, const std::vector<Cloud>& ideal_views,
+                           ScanFilterParams filters = {});
+// The recipe's training sensors (glimpse-lab --train-sensors, glimpse train --sensors): a depth camera at
+// 1.5 m, 15 deg and at 3 m, 45 deg, both off the 2 m, 30 deg the robustness matrix tests.
+std::vector<ScanCondition> default_training_sensors();
+// "depth:1.5:15,depth:3:45" (SENSOR:METRES:DEGREES, sensor depth or lidar) or "none" (no training
+// sensors). Errors name the bad item.
+Expected<std::vector<ScanCondition>> parse_training_sensors(std::string_view text);
+// The same text back: "depth:1.5:15,depth:3:45", "none" for no sensor.
+std::string training_sensors_spec(const std::vector<ScanCondition>& sensors);
 
 // ---- Stages of the top-down exploration (sec. 4) ---------------------------------------------------
 
@@ -145,6 +160,10 @@ struct EvalParams {
   // Training-only views besides the tested ones: the same azimuths from these elevations (deg above the
   // horizon; the tested views stay at the paper's 30), so a model learns cameras mounted low or high.
   std::vector<float> train_elevations_deg;
+  // Training-only views taken by simulated sensors (condition_view at each of these conditions, the
+  // same azimuths, through the scan filters at the density the ideal training views have), so a model
+  // learns what a real camera returns as well as the paper's ideal views. Learnt objects only.
+  std::vector<ScanCondition> train_conditions;
   double hpr_radius_factor = 100;
   std::vector<Stage> stages = paper_stages();
   float cut_margin_supports = 1.5f;  // keypoint cut margin in support radii (see keypoint_prefix)
