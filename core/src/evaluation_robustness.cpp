@@ -170,8 +170,12 @@ Cloud sensor_training_view(const EvalObject& object, const Points& full, size_t 
     if (const double x = relative_density(c.points); x > 0) d.push_back(x);
   std::sort(d.begin(), d.end());
   filters.relative_density = d.empty() ? 0.0 : d[d.size() / 2];
-  return filter_scan(condition_view(object, full, view, views, seed, condition, points_per_object, hpr_radius_factor),
-                     filters);
+  Cloud cloud = filter_scan(condition_view(object, full, view, views, seed, condition, points_per_object, hpr_radius_factor),
+                            filters);
+  // A camera that sees a sliver of the object (too close, or past its far end) teaches nothing, and
+  // training refuses a whole cloud without features: such a view is left out (empty).
+  if (cloud.points.size() < 2 * FeatureParams{}.min_points) return Cloud{};
+  return cloud;
 }
 
 std::vector<ScanCondition> default_training_sensors() {

@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "glimpse/evaluation.h"
+#include "glimpse/scan_filters.h"
 #include "glimpse/views.h"
 
 namespace glimpse {
@@ -414,6 +415,31 @@ TEST(RunEvaluation, ReducedProtocolOnTheZooIsWellAboveChance) {
     EXPECT_EQ(r1->streams[i].winners, r->streams[i].winners) << i;
     EXPECT_EQ(r1->streams[i].confidence, r->streams[i].confidence) << i;
   }
+}
+
+// A sensor training view is the camera's view filtered down to the ideal views' density; a camera that
+// sees a sliver (a 1 cm object at 3 m: a few pixels) gives none, which training would refuse.
+TEST(ConditionView, SensorTrainingViewsAreThinnedToTheIdealDensityOrLeftOut) {
+  EvalObject o = zoo_objects(1, 5).front();
+  const uint64_t seed = object_seed(7, o.category + "/" + o.id);
+  const Points full = object_cloud(o.mesh, 3000, seed);
+  std::vector<Cloud> ideal;
+  for (size_t v = 0; v < 3; ++v) ideal.push_back(object_view(full, v, 3, o.any_pose, seed));
+  ScanCondition near;
+  near.sensor = SensorKind::kDepthCamera, near.distance_m = 1.5f, near.elevation_deg = 15.f;
+  const Cloud raw = condition_view(o, full, 1, 3, seed, near, 3000, 100);
+  const Cloud kept = sensor_training_view(o, full, 1, 3, seed, near, 3000, 100, ideal);
+  ASSERT_GT(raw.points.size(), 2 * ideal[1].points.size()) << o.category;  // a camera at 1.5 m: dense
+  EXPECT_GE(kept.points.size(), 40u) << o.category;
+  EXPECT_LT(kept.points.size(), raw.points.size() / 2) << o.category;  // thinned towards the ideal density
+  EXPECT_LT(relative_density(kept.points), 2.5 * relative_density(ideal[1].points)) << o.category;
+  EvalObject speck = o;  // the same object 1 cm across
+  const Bounds b = bounds(speck.mesh.vertices);
+  for (Vec3& p : speck.mesh.vertices) p = (p - b.min) * (0.01f / b.extent().maxCoeff());
+  ScanCondition far = near;
+  far.distance_m = 3.f;
+  EXPECT_TRUE(sensor_training_view(speck, object_cloud(speck.mesh, 3000, seed), 1, 3, seed, far, 3000, 100, ideal)
+                  .points.empty());
 }
 
 TEST(ConditionView, IdealIsTheProtocolsViewAndSensorsSeeTheSameObjectFromTheSameSide) {

@@ -103,6 +103,8 @@ Cloud condition_view(const EvalObject& object, const Points& full, size_t view, 
 // A training-only view of a simulated sensor: condition_view through `filters` down to the median
 // relative density of `ideal_views` (the object's ideal views), as a test view of that sensor is filtered
 // down to the density the model learnt; then learnt like any view. Lab and client make them alike.
+// Empty when the camera saw fewer than 2 x FeatureParams::min_points of the object (a view of a sliver
+// teaches nothing, and training refuses a whole cloud without features).
 Cloud sensor_training_view(const EvalObject& object, const Points& full, size_t view, size_t views,
                            uint64_t object_seed, const ScanCondition& condition, size_t points_per_object,
                            double hpr_radius_factor, const std::vector<Cloud>& ideal_views,
