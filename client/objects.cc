@@ -114,13 +114,14 @@ ObjectViews ViewsOfMesh(const Mesh& mesh, const std::string& key, bool any_pose,
       for (size_t v = 0; v < options.views; ++v)
         out.views.push_back(object_view(full, v, options.views, any_pose, seed, options.hpr_radius_factor, elevation));
   if (!options.train_sensors.empty()) {
-    const std::vector<Cloud> ideal(out.views.begin(), out.views.begin() + std::ptrdiff_t(options.views));
+    const double density =
+        median_relative_density(std::vector<Cloud>(out.views.begin(), out.views.begin() + std::ptrdiff_t(options.views)));
     EvalObject object;
     object.mesh = mesh, object.any_pose = any_pose;
     for (const ScanCondition& sensor : options.train_sensors)
       for (size_t v = 0; v < options.views; ++v)
         out.views.push_back(sensor_training_view(object, full, v, options.views, seed, sensor, options.points,
-                                                 options.hpr_radius_factor, ideal));
+                                                 options.hpr_radius_factor, density));
   }
   return out;
 }

@@ -162,14 +162,18 @@ Cloud condition_view(const EvalObject& object, const Points& full, size_t view, 
   return cloud;
 }
 
-Cloud sensor_training_view(const EvalObject& object, const Points& full, size_t view, size_t views, uint64_t seed,
-                           const ScanCondition& condition, size_t points_per_object, double hpr_radius_factor,
-                           const std::vector<Cloud>& ideal_views, ScanFilterParams filters) {
+double median_relative_density(const std::vector<Cloud>& views) {
   std::vector<double> d;
-  for (const Cloud& c : ideal_views)
+  for (const Cloud& c : views)
     if (const double x = relative_density(c.points); x > 0) d.push_back(x);
   std::sort(d.begin(), d.end());
-  filters.relative_density = d.empty() ? 0.0 : d[d.size() / 2];
+  return d.empty() ? 0.0 : d[d.size() / 2];
+}
+
+Cloud sensor_training_view(const EvalObject& object, const Points& full, size_t view, size_t views, uint64_t seed,
+                           const ScanCondition& condition, size_t points_per_object, double hpr_radius_factor,
+                           double ideal_density, ScanFilterParams filters) {
+  filters.relative_density = ideal_density;
   Cloud cloud = filter_scan(condition_view(object, full, view, views, seed, condition, points_per_object, hpr_radius_factor),
                             filters);
   // A camera that sees a sliver of the object (too close, or past its far end) teaches nothing, and

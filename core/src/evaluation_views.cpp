@@ -195,13 +195,16 @@ void eval_internal::sensor_training_views(Protocol& P) {
   const size_t n = std::clamp<size_t>(P.params.views_per_object, 1, 6);
   std::vector<std::vector<Cloud>> ideal(P.objects.size());  // each object's ideal views at the paper's elevation
   for (size_t v = 0; v < P.objects.size() * n; ++v) ideal[size_t(P.views[v].object)].push_back(P.views[v].cloud);
+  std::vector<double> density(P.objects.size(), 0.0);
+  parallel_for(P.objects.size(), P.threads, "ideal densities", P.progress,
+               [&](size_t o) { density[o] = median_relative_density(ideal[o]); });
   parallel_for(P.views.size(), P.threads, "sensor training views", P.progress, [&](size_t v) {
     View& view = P.views[v];
     if (view.train_condition < 0) return;
     const size_t o = size_t(view.object);
     view.cloud = sensor_training_view(P.objects[o], P.full[o], size_t(view.view), n, P.object_seed(o),
                                       P.params.train_conditions[size_t(view.train_condition)],
-                                      P.params.points_per_object, P.params.hpr_radius_factor, ideal[o], P.params.filters);
+                                      P.params.points_per_object, P.params.hpr_radius_factor, density[o], P.params.filters);
     if (P.tp.tilt_deg > 0 && !view.cloud.points.empty())
       view.learnt = training_view(view.cloud, P.tp, P.object_seed(o) + 1000 * size_t(view.train_condition + 1) + size_t(view.view));
   });

@@ -153,6 +153,30 @@ TEST_F(ObjectsTest, ProtocolViewsAreTheLabsViews) {
   EXPECT_TRUE(f->dataset.objects[1].size.any_pose);
 }
 
+// glimpse train's --sensor-views: after the ideal views, the cameras' views of the same azimuths, thinned
+// to the ideal views' density as the lab makes them (glimpse-lab --train-sensors).
+TEST(Objects, SensorViewsFollowTheIdealOnesAsTheLabMakesThem) {
+  const EvalObject chair = zoo_objects(1, 5).at(1);  // a chair: seen whole from 1.5 m and 3 m
+  ProtocolOptions options;
+  options.points = 3000;
+  const ObjectViews plain = ViewsOfMesh(chair.mesh, "chair/1", chair.any_pose, options);
+  options.train_sensors = default_training_sensors();
+  const ObjectViews views = ViewsOfMesh(chair.mesh, "chair/1", chair.any_pose, options);
+  ASSERT_EQ(views.views.size(), 18u);
+  std::vector<Cloud> ideal(views.views.begin(), views.views.begin() + 6);
+  const uint64_t seed = object_seed(options.seed, "chair/1");
+  const Points full = object_cloud(chair.mesh, options.points, seed);
+  for (size_t v = 0; v < 6; ++v) {
+    EXPECT_EQ(views.views[v].points, plain.views[v].points);
+    for (size_t s = 0; s < 2; ++s)
+      EXPECT_EQ(views.views[6 * (s + 1) + v].points,
+                sensor_training_view(chair, full, v, 6, seed, options.train_sensors[s], 3000, options.hpr_radius_factor,
+                                     median_relative_density(ideal))
+                    .points)
+          << "sensor " << s << " view " << v;
+  }
+}
+
 TEST_F(ObjectsTest, AMeshFileIsOneViewOrWholeAndItsUnitApplies) {
   const std::string box = WriteBox(dir_ / "box.off", 500, 400, 300);  // millimetres
   ProtocolOptions options;

@@ -428,7 +428,7 @@ TEST(ConditionView, SensorTrainingViewsAreThinnedToTheIdealDensityOrLeftOut) {
   ScanCondition near;
   near.sensor = SensorKind::kDepthCamera, near.distance_m = 1.5f, near.elevation_deg = 15.f;
   const Cloud raw = condition_view(o, full, 1, 3, seed, near, 3000, 100);
-  const Cloud kept = sensor_training_view(o, full, 1, 3, seed, near, 3000, 100, ideal);
+  const Cloud kept = sensor_training_view(o, full, 1, 3, seed, near, 3000, 100, median_relative_density(ideal));
   ASSERT_GT(raw.points.size(), 2 * ideal[1].points.size()) << o.category;  // a camera at 1.5 m: dense
   EXPECT_GE(kept.points.size(), 40u) << o.category;
   EXPECT_LT(kept.points.size(), raw.points.size() / 2) << o.category;  // thinned towards the ideal density
@@ -438,8 +438,9 @@ TEST(ConditionView, SensorTrainingViewsAreThinnedToTheIdealDensityOrLeftOut) {
   for (Vec3& p : speck.mesh.vertices) p = (p - b.min) * (0.01f / b.extent().maxCoeff());
   ScanCondition far = near;
   far.distance_m = 3.f;
-  EXPECT_TRUE(sensor_training_view(speck, object_cloud(speck.mesh, 3000, seed), 1, 3, seed, far, 3000, 100, ideal)
-                  .points.empty());
+  EXPECT_TRUE(
+      sensor_training_view(speck, object_cloud(speck.mesh, 3000, seed), 1, 3, seed, far, 3000, 100, median_relative_density(ideal))
+          .points.empty());
 }
 
 TEST(ConditionView, IdealIsTheProtocolsViewAndSensorsSeeTheSameObjectFromTheSameSide) {
