@@ -69,10 +69,6 @@ std::string training_sensors_spec(const std::vector<ScanCondition>& sensors) {
   return out.empty() ? "none" : out;
 }
 
-namespace {
-
-}  // namespace
-
 std::string describe(const ScanCondition& c) {
   if (!c.label.empty()) return c.label;
   std::string s;
