@@ -19,14 +19,18 @@ namespace {
 
 constexpr double kTimeoutS = 3600;  // training a large set takes a while
 
-// Calls emit(category, object_id, cloud) for every training cloud; stops at the first error or
-// when emit returns false.
-using Emit = std::function<bool(const std::string&, const std::string&, const Cloud&)>;
+// Calls emit(category, object_id, cloud, augmented) for every training cloud; stops at the first error
+// or when emit returns false.
+using Emit = std::function<bool(const std::string&, const std::string&, const Cloud&, bool)>;
 
-// Emits the non-empty views (a view of nothing teaches nothing, and core refuses it).
-bool EmitViews(const std::string& category, const std::string& object_id, const ObjectViews& views, const Emit& emit) {
-  for (const Cloud& c : views.views)
-    if (!c.points.empty() && !emit(category, object_id, c)) return false;
+// Emits the non-empty views (a view of nothing teaches nothing, and core refuses it); augmented: all of
+// them, else the simulated sensors' (ObjectViews::first_augmented on).
+bool EmitViews(const std::string& category, const std::string& object_id, const ObjectViews& views, const Emit& emit,
+               bool augmented = false) {
+  for (size_t v = 0; v < views.views.size(); ++v)
+    if (!views.views[v].points.empty() &&
+        !emit(category, object_id, views.views[v], augmented || v >= views.first_augmented))
+      return false;
   return true;
 }
 
@@ -41,18 +45,21 @@ Status EmitDir(const TrainOptions& o, const Folder& folder, const Emit& emit) {
     auto clouds = TrainingClouds(f.path, ViewOptions{});
     if (!clouds) return clouds.error();
     for (const Cloud& c : *clouds)
-      if (!emit(f.category, f.object_id, c)) return {};
+      if (!emit(f.category, f.object_id, c, false)) return {};
   }
   return {};
 }
 
 // The procedural zoo's objects (upright, real-life size), viewed as glimpse-lab views them; only
-// those of `categories` when given (a folder's, which the zoo adds to).
+// those of `categories` when given (a folder's, which the zoo adds to: then they are augmented, learnt
+// but not what "unknown" measures against, as glimpse-lab's --also-train zoo:N).
 Status EmitZoo(const TrainOptions& o, const std::set<std::string>& categories, const Emit& emit) {
   for (const EvalObject& object : zoo_objects(o.per_category, o.protocol.seed)) {
     if (!categories.empty() && !categories.count(object.category)) continue;
     const std::string key = object.category + "/" + object.id;
-    if (!EmitViews(object.category, key, ViewsOfMesh(object.mesh, key, object.any_pose, o.protocol), emit)) return {};
+    if (!EmitViews(object.category, key, ViewsOfMesh(object.mesh, key, object.any_pose, o.protocol), emit,
+                   !categories.empty()))
+      return {};
   }
   return {};
 }
@@ -166,11 +173,12 @@ int RunTrain(const ConnectionOptions& conn, const TrainOptions& o) {
   bool open = stream->Write(header);
 
   v1::TrainRequest request;
-  const Emit emit = [&](const std::string& category, const std::string& object_id, const Cloud& cloud) {
+  const Emit emit = [&](const std::string& category, const std::string& object_id, const Cloud& cloud, bool augmented) {
     if (!open) return false;
     v1::LabelledCloud* lc = request.mutable_cloud();
     lc->set_category(category);
     lc->set_object_id(object_id);
+    lc->set_augmented(augmented);
     ToProto(cloud, lc->mutable_cloud());
     open = stream->Write(request);
     return open;

@@ -142,7 +142,8 @@ int Main(int argc, char** argv) {
   train->add_option("DIR", t.dir, "folder of category folders of .off .obj .ply .stl meshes or .pcd .xyz clouds")
                   ->check(CLI::ExistingDirectory);
   train->add_flag("--zoo", t.zoo, "train on the core's procedural shape zoo (" + std::to_string(glimpse::zoo_categories().size()) +
-                                      " categories); with DIR, add its objects of DIR's categories (the recipe that "
+                                      " categories); with DIR, add its objects of DIR's categories, augmented: learnt, but never what "
+                                      "'unknown' measures a cloud against (the recipe that "
                                       "transfers best to other collections: README)");
   train->add_option("--per-category", t.per_category, "zoo objects per category")->capture_default_str()
       ->check(CLI::Range(size_t{1}, size_t{10000}));
@@ -164,8 +165,8 @@ int Main(int argc, char** argv) {
            "--sensor-views",
            [&t](const std::string& text) { t.protocol.train_sensors = *glimpse::parse_training_sensors(text); },
            "more training views of each mesh taken by simulated sensors, SENSOR:METRES:DEGREES[,...] (depth or "
-           "lidar, from that distance and elevation, filtered to the views' density), as glimpse-lab's "
-           "--train-sensors; 'none': the paper's views alone (default: " + kSensorViews + ", the recipe the README "
+           "lidar, from that distance and elevation, filtered to the views' density; sent marked augmented: "
+           "learnt, but never what 'unknown' measures a cloud against), as glimpse-lab's --train-sensors; 'none': the paper's views alone (default: " + kSensorViews + ", the recipe the README "
            "measures; training takes about 3 times longer)")
       ->check(Checked([](const std::string& s) { return glimpse::parse_training_sensors(s); }, "LIST"))
       ->group("Meshes");

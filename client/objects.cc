@@ -116,6 +116,7 @@ ObjectViews ViewsOfMesh(const Mesh& mesh, const std::string& key, bool any_pose,
   if (!options.train_sensors.empty()) {
     const double density =
         median_relative_density(std::vector<Cloud>(out.views.begin(), out.views.begin() + std::ptrdiff_t(options.views)));
+    out.first_augmented = out.views.size();
     EvalObject object;
     object.mesh = mesh, object.any_pose = any_pose;
     for (const ScanCondition& sensor : options.train_sensors)

@@ -61,6 +61,7 @@ Expected<Folder> ScanFolder(const std::string& dir, const Placement& placement);
 // and views exactly as glimpse-lab makes them. Errors name the mesh's path.
 struct ObjectViews {
   std::vector<Cloud> views;
+  size_t first_augmented = SIZE_MAX;  // views from here on are simulated sensors' (LabelledCloud.augmented)
   size_t full_points = 0;  // the object's full 3D cloud: stages are fractions of it
 };
 Expected<ObjectViews> ProtocolViews(const DatasetObject& object, const Sizing& sizing, const ProtocolOptions& options);

@@ -42,7 +42,7 @@ Status AddTrainRequest(const v1::TrainRequest& msg, const Limits& limits, TrainI
       input.points += cloud->points.size();
       // Without an object id each cloud is its own object (ids cannot clash: real ones have no '#').
       std::string object_id = lc.object_id().empty() ? "#" + std::to_string(index) : lc.object_id();
-      input.clouds.push_back({lc.category(), std::move(object_id), std::move(*cloud)});
+      input.clouds.push_back({lc.category(), std::move(object_id), std::move(*cloud), lc.augmented()});
       return {};
     }
     case v1::TrainRequest::KIND_NOT_SET: return invalid_argument("empty Train message");
@@ -90,7 +90,8 @@ double TrainPercent(std::string_view stage, size_t done, size_t total) {
   };
   // Rough shares of a training run; only the order and monotonicity matter to a progress bar.
   static constexpr Span kSpans[] = {{"received", 0, 0},    {"features", 0, 60},      {"codebooks", 60, 80},
-                                    {"centres", 80, 92},   {"calibration", 92, 97}, {"storing", 97, 99},
+                                    {"centres", 80, 92},   {"calibration", 92, 96}, {"novelty", 96, 97},
+                                    {"storing", 97, 99},
                                     {"done", 100, 100}};
   for (const Span& s : kSpans) {
     if (s.stage != stage) continue;

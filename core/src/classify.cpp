@@ -90,10 +90,14 @@ Eigen::VectorXd fused_scores(const Eigen::VectorXd& mean, const Eigen::VectorXd&
   return (1 - share) * mean + share * probabilities;
 }
 
-MethodDecision method_decision(const ModelImpl& impl, MethodId method, const CloudFeatures& f) {
+namespace {
+// A method's mean score over its components' decision stages and, with `with_novelty` and a calibrated
+// novelty, how novel the cloud is to each category.
+MethodDecision stage_decision(const ModelImpl& impl, MethodId method, const CloudFeatures& f, bool with_novelty) {
   const std::vector<MethodId> parts = component_methods(impl, method);
   const Calibration& cal = impl.calibration;
-  const bool calibrated = cal.method == method && !cal.novelty_scale.empty() && cal.reference_whole.size() == parts.size();
+  const bool calibrated =
+      with_novelty && cal.method == method && !cal.novelty_scale.empty() && cal.reference_whole.size() == parts.size();
   MethodDecision out;
   std::vector<NearestReferences> nearest;
   for (size_t j = 0; j < parts.size(); ++j) {
@@ -116,10 +120,19 @@ MethodDecision method_decision(const ModelImpl& impl, MethodId method, const Clo
   // Novelty from the nearest references and their scores alone: the logistic decision is as sure of a
   // cloud far from everything learnt as of a known one (a logistic score grows away from the boundary).
   if (calibrated) out.novelty = category_novelty(cal, nearest, out.scores);
-  if (method == MethodId::kFusion && impl.fusion_head && cal.fusion_head_share > 0) {
+  return out;
+}
+}  // namespace
+
+MethodDecision method_decision(const ModelImpl& impl, MethodId method, const CloudFeatures& f) {
+  MethodDecision out = stage_decision(impl, method, f, !impl.novelty);
+  // Trained with augmented clouds: novelty from the model of the clouds given as they are.
+  if (impl.novelty) out.novelty = stage_decision(*impl.novelty, method, f, true).novelty;
+  const double share = impl.calibration.fusion_head_share;
+  if (method == MethodId::kFusion && impl.fusion_head && share > 0) {
     const Eigen::VectorXd features =
         fusion_head_features(impl, [&](MethodId m) { return method_histogram(impl, m, f); });
-    out.scores = fused_scores(out.scores, chi2_logistic_probabilities(*impl.fusion_head, features), cal.fusion_head_share);
+    out.scores = fused_scores(out.scores, chi2_logistic_probabilities(*impl.fusion_head, features), share);
   }
   return out;
 }
@@ -177,7 +190,7 @@ Status set_known_acceptance(const Model& model, Classification& c, double known_
     return invalid_argument("known acceptance must be in (0, 1] (0: the model's default), not " +
                             std::to_string(known_acceptance));
   if (c.unknown && !std::isfinite(c.novelty)) return {};  // the method cannot judge the cloud at all
-  const Calibration& cal = calibration(model);
+  const Calibration& cal = novelty_calibration(model);
   const double a = known_acceptance > 0 ? known_acceptance : cal.known_acceptance;
   judge_novelty(c, cal.method == c.method ? novelty_threshold(cal, a) : std::numeric_limits<double>::quiet_NaN(), a);
   return {};

@@ -114,7 +114,12 @@ std::string open_set_section(const EvalResult& r) {
     << " nearest training objects of the distance to each one's nearest reference, over the typical held-out "
     << "distance for that category and kind of reference, a whole view or a top-down prefix, or what the "
     << "stage's PCA leaves out if larger; averaged over the components and divided by the decision's score "
-    << "for the category) was calibrated on held-out folds of its own training set, and its operating point accepts "
+    << "for the category) was calibrated on held-out folds of its own training set"
+    << (r.novelty_models ? " (of " + std::to_string(r.novelty_models) + " of the " + std::to_string(r.novelty_thresholds.size()) +
+                               " models, by a model of its training views not augmented: the simulated sensors' views and "
+                               "the zoo beside other sources are learnt by the decision, not measured against)"
+                         : std::string())
+    << ", and its operating point accepts "
     << fixed("%.0f", 100 * r.params.train.known_acceptance) << " % of those held-out known decisions";
   if (std::isfinite(lo)) o << " (novelty threshold " << fixed("%.2f", lo) << (hi > lo ? "–" + fixed("%.2f", hi) : "") << ")";
   o << ". AUROC ranks known against unknown views by novelty; FAR at 95 % is the share of unknown views "

@@ -68,6 +68,11 @@ Status train_and_classify(Protocol& P) {
   const size_t n_cat = r.categories.size();
   double train_seconds = 0, classify_seconds = 0;
   size_t train_samples = 0;
+  // Augmented (TrainingCloud::augmented: learnt, but not what novelty measures against): a simulated
+  // sensor's training views, and the procedural zoo's objects when added to real ones (--also-train zoo:N).
+  const bool zoo_added = std::any_of(P.objects.begin(), P.objects.end(), [](const EvalObject& o) {
+    return (o.role == EvalRole::kCrossValidate || o.role == EvalRole::kTrainOnly) && o.source != "zoo";
+  });
   for (int fold = 0; fold < P.folds; ++fold) {
     const std::string tag = r.cross_source ? std::string("all sources") : "fold " + std::to_string(fold + 1) + "/" + std::to_string(P.folds);
     auto t0 = Clock::now();
@@ -86,7 +91,8 @@ Status train_and_classify(Protocol& P) {
       for (size_t k = 0; k < P.train_slots[v].size(); ++k) {  // the whole (learnt) view, then its prefixes
         const FeatureSlot& slot = P.slots[static_cast<size_t>(P.train_slots[v][k])];
         if (!slot.ok) continue;
-        samples.push_back({object.category, id, slot.features, k == 0, std::nullopt});
+        const bool augmented = P.views[v].train_condition >= 0 || (zoo_added && object.source == "zoo");
+        samples.push_back({object.category, id, slot.features, k == 0, std::nullopt, augmented});
         const FeatureSlot& seen = P.slots[static_cast<size_t>(P.seen_slots[v][k])];
         if (&seen != &slot && seen.ok) samples.back().as_seen = seen.features;
       }
@@ -101,7 +107,8 @@ Status train_and_classify(Protocol& P) {
     r.settle_margins.push_back(model->impl->calibration.settle_margin);
     r.calibration_accuracy.push_back(model->impl->calibration.held_out_accuracy);
     r.fusion_head_shares.push_back(model->impl->fusion_head ? model->impl->calibration.fusion_head_share : 0.0);
-    r.novelty_thresholds.push_back(model->impl->calibration.novelty_threshold);
+    r.novelty_thresholds.push_back(novelty_calibration(*model->impl).novelty_threshold);
+    r.novelty_models += model->impl->novelty != nullptr;
     train_seconds += seconds_since(t0);
     if (P.progress) P.progress({tag + ": train", 1, 1});
 

@@ -30,6 +30,10 @@ const Calibration& calibration(const Model& model) {
   return model.impl ? model.impl->calibration : none;
 }
 
+const Calibration& novelty_calibration(const Model& model) {
+  return model.impl ? novelty_calibration(*model.impl) : calibration(model);
+}
+
 std::vector<MethodId> base_methods(const TrainParams& params) {
   std::vector<MethodId> base;
   for (MethodId m : params.methods)
@@ -145,7 +149,7 @@ Expected<Model> train(const std::vector<TrainingCloud>& data, const TrainParams&
                                               (jobs[j].prefix ? ", top " + std::to_string(jobs[j].prefix) + " points" : "") +
                                               ": " + feats[j].error().message};
     }
-    samples.push_back({d.category, d.object_id, std::move(*feats[j]), jobs[j].prefix == 0, std::nullopt});
+    samples.push_back({d.category, d.object_id, std::move(*feats[j]), jobs[j].prefix == 0, std::nullopt, d.augmented});
     if (tilted && as_seen[j].ok()) samples.back().as_seen = std::move(*as_seen[j]);
   }
   feats.clear();
@@ -203,6 +207,13 @@ Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainP
     const std::string key = d.object_id.empty() ? "#" + std::to_string(labels.size()) : d.category + "/" + d.object_id;
     object_of.push_back(object_index.emplace(key, static_cast<int>(object_index.size())).first->second);
   }
+
+  // What novelty measures against when some clouds were augmented: the others, learnt apart (step 5).
+  std::vector<TrainingSample> given;
+  const size_t augmented = static_cast<size_t>(std::count_if(data.begin(), data.end(), [](const TrainingSample& d) { return d.augmented; }));
+  if (augmented > 0 && augmented < data.size())
+    for (const TrainingSample& d : data)
+      if (!d.augmented) given.push_back(d);
 
   const std::vector<MethodId> base = base_methods(params);
   const int threads = resolve_threads(params.threads);
@@ -308,6 +319,18 @@ Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainP
                                 static_cast<int>(model.categories.size()), threads, cancel);
   report("calibration", 1, 1);
   if (cancelled_now()) return cancelled("training cancelled");
+  // 5. Novelty from the clouds given as they are: the augmented ones widen the decision, not what is
+  // known. Without a calibrated novelty there (too few objects of a category, or a category only
+  // augmented clouds have), novelty stays the model's own.
+  if (!given.empty()) {
+    report("novelty", 0, 1);
+    auto novelty = train_on_features(std::move(given), params, {}, cancel);
+    if (cancelled_now()) return cancelled("training cancelled");
+    if (novelty.ok() && novelty->categories == model.categories && novelty->impl &&
+        !novelty->impl->calibration.novelty_scale.empty() && novelty->impl->calibration.method == impl->calibration.method)
+      impl->novelty = novelty->impl;
+    report("novelty", 1, 1);
+  }
   model.stats.clouds = data.size();
   std::set<std::string> objects;
   for (const auto& d : data) objects.insert(d.category + "/" + d.object_id);

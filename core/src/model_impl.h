@@ -31,7 +31,18 @@ struct ModelImpl {
   // the fusion's scores in calibration.fusion_head_share. None: a model of format 6 or older, or trained
   // without one.
   std::optional<Chi2Logistic> fusion_head;
+  // What novelty ("none of these") measures a cloud against when some training clouds were augmented
+  // (TrainingCloud::augmented): the same training on the other clouds alone (its stages, its calibrated
+  // novelty and threshold; the same categories, nothing nested further). A decision stage fitted with the
+  // augmented clouds spans them too, and what it calls near grows with it (README, "Open set"). None:
+  // nothing augmented (novelty from this model's own stages), or a model of format 7 or older.
+  std::shared_ptr<const ModelImpl> novelty;
 };
+
+// The calibration novelty and its threshold come from: the novelty model's, else the model's own.
+inline const Calibration& novelty_calibration(const ModelImpl& impl) {
+  return impl.novelty ? impl.novelty->calibration : impl.calibration;
+}
 
 inline bool uses_keypoints(MethodId m) { return m == MethodId::kBoK || m == MethodId::kBoG || m == MethodId::kKGH; }
 inline bool needs(const std::vector<MethodId>& methods, MethodId m) {  // `methods` lists m
@@ -93,6 +104,7 @@ struct TrainingSample {
   // The same cloud as a sensor gives it, when what is learnt differs (training views are tilted, see
   // TrainParams::tilt_deg): calibration decides these held-out clouds, as a test cloud would come.
   std::optional<CloudFeatures> as_seen;
+  bool augmented = false;  // TrainingCloud::augmented
 };
 Expected<Model> train_on_features(std::vector<TrainingSample> samples, const TrainParams& params,
                                   const ProgressFn& progress = {}, const CancelFn& cancel = {});

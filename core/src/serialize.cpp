@@ -33,7 +33,9 @@ constexpr char kMagic[8] = {'G', 'L', 'M', 'P', 'S', 'M', 'D', 'L'};
 // component each reference's training object (format 5 reads none: the nearest reference alone).
 // 7: after the calibration, a u8 (1: the fusion's logistic decision follows: i32 feature map steps, f64
 // its interval, its weights and biases, f64 its share of the fusion's scores; format 6 reads none).
-constexpr uint32_t kFormatVersion = 7;
+// 8: after it, a u8 (1: the novelty model follows, ModelImpl::novelty: the trained part again, fitted on
+// the clouds not augmented; format 7 reads none: novelty from the model's own stages).
+constexpr uint32_t kFormatVersion = 8;
 constexpr uint32_t kOldestReadableVersion = 1;
 
 uint32_t crc32(const uint8_t* data, size_t n) {
@@ -140,6 +142,132 @@ DecisionStage read_stage(Reader& r, int categories, Eigen::Index histogram_size)
   return s;
 }
 
+// The trained part of a model; then (format 8 on) a u8, 1: the novelty model follows (ModelImpl::novelty,
+// the same layout, its own flag 0).
+void write_impl(Writer& w, const ModelImpl& m) {
+  const TrainParams& p = m.params;
+  write_train_params(w, p);
+  write_methods(w, p.methods);
+  w.u8(static_cast<uint8_t>(p.default_method));
+  write_methods(w, p.fusion_of);
+  write_codebook(w, m.bok);
+  write_codebook(w, m.bog);
+  write_codebook(w, m.kgh);
+  w.i32(m.graphs.keypoint_clusters);
+  w.u32(static_cast<uint32_t>(m.graphs.log_volume_centres.size()));
+  for (double c : m.graphs.log_volume_centres) w.f64(c);
+  w.u32(static_cast<uint32_t>(m.graphs.types.size()));
+  for (uint64_t t : m.graphs.types) w.u64(t);
+  w.f64(m.kgh_max_distance_m);
+  w.u8(static_cast<uint8_t>(m.stages.size()));
+  for (const auto& s : m.stages) {
+    w.u8(s ? 1 : 0);
+    if (s) write_stage(w, *s);
+  }
+  write_calibration(w, m.calibration);
+  w.u8(m.fusion_head ? 1 : 0);
+  if (m.fusion_head) {
+    w.i32(m.fusion_head->sample_steps);
+    w.f64(m.fusion_head->sample_interval);
+    w.mat(m.fusion_head->weights);
+    w.vec(m.fusion_head->bias);
+    w.f64(m.calibration.fusion_head_share);
+  }
+  w.u8(m.novelty ? 1 : 0);
+  if (m.novelty) write_impl(w, *m.novelty);
+}
+
+// write_impl's block; `nested`: the novelty model's, which holds none itself.
+std::shared_ptr<ModelImpl> read_impl(Reader& r, uint32_t ncat, uint32_t version, bool nested) {
+  auto impl = std::make_shared<ModelImpl>();
+  TrainParams& p = impl->params;
+  const std::map<std::string, double> values = read_train_params(r, p);
+  // A model from before the scan filters classifies as it did: unfiltered.
+  if (!values.count("filters.enabled")) p.filter_scans = false;
+  if (!(p.filters.relative_density >= 0 && p.filters.relative_density < 1e12)) r.fail("filters.relative_density out of range");
+  p.methods = read_methods(r);
+  p.default_method = static_cast<MethodId>(r.u8("default method"));
+  p.fusion_of = read_methods(r);
+  const int max_clusters = 100000;
+  if (p.bok_clusters < 2 || p.bok_clusters > max_clusters || p.bog_keypoint_clusters < 2 ||
+      p.bog_keypoint_clusters > 40 || p.kgh_clusters < 2 || p.kgh_clusters > 1000 || p.kgh_distance_bins < 1 ||
+      p.kgh_distance_bins > 10000 || p.bog_volume_clusters < 1 || p.bog_volume_clusters > 1000)
+    r.fail("codebook sizes out of range");
+  auto used = [&](MethodId m) {
+    for (MethodId q : p.methods)
+      if (q == m) return true;
+    if (std::find(p.methods.begin(), p.methods.end(), MethodId::kFusion) != p.methods.end())
+      for (MethodId q : p.fusion_of)
+        if (q == m) return true;
+    return false;
+  };
+  impl->bok = read_codebook(r, used(MethodId::kBoK), p.bok_clusters);
+  impl->bog = read_codebook(r, used(MethodId::kBoG), p.bog_keypoint_clusters);
+  impl->kgh = read_codebook(r, used(MethodId::kKGH), p.kgh_clusters);
+  impl->graphs.keypoint_clusters = r.i32("graph clusters");
+  const uint32_t nvol = r.u32("volume centres");
+  if (nvol > 1000) r.fail("too many volume centres");
+  for (uint32_t i = 0; i < nvol && !r.failed(); ++i) impl->graphs.log_volume_centres.push_back(r.f64("volume centre"));
+  const uint32_t ntypes = r.u32("graph types");
+  r.need(size_t{ntypes} * 8, "graph types");
+  for (uint32_t i = 0; i < ntypes && !r.failed(); ++i) {
+    impl->graphs.types.push_back(r.u64("graph type"));
+    if (i && impl->graphs.types[i] <= impl->graphs.types[i - 1]) r.fail("graph types not sorted");
+  }
+  if (used(MethodId::kBoG) && !r.failed() &&
+      (impl->graphs.keypoint_clusters != p.bog_keypoint_clusters || impl->graphs.log_volume_centres.empty()))
+    r.fail("inconsistent graph vocabulary");
+  impl->kgh_max_distance_m = static_cast<float>(r.f64("KGH distance"));
+  if (!r.failed() && !(impl->kgh_max_distance_m > 0)) r.fail("KGH distance range must be positive");
+  const Eigen::Index sizes[kMethodCount] = {
+      p.bok_clusters, static_cast<Eigen::Index>(impl->graphs.types.size()),
+      static_cast<Eigen::Index>(p.kgh_clusters) * p.kgh_clusters * p.kgh_distance_bins, kVfhSize, kEsfSize,
+      0, kUprightHistogramSize, kVisibleSizeSize};
+  const uint32_t slots = version == 1 ? 5 : r.u8("stage slots");
+  if (!r.failed() && slots > kMethodCount) r.fail("more decision stages than methods this build knows");
+  for (int m = 0; m < kMethodCount && !r.failed(); ++m) {
+    const MethodId method = static_cast<MethodId>(m);
+    if (static_cast<uint32_t>(m) < slots && r.u8("stage flag") == 1) {
+      if (method == MethodId::kFusion) r.fail("fusion has no decision stage of its own");
+      else impl->stages[m] = read_stage(r, static_cast<int>(ncat), sizes[m]);
+    }
+    if (!r.failed() && method != MethodId::kFusion && used(method) != impl->stages[m].has_value())
+      r.fail(std::string("decision stage of ") + method_name(method) + " missing or unexpected");
+  }
+  if (version >= 3 && !r.failed()) read_calibration(r, impl->calibration, ncat, *impl, version);
+  if (version >= 7 && !r.failed() && r.u8("fusion head flag") == 1) {
+    Chi2Logistic head;
+    head.sample_steps = r.i32("fusion head steps");
+    head.sample_interval = r.f64("fusion head interval");
+    head.weights = r.mat("fusion head weights");
+    head.bias = r.vec("fusion head bias");
+    const double share = r.f64("fusion head share");
+    Eigen::Index mapped = 0;
+    for (MethodId m : fusion_head_methods(*impl)) mapped += sizes[static_cast<int>(m)];
+    mapped *= 2 * static_cast<Eigen::Index>(head.sample_steps) - 1;
+    if (!r.failed() && (head.sample_steps < 1 || head.sample_steps > 16 || !(head.sample_interval > 0) ||
+                        head.weights.rows() != static_cast<Eigen::Index>(ncat) || head.weights.cols() != mapped ||
+                        head.bias.size() != static_cast<Eigen::Index>(ncat) || !(share >= 0 && share <= 1) ||
+                        !head.weights.allFinite() || !head.bias.allFinite()))
+      r.fail("inconsistent fusion logistic decision");
+    impl->params.fusion_head.sample_steps = head.sample_steps;
+    impl->params.fusion_head.sample_interval = head.sample_interval;
+    impl->calibration.fusion_head_share = share;
+    impl->fusion_head = std::move(head);
+  }
+  if (version >= 8 && !r.failed() && r.u8("novelty model flag") == 1) {
+    if (nested) {
+      r.fail("a novelty model within a novelty model");
+    } else if (auto novelty = read_impl(r, ncat, version, true); !r.failed()) {
+      if (novelty->params.methods != impl->params.methods || novelty->calibration.method != impl->calibration.method ||
+          novelty->calibration.novelty_scale.empty())
+        r.fail("the novelty model's methods or calibration do not match the model's");
+      impl->novelty = std::move(novelty);
+    }
+  }
+  return impl;
+}
+
 }  // namespace
 
 std::vector<uint8_t> serialize(const Model& model) {
@@ -158,39 +286,8 @@ std::vector<uint8_t> serialize(const Model& model) {
   w.f64(model.stats.min_extent_m);
   w.f64(model.stats.max_extent_m);
 
-  const bool trained = model.impl != nullptr;
-  w.u8(trained ? 1 : 0);
-  if (trained) {
-    const ModelImpl& m = *model.impl;
-    const TrainParams& p = m.params;
-    write_train_params(w, p);
-    write_methods(w, p.methods);
-    w.u8(static_cast<uint8_t>(p.default_method));
-    write_methods(w, p.fusion_of);
-    write_codebook(w, m.bok);
-    write_codebook(w, m.bog);
-    write_codebook(w, m.kgh);
-    w.i32(m.graphs.keypoint_clusters);
-    w.u32(static_cast<uint32_t>(m.graphs.log_volume_centres.size()));
-    for (double c : m.graphs.log_volume_centres) w.f64(c);
-    w.u32(static_cast<uint32_t>(m.graphs.types.size()));
-    for (uint64_t t : m.graphs.types) w.u64(t);
-    w.f64(m.kgh_max_distance_m);
-    w.u8(static_cast<uint8_t>(m.stages.size()));
-    for (const auto& s : m.stages) {
-      w.u8(s ? 1 : 0);
-      if (s) write_stage(w, *s);
-    }
-    write_calibration(w, m.calibration);
-    w.u8(m.fusion_head ? 1 : 0);
-    if (m.fusion_head) {
-      w.i32(m.fusion_head->sample_steps);
-      w.f64(m.fusion_head->sample_interval);
-      w.mat(m.fusion_head->weights);
-      w.vec(m.fusion_head->bias);
-      w.f64(m.calibration.fusion_head_share);
-    }
-  }
+  w.u8(model.impl ? 1 : 0);
+  if (model.impl) write_impl(w, *model.impl);
 
   Writer out;
   out.bytes.insert(out.bytes.end(), kMagic, kMagic + 8);
@@ -243,85 +340,7 @@ Expected<Model> deserialize(std::span<const uint8_t> bytes) {
   model.stats.categories = model.categories;
 
   const bool trained = r.u8("trained flag") == 1;
-  if (trained && !r.failed()) {
-    auto impl = std::make_shared<ModelImpl>();
-    TrainParams& p = impl->params;
-    const std::map<std::string, double> values = read_train_params(r, p);
-    // A model from before the scan filters classifies as it did: unfiltered.
-    if (!values.count("filters.enabled")) p.filter_scans = false;
-    if (!(p.filters.relative_density >= 0 && p.filters.relative_density < 1e12)) r.fail("filters.relative_density out of range");
-    p.methods = read_methods(r);
-    p.default_method = static_cast<MethodId>(r.u8("default method"));
-    p.fusion_of = read_methods(r);
-    const int max_clusters = 100000;
-    if (p.bok_clusters < 2 || p.bok_clusters > max_clusters || p.bog_keypoint_clusters < 2 ||
-        p.bog_keypoint_clusters > 40 || p.kgh_clusters < 2 || p.kgh_clusters > 1000 || p.kgh_distance_bins < 1 ||
-        p.kgh_distance_bins > 10000 || p.bog_volume_clusters < 1 || p.bog_volume_clusters > 1000)
-      r.fail("codebook sizes out of range");
-    auto used = [&](MethodId m) {
-      for (MethodId q : p.methods)
-        if (q == m) return true;
-      if (std::find(p.methods.begin(), p.methods.end(), MethodId::kFusion) != p.methods.end())
-        for (MethodId q : p.fusion_of)
-          if (q == m) return true;
-      return false;
-    };
-    impl->bok = read_codebook(r, used(MethodId::kBoK), p.bok_clusters);
-    impl->bog = read_codebook(r, used(MethodId::kBoG), p.bog_keypoint_clusters);
-    impl->kgh = read_codebook(r, used(MethodId::kKGH), p.kgh_clusters);
-    impl->graphs.keypoint_clusters = r.i32("graph clusters");
-    const uint32_t nvol = r.u32("volume centres");
-    if (nvol > 1000) r.fail("too many volume centres");
-    for (uint32_t i = 0; i < nvol && !r.failed(); ++i) impl->graphs.log_volume_centres.push_back(r.f64("volume centre"));
-    const uint32_t ntypes = r.u32("graph types");
-    r.need(size_t{ntypes} * 8, "graph types");
-    for (uint32_t i = 0; i < ntypes && !r.failed(); ++i) {
-      impl->graphs.types.push_back(r.u64("graph type"));
-      if (i && impl->graphs.types[i] <= impl->graphs.types[i - 1]) r.fail("graph types not sorted");
-    }
-    if (used(MethodId::kBoG) && !r.failed() &&
-        (impl->graphs.keypoint_clusters != p.bog_keypoint_clusters || impl->graphs.log_volume_centres.empty()))
-      r.fail("inconsistent graph vocabulary");
-    impl->kgh_max_distance_m = static_cast<float>(r.f64("KGH distance"));
-    if (!r.failed() && !(impl->kgh_max_distance_m > 0)) r.fail("KGH distance range must be positive");
-    const Eigen::Index sizes[kMethodCount] = {
-        p.bok_clusters, static_cast<Eigen::Index>(impl->graphs.types.size()),
-        static_cast<Eigen::Index>(p.kgh_clusters) * p.kgh_clusters * p.kgh_distance_bins, kVfhSize, kEsfSize,
-        0, kUprightHistogramSize, kVisibleSizeSize};
-    const uint32_t slots = version == 1 ? 5 : r.u8("stage slots");
-    if (!r.failed() && slots > kMethodCount) r.fail("more decision stages than methods this build knows");
-    for (int m = 0; m < kMethodCount && !r.failed(); ++m) {
-      const MethodId method = static_cast<MethodId>(m);
-      if (static_cast<uint32_t>(m) < slots && r.u8("stage flag") == 1) {
-        if (method == MethodId::kFusion) r.fail("fusion has no decision stage of its own");
-        else impl->stages[m] = read_stage(r, static_cast<int>(ncat), sizes[m]);
-      }
-      if (!r.failed() && method != MethodId::kFusion && used(method) != impl->stages[m].has_value())
-        r.fail(std::string("decision stage of ") + method_name(method) + " missing or unexpected");
-    }
-    if (version >= 3 && !r.failed()) read_calibration(r, impl->calibration, ncat, *impl, version);
-    if (version >= 7 && !r.failed() && r.u8("fusion head flag") == 1) {
-      Chi2Logistic head;
-      head.sample_steps = r.i32("fusion head steps");
-      head.sample_interval = r.f64("fusion head interval");
-      head.weights = r.mat("fusion head weights");
-      head.bias = r.vec("fusion head bias");
-      const double share = r.f64("fusion head share");
-      Eigen::Index mapped = 0;
-      for (MethodId m : fusion_head_methods(*impl)) mapped += sizes[static_cast<int>(m)];
-      mapped *= 2 * static_cast<Eigen::Index>(head.sample_steps) - 1;
-      if (!r.failed() && (head.sample_steps < 1 || head.sample_steps > 16 || !(head.sample_interval > 0) ||
-                          head.weights.rows() != static_cast<Eigen::Index>(ncat) || head.weights.cols() != mapped ||
-                          head.bias.size() != static_cast<Eigen::Index>(ncat) || !(share >= 0 && share <= 1) ||
-                          !head.weights.allFinite() || !head.bias.allFinite()))
-        r.fail("inconsistent fusion logistic decision");
-      impl->params.fusion_head.sample_steps = head.sample_steps;
-      impl->params.fusion_head.sample_interval = head.sample_interval;
-      impl->calibration.fusion_head_share = share;
-      impl->fusion_head = std::move(head);
-    }
-    model.impl = std::move(impl);
-  }
+  if (trained && !r.failed()) model.impl = read_impl(r, ncat, version, false);
   if (!r.failed() && r.left() != 0) r.fail(std::to_string(r.left()) + " unexpected trailing bytes");
   if (!r.failed()) {
     if (model.methods.empty()) r.fail("the model has no method");

@@ -26,7 +26,7 @@ class Session final : public ScanSession {
     if (const Calibration& c = impl_.calibration;
         params_.use_model_calibration && c.method == method_ && c.settle_margin > 0 && params_.settle_confidence > 0)
       params_.full_margin = c.settle_margin / params_.settle_confidence;
-    const Calibration& c = impl_.calibration;
+    const Calibration& c = novelty_calibration(impl_);
     threshold_ = c.method == method_ ? novelty_threshold(c, params_.known_acceptance > 0 ? params_.known_acceptance
                                                                                         : c.known_acceptance)
                                      : std::numeric_limits<double>::quiet_NaN();

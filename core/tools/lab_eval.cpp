@@ -240,7 +240,8 @@ void add_eval_command(CLI::App& app) {
   test->needs(train);
   cmd->add_option("--also-train", o->also_train,
                   "extra training-only sources DIR[,DIR...] or zoo:N (the procedural zoo, N per category), learnt by "
-                  "every model and never tested");
+                  "every model and never tested; the zoo beside other sources is augmented (novelty measures against a "
+                  "model of the other objects)");
   cmd->add_option("--unknown", o->unknown,
                   "objects of categories no model learns DIR[,DIR...] or zoo:N, tested besides the known ones: the "
                   "report's open-set section (AUROC of novelty, false acceptance, known accuracy at the operating point)");
@@ -264,7 +265,7 @@ void add_eval_command(CLI::App& app) {
   cmd->add_option("--train-sensors", o->train_sensors,
                   "training-only views of simulated sensors besides the ideal ones: SENSOR:METRES:DEGREES[,...] "
                   "(depth or lidar, from that distance and elevation, the same azimuths, through the scan filters "
-                  "down to the ideal views' density), or 'none' (the recipe's: off the 2 m, 30 deg camera the "
+                  "down to the ideal views' density; augmented: the decision learns them, novelty measures against a model of the other views), or 'none' (the recipe's: off the 2 m, 30 deg camera the "
                   "robustness matrix tests)")
       ->capture_default_str();
   cmd->add_option("--folds", o->folds, "cross-validation folds (by object, stratified)")->capture_default_str();

@@ -154,15 +154,18 @@ TEST_F(ObjectsTest, ProtocolViewsAreTheLabsViews) {
 }
 
 // glimpse train's --sensor-views: after the ideal views, the cameras' views of the same azimuths, thinned
-// to the ideal views' density as the lab makes them (glimpse-lab --train-sensors).
+// to the ideal views' density as the lab makes them (glimpse-lab --train-sensors), and marked augmented
+// (sent as LabelledCloud.augmented: learnt, not what novelty measures against).
 TEST(Objects, SensorViewsFollowTheIdealOnesAsTheLabMakesThem) {
   const EvalObject chair = zoo_objects(1, 5).at(1);  // a chair: seen whole from 1.5 m and 3 m
   ProtocolOptions options;
   options.points = 3000;
   const ObjectViews plain = ViewsOfMesh(chair.mesh, "chair/1", chair.any_pose, options);
+  EXPECT_EQ(plain.first_augmented, SIZE_MAX);
   options.train_sensors = default_training_sensors();
   const ObjectViews views = ViewsOfMesh(chair.mesh, "chair/1", chair.any_pose, options);
   ASSERT_EQ(views.views.size(), 18u);
+  EXPECT_EQ(views.first_augmented, 6u);
   std::vector<Cloud> ideal(views.views.begin(), views.views.begin() + 6);
   const uint64_t seed = object_seed(options.seed, "chair/1");
   const Points full = object_cloud(chair.mesh, options.points, seed);

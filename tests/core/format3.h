@@ -1,4 +1,4 @@
-// Model bytes of formats 3, 4, 5 and 6 made from a format-7 model, for tests and benchmarks of models
+// Model bytes of formats 3 to 7 made from a format-8 model (of no augmented cloud), for tests and benchmarks of models
 // written before novelty existed ("none of these"; format 3 has no novelty block), before novelty was
 // divided by the decision's score (format 4 lacks that byte) or before it was measured over several
 // training objects (format 5 lacks the reference objects that end the payload).
@@ -31,10 +31,20 @@ inline std::vector<uint8_t> with_version(std::vector<uint8_t> bytes, uint32_t ve
   return bytes;
 }
 
+// Format 7 is format 8 without the novelty model's flag that ends the payload (serialize.cpp), for a
+// model trained with no augmented cloud (the flag 0, nothing after it).
+inline std::vector<uint8_t> as_format_7(std::vector<uint8_t> bytes) {
+  if (bytes.size() < 25 || bytes[bytes.size() - 5] != 0) return {};
+  const size_t payload = bytes.size() - 24;
+  bytes.erase(bytes.end() - 5);
+  return with_version(std::move(bytes), 7, payload - 1);
+}
+
 // Format 6 is format 7 without the fusion's logistic decision that ends the payload (serialize.cpp): its
 // flag byte and, when the flag is 1, the decision of a USH + VFH fusion (the only kind tests train): i32
 // steps (2), f64 interval, the weights (u32 rows = categories, u32 cols, values), the biases, the share.
 inline std::vector<uint8_t> as_format_6(std::vector<uint8_t> bytes, size_t categories) {
+  bytes = as_format_7(std::move(bytes));
   if (bytes.size() < 25) return {};
   const size_t payload = bytes.size() - 24;
   const size_t features = 3 * static_cast<size_t>(kUprightHistogramSize + kVfhSize);

@@ -30,6 +30,7 @@ struct FakeBehaviour {
   bool train_waits_for_cancel = false;  // loops until the CancelFn says stop, then returns kCancelled
   std::atomic<int> deserialize_calls{0};
   std::atomic<int> train_calls{0};
+  std::atomic<int> augmented_clouds{0};  // the last Train's clouds marked augmented
 };
 
 // "cats=a,b;methods=0,5;default=5" as bytes.
@@ -145,6 +146,7 @@ inline Engine FakeEngine(FakeBehaviour* b) {
     }
     std::set<std::string> cats, objects;
     size_t points = 0;
+    b->augmented_clouds = int(std::count_if(data.begin(), data.end(), [](const TrainingCloud& d) { return d.augmented; }));
     for (const auto& d : data) {
       cats.insert(d.category);
       objects.insert(d.object_id);

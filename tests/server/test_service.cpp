@@ -63,6 +63,7 @@ TEST(Train, StreamsProgressAndEndsWithTheStoredModel) {
     v1::TrainRequest req;
     req.mutable_cloud()->set_category(i % 3 == 0 ? "box" : "sphere");
     req.mutable_cloud()->set_object_id("obj" + std::to_string(i % 10));
+    req.mutable_cloud()->set_augmented(i % 5 == 4);  // a simulated sensor's view: reaches the engine marked
     *req.mutable_cloud()->mutable_cloud() = CloudToProto(SpiralCloud(20));
     ASSERT_TRUE(stream->Write(req));
   }
@@ -84,6 +85,7 @@ TEST(Train, StreamsProgressAndEndsWithTheStoredModel) {
   EXPECT_EQ(done.stage(), "done");
   EXPECT_EQ(done.percent(), 100);
   EXPECT_EQ(done.clouds_received(), n);
+  EXPECT_EQ(h.behaviour.augmented_clouds, int(n / 5));
   EXPECT_EQ(done.features_extracted(), n);
   EXPECT_EQ(done.codebooks_fitted(), 1u);
   const v1::ModelInfo& m = done.model();

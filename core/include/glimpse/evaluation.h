@@ -251,6 +251,7 @@ struct EvalResult {
   std::vector<std::string> unknown_categories;   // of the kUnknown objects (never learnt)
   std::vector<int> object_unknown_class;         // per object: index into unknown_categories, -1 known
   std::vector<double> novelty_thresholds;        // per model: its calibrated operating point
+  size_t novelty_models = 0;                     // models whose novelty is their novelty model's (ModelImpl::novelty)
   std::vector<std::string> categories;
   std::vector<std::string> object_ids;      // "category/id" per object
   std::vector<int> object_truth;

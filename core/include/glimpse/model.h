@@ -33,10 +33,14 @@ struct TrainingCloud {
   std::string category;
   std::string object_id;  // views of one object share it (cross-validation splits by object)
   Cloud cloud;
+  // A view made to widen what the decision learns (a simulated sensor's view of an object also given as
+  // it is, or the procedural zoo's objects added to real ones): learnt like any cloud, but what "unknown"
+  // measures a cloud against is learnt from the other clouds alone (ModelImpl::novelty).
+  bool augmented = false;
 };
 
 struct TrainingProgress {
-  std::string stage;  // "features", "codebooks", "centres", "calibration", "done"
+  std::string stage;  // "features", "codebooks", "centres", "calibration", "novelty", "done"
   size_t done = 0;
   size_t total = 0;
 };
@@ -170,6 +174,9 @@ double settle_margin(std::vector<std::pair<double, bool>> decisions, double prec
 
 // The model's calibration (all zero for an untrained model).
 const Calibration& calibration(const Model& model);
+// The calibration its novelty and threshold come from: its novelty model's when some training clouds
+// were augmented (TrainingCloud::augmented), else calibration(model).
+const Calibration& novelty_calibration(const Model& model);
 
 Expected<Model> train(const std::vector<TrainingCloud>& data, const TrainParams& params,
                       const ProgressFn& progress = {}, const CancelFn& cancel = {});
