@@ -29,7 +29,7 @@ for t in "${targets[@]}"; do
   mkdir -p "$run_corpus" "$crashes"
   echo "== fuzz_$t: $seconds s"
   # -rss_limit_mb: the readers refuse files they cannot hold, so 2 GB means a bug;
-  # -max_len: big enough for the model seeds (~40 KB).
+  # -max_len: big enough for the model seeds (up to ~60 KB).
   if ! "$build/tests/fuzz/fuzz_$t" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -max_len=65536 \
       -print_final_stats=1 -artifact_prefix="$crashes/" "$run_corpus" "tests/fuzz/corpus/$t" \
       2>"$build/fuzz_$t.log"; then
