@@ -379,7 +379,7 @@ TEST(Serialize, RejectsCorruptAndTruncatedBytes) {
 
 // Found by tests/fuzz: a stored parameter of 9.6e220 was cast to int (undefined behaviour).
 TEST(Serialize, RejectsParametersOutsideTheirType) {
-  const std::string path = GLIMPSE_SOURCE_DIR "/tests/fuzz/crashes/deserialize/float-cast-overflow-parameter.glmpsmdl";
+  const std::string path = GLIMPSE_SOURCE_DIR "/tests/fuzz/corpus/deserialize/regress-float-cast-overflow-parameter.glmpsmdl";
   std::ifstream in(path, std::ios::binary);
   ASSERT_TRUE(in) << path;
   const std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
