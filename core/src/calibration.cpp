@@ -162,8 +162,10 @@ Eigen::VectorXd category_novelty(const Calibration& c, const std::vector<Nearest
       outside[k] += n.residual / scale[2 * n_cat + whole];
     }
   }
-  // Novel either way: far from every reference of the category, or outside what training histograms span.
-  Eigen::VectorXd novelty = near.cwiseMax(outside) / double(components.size());
+  // Novel both ways, added: far from every reference of the category, and outside what training
+  // histograms span (a model of format 8 or older: the larger).
+  Eigen::VectorXd novelty = (c.novelty_adds_evidence ? Eigen::VectorXd(near + outside) : Eigen::VectorXd(near.cwiseMax(outside))) /
+                            double(components.size());
   // ... and more so when the decision is torn between categories (its score for this one is low).
   if (c.novelty_over_score && scores.size() == categories) novelty.array() /= scores.array().max(1e-6);
   return novelty;

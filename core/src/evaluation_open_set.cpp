@@ -112,8 +112,8 @@ std::string open_set_section(const EvalResult& r) {
     << method_name(r.change_method) << ". A model knows nothing of them: its novelty (per component, the "
     << "distance to the decided category, the mean over its (up to) " << r.params.train.novelty_objects
     << " nearest training objects of the distance to each one's nearest reference, over the typical held-out "
-    << "distance for that category and kind of reference, a whole view or a top-down prefix, or what the "
-    << "stage's PCA leaves out if larger; averaged over the components and divided by the decision's score "
+    << "distance for that category and kind of reference, a whole view or a top-down prefix, plus what the "
+    << "stage's PCA leaves out over its typical value; averaged over the components and divided by the decision's score "
     << "for the category) was calibrated on held-out folds of its own training set"
     << (r.novelty_models ? " (of " + std::to_string(r.novelty_models) + " of the " + std::to_string(r.novelty_thresholds.size()) +
                                " models, by a model of its training views not augmented: the simulated sensors' views and "

@@ -35,7 +35,10 @@ constexpr char kMagic[8] = {'G', 'L', 'M', 'P', 'S', 'M', 'D', 'L'};
 // its interval, its weights and biases, f64 its share of the fusion's scores; format 6 reads none).
 // 8: after it, a u8 (1: the novelty model follows, ModelImpl::novelty: the trained part again, fitted on
 // the clouds not augmented; format 7 reads none: novelty from the model's own stages).
-constexpr uint32_t kFormatVersion = 8;
+// 9: after it (the model's, not the novelty model's), a u8: 1 novelty adds its two evidences
+// (Calibration::novelty_adds_evidence, the model's and its novelty model's), 0 the larger; format 8 and
+// older read 0, what their quantiles were taken with.
+constexpr uint32_t kFormatVersion = 9;
 constexpr uint32_t kOldestReadableVersion = 1;
 
 uint32_t crc32(const uint8_t* data, size_t n) {
@@ -143,8 +146,9 @@ DecisionStage read_stage(Reader& r, int categories, Eigen::Index histogram_size)
 }
 
 // The trained part of a model; then (format 8 on) a u8, 1: the novelty model follows (ModelImpl::novelty,
-// the same layout, its own flag 0).
-void write_impl(Writer& w, const ModelImpl& m) {
+// the same layout, its own flag 0); then, but for the novelty model (`nested`), how novelty combines its
+// evidence (format 9 on).
+void write_impl(Writer& w, const ModelImpl& m, bool nested) {
   const TrainParams& p = m.params;
   write_train_params(w, p);
   write_methods(w, p.methods);
@@ -174,7 +178,8 @@ void write_impl(Writer& w, const ModelImpl& m) {
     w.f64(m.calibration.fusion_head_share);
   }
   w.u8(m.novelty ? 1 : 0);
-  if (m.novelty) write_impl(w, *m.novelty);
+  if (m.novelty) write_impl(w, *m.novelty, true);
+  if (!nested) w.u8(m.calibration.novelty_adds_evidence ? 1 : 0);
 }
 
 // write_impl's block; `nested`: the novelty model's, which holds none itself.
@@ -255,15 +260,26 @@ std::shared_ptr<ModelImpl> read_impl(Reader& r, uint32_t ncat, uint32_t version,
     impl->calibration.fusion_head_share = share;
     impl->fusion_head = std::move(head);
   }
+  std::shared_ptr<ModelImpl> novelty;
   if (version >= 8 && !r.failed() && r.u8("novelty model flag") == 1) {
     if (nested) {
       r.fail("a novelty model within a novelty model");
-    } else if (auto novelty = read_impl(r, ncat, version, true); !r.failed()) {
+    } else if (novelty = read_impl(r, ncat, version, true); !r.failed()) {
       if (novelty->params.methods != impl->params.methods || novelty->calibration.method != impl->calibration.method ||
           novelty->calibration.novelty_scale.empty())
         r.fail("the novelty model's methods or calibration do not match the model's");
-      impl->novelty = std::move(novelty);
     }
+  }
+  // Format 8 and older took their novelty quantiles with the larger of the two evidences.
+  impl->calibration.novelty_adds_evidence = false;
+  if (version >= 9 && !nested && !r.failed()) {
+    const uint8_t adds = r.u8("novelty combination");
+    if (adds > 1) r.fail("unknown novelty combination");
+    impl->calibration.novelty_adds_evidence = adds == 1;
+  }
+  if (novelty) {
+    novelty->calibration.novelty_adds_evidence = impl->calibration.novelty_adds_evidence;
+    impl->novelty = std::move(novelty);
   }
   return impl;
 }
@@ -287,7 +303,7 @@ std::vector<uint8_t> serialize(const Model& model) {
   w.f64(model.stats.max_extent_m);
 
   w.u8(model.impl ? 1 : 0);
-  if (model.impl) write_impl(w, *model.impl);
+  if (model.impl) write_impl(w, *model.impl, false);
 
   Writer out;
   out.bytes.insert(out.bytes.end(), kMagic, kMagic + 8);

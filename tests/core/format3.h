@@ -1,4 +1,4 @@
-// Model bytes of formats 3 to 7 made from a format-8 model (of no augmented cloud), for tests and benchmarks of models
+// Model bytes of formats 3 to 8 made from a format-9 model (of no augmented cloud for 7 and older), for tests and benchmarks of models
 // written before novelty existed ("none of these"; format 3 has no novelty block), before novelty was
 // divided by the decision's score (format 4 lacks that byte) or before it was measured over several
 // training objects (format 5 lacks the reference objects that end the payload).
@@ -31,9 +31,19 @@ inline std::vector<uint8_t> with_version(std::vector<uint8_t> bytes, uint32_t ve
   return bytes;
 }
 
+// Format 8 is format 9 without the byte that ends the payload (serialize.cpp: 1, novelty adds its two
+// evidences; format 8 reads the larger).
+inline std::vector<uint8_t> as_format_8(std::vector<uint8_t> bytes) {
+  if (bytes.size() < 25 || bytes[bytes.size() - 5] > 1) return {};
+  const size_t payload = bytes.size() - 24;
+  bytes.erase(bytes.end() - 5);
+  return with_version(std::move(bytes), 8, payload - 1);
+}
+
 // Format 7 is format 8 without the novelty model's flag that ends the payload (serialize.cpp), for a
 // model trained with no augmented cloud (the flag 0, nothing after it).
 inline std::vector<uint8_t> as_format_7(std::vector<uint8_t> bytes) {
+  bytes = as_format_8(std::move(bytes));
   if (bytes.size() < 25 || bytes[bytes.size() - 5] != 0) return {};
   const size_t payload = bytes.size() - 24;
   bytes.erase(bytes.end() - 5);

@@ -86,16 +86,18 @@ TEST(Novelty, IsCalibratedOnHeldOutFoldsOfTheTrainingSet) {
   EXPECT_DOUBLE_EQ(c.novelty_threshold, novelty_threshold(c, 0.95));
   EXPECT_LE(novelty_threshold(c, 0.5), novelty_threshold(c, 0.95));
   EXPECT_LE(novelty_threshold(c, 0.95), novelty_threshold(c, 1.0));
-  // Novelty is a distance over its typical held-out value: the median held-out known cloud is near 1.
-  EXPECT_GT(novelty_threshold(c, 0.5), 0.5);
-  EXPECT_LT(novelty_threshold(c, 0.5), 2.0);
+  // Novelty adds two evidences, each over its typical held-out value: the median held-out known cloud is
+  // near 2 (2.36 here: the decision's score divides it).
+  EXPECT_GT(novelty_threshold(c, 0.5), 1.0);
+  EXPECT_LT(novelty_threshold(c, 0.5), 4.0);
   EXPECT_TRUE(std::isnan(novelty_threshold(c, 0.0)));
   EXPECT_TRUE(std::isnan(novelty_threshold(Calibration{}, 0.95)));
 }
 
 // Cans were never learnt: their views must come out more novel than new balls' and boxes'. Measured
-// (6 objects per category, 3 views, seed 1; tested on 5 new objects, 2 views each): AUROC 0.955; 16 of
-// 20 known views accepted at the default operating point (95 % promised), 10 of 10 cans rejected. From
+// (6 objects per category, 3 views, seed 1; tested on 5 new objects, 2 views each): AUROC 0.95; 19 of
+// 20 known views accepted at the default operating point (95 % promised), 10 of 10 cans rejected. With the
+// larger of novelty's two evidences, not their sum (format 8): 0.955, 16 of 20, 10 of 10. From
 // the nearest reference alone (not a category's 4 nearest objects): 0.95, 17 of 20, 10 of 10. Before
 // novelty was divided by the decision's score: AUROC 0.925, 18 of 20, 8 of 10; before calibration decided
 // the held-out views untilted (as they come, not as they are learnt): 0.975, 10 of 20, 10 of 10.
@@ -117,13 +119,14 @@ TEST(Novelty, TellsACategoryNeverLearntFromTheKnownOnes) {
   const double a = auroc(known, unknown);
   std::cout << "balls and boxes learnt, cans unknown: AUROC " << a << ", known accepted " << accepted << "/"
             << known.size() << ", cans rejected " << rejected << "/" << unknown.size() << "\n";
-  EXPECT_GE(a, 0.93);  // measured 0.955
-  EXPECT_GE(double(accepted) / double(known.size()), 0.75);  // measured 0.8
+  EXPECT_GE(a, 0.93);  // measured 0.95
+  EXPECT_GE(double(accepted) / double(known.size()), 0.9);  // measured 0.95
   EXPECT_GE(double(rejected) / double(unknown.size()), 0.9);  // measured 1.0
 }
 
 // What the issue names: a cloud in millimetres (a 100 m ball), a room's corner, a 2 m wavy sheet. Their
-// histograms fall outside what the training histograms span (measured novelty 5.2-6.3, threshold 2.3).
+// histograms fall outside what the training histograms span (measured novelty 8.5-10.5, threshold 4.0;
+// 5.2-6.3 and 2.3 when novelty took the larger of its two evidences, not their sum).
 TEST(Novelty, CloudsFarOutsideEverythingLearntAreUnknown) {
   const OpenSet& s = open_set();
   Cloud giant = s.known.front().cloud;
@@ -146,6 +149,7 @@ TEST(Novelty, CloudsFarOutsideEverythingLearntAreUnknown) {
     ASSERT_TRUE(c.ok()) << c.error().message;
     EXPECT_TRUE(c->unknown) << "novelty " << c->novelty << ", threshold " << calibration(s.model).novelty_threshold;
     EXPECT_GT(c->novelty, 1.5 * calibration(s.model).novelty_threshold);
+    std::cout << "far outside: novelty " << c->novelty << ", threshold " << calibration(s.model).novelty_threshold << "\n";
   }
 }
 
@@ -259,7 +263,7 @@ TEST(Novelty, AugmentedCloudsAreLearntButNotMeasuredAgainst) {
   }
   ASSERT_EQ(cans, 10u);
   std::cout << "cans learnt as boxes: novelty " << ratio / double(cans) << " x as high marked augmented\n";
-  EXPECT_GE(ratio / double(cans), 2.8);  // measured 2.96
+  EXPECT_GE(ratio / double(cans), 2.2);  // measured 2.26 (2.96 when novelty took the larger evidence, not the sum)
   // The novelty model survives serialisation, and so does every novelty.
   const std::vector<uint8_t> bytes = serialize(*a);
   auto back = deserialize(bytes);
@@ -321,6 +325,42 @@ TEST(Novelty, AModelOfFormat5KeepsTheNearestReferenceAlone) {
     }
   }
   EXPECT_GT(differ, 0u);  // the known clouds' (the cans' are all outside PCA's span: the residual decides)
+}
+
+// Format 8 and older took their quantiles on the larger of the two evidences (the distance to the
+// category, what PCA leaves out), not their sum: read so, a model keeps that, with the same scores.
+TEST(Novelty, AModelOfFormat8KeepsTheLargerOfTheTwoEvidences) {
+  const OpenSet& s = open_set();
+  ASSERT_TRUE(calibration(s.model).novelty_adds_evidence);
+  auto eight = deserialize(test::as_format_8(serialize(s.model)));
+  ASSERT_TRUE(eight.ok()) << eight.error().message;
+  EXPECT_FALSE(calibration(*eight).novelty_adds_evidence);
+  EXPECT_EQ(calibration(*eight).novelty_quantiles, calibration(s.model).novelty_quantiles);
+  size_t differ = 0;
+  std::vector<TrainingCloud> clouds = s.known;
+  clouds.insert(clouds.end(), s.unknown.begin(), s.unknown.end());
+  for (const TrainingCloud& t : clouds) {
+    auto a = classify(s.model, t.cloud), b = classify(*eight, t.cloud);
+    ASSERT_TRUE(a.ok() && b.ok());
+    EXPECT_EQ(a->scores, b->scores);
+    ASSERT_EQ(a->category_novelty.size(), b->category_novelty.size());
+    for (size_t k = 0; k < a->category_novelty.size(); ++k) {
+      // Of two non-negative evidences the larger is at most their sum and at least half of it.
+      EXPECT_LE(b->category_novelty[k], a->category_novelty[k] * (1 + 1e-9));
+      EXPECT_GE(2 * b->category_novelty[k], a->category_novelty[k] * (1 - 1e-9));
+      differ += b->category_novelty[k] < a->category_novelty[k] * (1 - 1e-6);
+    }
+  }
+  EXPECT_GT(differ, 0u);
+  // The combination byte that ends the payload is 0 or 1; anything else is damage.
+  std::vector<uint8_t> bytes = serialize(s.model);
+  ASSERT_EQ(bytes[bytes.size() - 5], 1);
+  bytes[bytes.size() - 5] = 2;
+  uint64_t length = 0;
+  std::memcpy(&length, bytes.data() + 12, 8);
+  auto damaged = deserialize(test::with_version(bytes, 9, length));
+  ASSERT_FALSE(damaged.ok());
+  EXPECT_NE(damaged.error().message.find("novelty combination"), std::string::npos) << damaged.error().message;
 }
 
 // Format 4's quantiles were taken on novelty without the division by the score (and from the nearest

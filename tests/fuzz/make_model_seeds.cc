@@ -1,6 +1,6 @@
 // Writes the deserializer's seed corpus: the payloads (the bytes between the 20-byte frame header and
 // the CRC) of small models trained on two views of each zoo shape, one model per method mix, and one
-// with half its clouds marked augmented (it carries a nested novelty model, format 8).
+// with half its clouds marked augmented (it carries a nested novelty model, format 8 on).
 //   fuzz_make_model_seeds OUT_DIR
 #include <cstdio>
 #include <filesystem>

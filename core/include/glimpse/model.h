@@ -82,10 +82,10 @@ struct Calibration {
   // prefix), the median distance from held-out clouds decided as that category to its nearest
   // reference; last (+ 0 prefix, + 1 whole, by the winner's nearest reference), the median of what the
   // stage's PCA leaves out of held-out histograms. A cloud's
-  // novelty for a category is the larger of two means over the components: its distance to the
-  // category's nearest reference over that median, and what PCA leaves out of its histogram over that
-  // median. Known clouds come out near 1, clouds of nothing learnt above. Empty: not calibrated (a model
-  // of format 3 or older, or too few objects).
+  // novelty for a category is the sum (novelty_adds_evidence) of two means over the components: its
+  // distance to the category's nearest reference over that median, and what PCA leaves out of its
+  // histogram over that median. Known clouds come out near 2, clouds of nothing learnt above. Empty: not
+  // calibrated (a model of format 3 or older, or too few objects).
   std::vector<std::vector<double>> novelty_scale;
   // Per component, per reference of the model's decision stage: 1 a whole training cloud, 0 a prefix
   // (empty: every reference whole, as for decision rules whose references are centres).
@@ -105,6 +105,10 @@ struct Calibration {
   // cloud both far from what was learnt and torn between categories is more novel than one far but
   // plainly of one. False: a model of format 4, whose quantiles were taken without it.
   bool novelty_over_score = true;
+  // The two means above are added (format 9 on): a cloud somewhat far from every reference and somewhat
+  // outside what training histograms span is more novel than one as far on one count alone. False: the
+  // larger of the two, as a model of format 8 or older took its quantiles.
+  bool novelty_adds_evidence = true;
   double known_acceptance = 0.95;  // the model's default operating point (TrainParams::known_acceptance)
   double novelty_threshold = std::numeric_limits<double>::quiet_NaN();  // at known_acceptance; NaN: none
   // The share of the fusion's logistic decision in its scores (TrainParams::fusion_head_shares), chosen
