@@ -159,8 +159,9 @@ struct MethodDecision {
 MethodDecision method_decision(const ModelImpl& impl, MethodId method, const CloudFeatures& f);
 // Per category, the sum (Calibration::novelty_adds_evidence; else the larger) of two means over the
 // components, each over its calibrated scale (Calibration::novelty_scale): the distance to the
-// category's nearest reference, and what the stage's PCA leaves out of the histogram; divided by `scores` (the decision's, per category) when
-// Calibration::novelty_over_score. Empty when not calibrated or the sizes differ.
+// category's nearest reference, and what the stage's PCA leaves out of the histogram; divided by
+// `scores` (the decision's, per category) when Calibration::novelty_over_score. Empty when not
+// calibrated or the sizes differ.
 Eigen::VectorXd category_novelty(const Calibration& c, const std::vector<NearestReferences>& components,
                                  const Eigen::VectorXd& scores);
 // novelty, unknown and unknown_reason of `c` (its method and winner set) from `decision` on `f`, at the
