@@ -270,17 +270,18 @@ Calibration calibrate(const ModelImpl& impl, MethodId method, const std::vector<
       const std::vector<uint8_t> reference_whole = whole_references(stage->kind, whole, train_rows);
       const std::vector<uint32_t> reference_object = object_references(stage->kind, objects, train_rows);
       scores[j].resize(static_cast<Eigen::Index>(test_rows.size()), categories);
-      for (size_t r = 0; r < test_rows.size(); ++r) {
-        StageScores answer = decide_with_distances(*stage, q.row(test_rows[r]).transpose());
+      std::vector<NearestReferences> component(test_rows.size());
+      decide_rows_with_distances(*stage, q, test_rows, threads, [&](size_t r, StageScores&& answer) {
         scores[j].row(static_cast<Eigen::Index>(r)) = answer.scores.transpose();
-        nearest[r].push_back(nearest_references(*stage, std::move(answer), reference_whole, reference_object, novelty_objects));
-      }
+        component[r] = nearest_references(*stage, std::move(answer), reference_whole, reference_object, novelty_objects);
+      });
+      for (size_t r = 0; r < test_rows.size(); ++r) nearest[r].push_back(std::move(component[r]));
     }
     if (!ok) continue;
     // The fusion's logistic decision, learnt on this fold's training rows like the stages.
     Eigen::MatrixXd probabilities;
     if (with_head && !(cancel && cancel())) {
-      auto head = fit_chi2_logistic(fusion_head_rows(impl, histograms, train_rows), train_labels, categories, p.fusion_head);
+      auto head = fit_chi2_logistic(fusion_head_rows(impl, histograms, train_rows), train_labels, categories, p.fusion_head, threads);
       if (head.ok()) {
         const Eigen::MatrixXd x = fusion_head_rows(impl, queries, test_rows);
         probabilities.resize(x.rows(), categories);

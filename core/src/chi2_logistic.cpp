@@ -1,7 +1,9 @@
 #include "glimpse/chi2_logistic.h"
 
 #include <linear.h>
+#include <omp.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <mutex>
@@ -41,7 +43,7 @@ void quiet(const char*) {}
 }  // namespace
 
 Expected<Chi2Logistic> fit_chi2_logistic(const Eigen::MatrixXd& features, const std::vector<int>& labels, int categories,
-                                         const Chi2LogisticParams& params) {
+                                         const Chi2LogisticParams& params, int threads) {
   if (categories < 2) return invalid_argument("a logistic decision needs at least 2 categories");
   if (features.rows() != static_cast<Eigen::Index>(labels.size()) || features.rows() < 2 || features.cols() < 1)
     return invalid_argument("the logistic decision needs at least 2 labelled training rows");
@@ -67,35 +69,52 @@ Expected<Chi2Logistic> fit_chi2_logistic(const Eigen::MatrixXd& features, const 
     nodes.push_back({n + 1, 1.0});
     nodes.push_back({-1, 0.0});
   }
-  std::vector<feature_node*> rows;
-  for (size_t s : starts) rows.push_back(nodes.data() + s);
-  std::vector<double> y(labels.begin(), labels.end());
-  problem prob{};
-  prob.l = static_cast<int>(features.rows());
-  prob.n = n + 1;
-  prob.y = y.data();
-  prob.x = rows.data();
-  prob.bias = 1;
   parameter param{};
   param.solver_type = L2R_LR;
   param.eps = 1e-4;
   param.C = params.c;
-  if (const char* why = check_parameter(&prob, &param)) return internal_error(std::string("LIBLINEAR: ") + why);
-  std::unique_ptr<model, void (*)(model*)> fitted(train(&prob, &param), [](model* m) { free_and_destroy_model(&m); });
-  if (!fitted) return internal_error("LIBLINEAR trained no model");
 
   Chi2Logistic head;
   head.sample_steps = params.sample_steps;
   head.sample_interval = params.sample_interval;
   head.weights = Eigen::MatrixXd::Zero(categories, n);
   head.bias = Eigen::VectorXd::Zero(categories);
-  std::vector<int> label(static_cast<size_t>(get_nr_class(fitted.get())));
-  get_labels(fitted.get(), label.data());
-  for (size_t k = 0; k < label.size(); ++k) {
-    const int c = label[k];
-    for (int f = 0; f < n; ++f) head.weights(c, f) = get_decfun_coef(fitted.get(), f + 1, static_cast<int>(k));
-    head.bias[c] = get_decfun_bias(fitted.get(), static_cast<int>(k));
+  // One-vs-rest as LIBLINEAR's multi-class training does it, one binary problem per category, the
+  // problems shared among threads (each writes its own row of weights: the same answer whatever the
+  // thread count). A category's rows go first, so LIBLINEAR takes it as its positive label, as it
+  // does for the first category of a multi-class problem; two categories are one problem, negated.
+  const int problems = categories == 2 ? 1 : categories;
+  std::vector<std::string> failed(static_cast<size_t>(problems));
+  const int workers = std::max(1, std::min(threads > 0 ? threads : omp_get_max_threads(), problems));
+#pragma omp parallel for num_threads(workers) schedule(dynamic, 1)
+  for (int k = 0; k < problems; ++k) {
+    std::vector<feature_node*> rows;
+    std::vector<double> y;
+    for (int positive = 1; positive >= 0; --positive)
+      for (size_t r = 0; r < labels.size(); ++r)
+        if ((labels[r] == k) == bool(positive)) rows.push_back(nodes.data() + starts[r]), y.push_back(positive ? 1 : -1);
+    problem prob{};
+    prob.l = static_cast<int>(rows.size());
+    prob.n = n + 1;
+    prob.y = y.data();
+    prob.x = rows.data();
+    prob.bias = 1;
+    if (const char* why = check_parameter(&prob, &param)) {
+      failed[static_cast<size_t>(k)] = std::string("LIBLINEAR: ") + why;
+      continue;
+    }
+    std::unique_ptr<model, void (*)(model*)> fitted(train(&prob, &param), [](model* m) { free_and_destroy_model(&m); });
+    if (!fitted || get_nr_class(fitted.get()) != 2) {
+      failed[static_cast<size_t>(k)] = "LIBLINEAR trained no model";
+      continue;
+    }
+    // Label index 0 is the positive one (its rows came first).
+    for (int f = 0; f < n; ++f) head.weights(k, f) = get_decfun_coef(fitted.get(), f + 1, 0);
+    head.bias[k] = get_decfun_bias(fitted.get(), 0);
   }
+  for (const std::string& why : failed)
+    if (!why.empty()) return internal_error(why);
+  if (categories == 2) head.weights.row(1) = -head.weights.row(0), head.bias[1] = -head.bias[0];
   return head;
 }
 

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <numeric>
 #include <string>
 
@@ -29,6 +30,47 @@ void l1_to_rows(const Eigen::MatrixXd& m, const Vector& x, Eigen::ArrayXd& out) 
   out.setZero(m.rows());
   for (Eigen::Index c = 0; c < m.cols(); ++c) out += (m.col(c).array() - x[c]).abs();
 }
+
+// L1 distances from each row of x (a few queries) to every row of m, into the columns of out (m's rows
+// x queries): blocks of kRows references against kQueries queries at a time, the sums held in
+// registers while the block's columns are read once for all the queries (l1_to_rows streams the whole
+// matrix and its sums through memory per query). Every distance adds its columns in order from zero,
+// as l1_to_rows, so the two give the same bits.
+// Plain loops the compiler vectorises, built twice (AVX2 where the processor has it, SSE2 otherwise;
+// the same operations element by element, so the same bits either way).
+__attribute__((target_clones("avx2", "default")))
+void l1_to_rows_many(const Eigen::MatrixXd& m, const Eigen::MatrixXd& x, Eigen::ArrayXXd& out) {
+  constexpr int kRows = 8, kQueries = 4;
+  const Eigen::Index n = m.rows(), d = m.cols();
+  out.resize(n, x.rows());
+  std::vector<double> xq(static_cast<size_t>(kQueries * d));  // xq[c * kQueries + q]
+  for (Eigen::Index q0 = 0; q0 < x.rows(); q0 += kQueries) {
+    // The last group padded with copies of its last query, computed and dropped.
+    for (int q = 0; q < kQueries; ++q)
+      for (Eigen::Index c = 0; c < d; ++c)
+        xq[static_cast<size_t>(c * kQueries + q)] = x(std::min<Eigen::Index>(q0 + q, x.rows() - 1), c);
+    const int count = static_cast<int>(std::min<Eigen::Index>(kQueries, x.rows() - q0));
+    Eigen::Index j0 = 0;
+    for (; j0 + kRows <= n; j0 += kRows) {
+      double acc[kQueries][kRows] = {};
+      for (Eigen::Index c = 0; c < d; ++c) {
+        const double* column = m.data() + c * n + j0;
+        const double* xc = xq.data() + c * kQueries;
+        for (int q = 0; q < kQueries; ++q)
+          for (int j = 0; j < kRows; ++j) acc[q][j] += std::abs(column[j] - xc[q]);
+      }
+      for (int q = 0; q < count; ++q)
+        for (int j = 0; j < kRows; ++j) out(j0 + j, q0 + q) = acc[q][j];
+    }
+    for (; j0 < n; ++j0)
+      for (int q = 0; q < count; ++q) {
+        double sum = 0;
+        for (Eigen::Index c = 0; c < d; ++c) sum += std::abs(m(j0, c) - xq[static_cast<size_t>(c * kQueries + q)]);
+        out(j0, q0 + q) = sum;
+      }
+  }
+}
+constexpr Eigen::Index kQueriesPerPass = 8;
 
 double median(std::vector<double> v) {
   if (v.empty()) return 0;
@@ -80,19 +122,21 @@ Expected<DecisionStage> fit_decision(const Eigen::MatrixXd& histograms, const st
     // Scale: the median distance from a training vector to its nearest one of another object (the
     // distance a new object is from the training set; another view of the same object is closer).
     // Quadratic in the training vectors (tens of thousands with several elevations and prefixes):
-    // each row's distances in one column-wise pass, rows shared among threads (each writes its own
-    // slot, so the result does not depend on the thread count).
+    // a few rows' distances per pass over the rows (l1_to_rows_many), passes shared among threads
+    // (each writes its own rows' slots, so the result does not depend on the thread count).
     std::vector<double> nearest(static_cast<size_t>(y.rows()), INFINITY);
     const int workers = threads > 0 ? threads : std::max(1, omp_get_max_threads());
-#pragma omp parallel num_threads(workers)
-    {
-      Eigen::ArrayXd dist;
-#pragma omp for schedule(dynamic, 16)
-      for (Eigen::Index i = 0; i < y.rows(); ++i) {
-        l1_to_rows(y, y.row(i), dist);
+    const Eigen::Index passes = (y.rows() + kQueriesPerPass - 1) / kQueriesPerPass;
+#pragma omp parallel for num_threads(workers) schedule(dynamic, 2)
+    for (Eigen::Index pass = 0; pass < passes; ++pass) {
+      const Eigen::Index first = pass * kQueriesPerPass, count = std::min(kQueriesPerPass, y.rows() - first);
+      Eigen::ArrayXXd dist;
+      l1_to_rows_many(y, y.middleRows(first, count), dist);
+      for (Eigen::Index q = 0; q < count; ++q) {
+        const Eigen::Index i = first + q;
         double best = INFINITY;
         for (Eigen::Index j = 0; j < y.rows(); ++j)
-          if (j != i && !same_object(i, j)) best = std::min(best, dist[j]);
+          if (j != i && !same_object(i, j)) best = std::min(best, dist(j, q));
         nearest[static_cast<size_t>(i)] = best;
       }
     }
@@ -141,35 +185,15 @@ bool is_identity_projection(const Pca& pca) {
          pca.basis.isIdentity();
 }
 
-StageScores decide_with_distances(const DecisionStage& st, const Eigen::VectorXd& histogram, bool by_shape) {
+namespace {
+
+// A stage's answer (scores, nearest reference per category) from the query's distance to every
+// reference and the temperature those distances are in.
+void answer_from_distances(const DecisionStage& st, Eigen::ArrayXd&& dist, double temperature, StageScores& out) {
   const Eigen::Index n = st.references.rows();
   std::vector<std::pair<double, Eigen::Index>> d(static_cast<size_t>(n));
-  double temperature = st.temperature;
-  StageScores out;
-  if (by_shape && !st.projected) {
-    auto unit = [](const Eigen::VectorXd& v) {
-      const double mass = v.lpNorm<1>();
-      return mass > 0 ? Eigen::VectorXd(v / mass) : v;
-    };
-    const Eigen::VectorXd y = unit(histogram);
-    double mass = 0;
-    for (Eigen::Index i = 0; i < n; ++i) {
-      const Eigen::VectorXd ref = st.references.row(i).transpose();
-      mass += ref.lpNorm<1>();
-      d[static_cast<size_t>(i)] = {(unit(ref) - y).lpNorm<1>(), i};
-    }
-    out.distance.resize(n);
-    for (Eigen::Index i = 0; i < n; ++i) out.distance[i] = d[static_cast<size_t>(i)].first;
-    // Distances between unit-mass histograms: the temperature in the same units.
-    if (mass > 0) temperature = st.temperature / (mass / static_cast<double>(n));
-  } else {
-    const Eigen::VectorXd y = project_row(st.pca, histogram);
-    Eigen::ArrayXd dist;
-    l1_to_rows(st.references, y, dist);
-    for (Eigen::Index i = 0; i < n; ++i) d[static_cast<size_t>(i)] = {dist[i], i};
-    out.distance = std::move(dist);
-    out.residual = (histogram - st.pca.mean - st.pca.basis * y).lpNorm<1>();
-  }
+  for (Eigen::Index i = 0; i < n; ++i) d[static_cast<size_t>(i)] = {dist[i], i};
+  out.distance = std::move(dist);
   Eigen::VectorXd& best = out.nearest_distance;
   best = Eigen::VectorXd::Constant(st.categories, INFINITY);
   out.nearest_reference = Eigen::VectorXi::Constant(st.categories, -1);
@@ -192,7 +216,66 @@ StageScores decide_with_distances(const DecisionStage& st, const Eigen::VectorXd
   // A small floor keeps every category possible (no hard zero), then scores sum to 1.
   scores.array() += 1e-3;
   out.scores = scores / scores.sum();
+}
+
+}  // namespace
+
+StageScores decide_with_distances(const DecisionStage& st, const Eigen::VectorXd& histogram, bool by_shape) {
+  const Eigen::Index n = st.references.rows();
+  StageScores out;
+  if (by_shape && !st.projected) {
+    auto unit = [](const Eigen::VectorXd& v) {
+      const double mass = v.lpNorm<1>();
+      return mass > 0 ? Eigen::VectorXd(v / mass) : v;
+    };
+    const Eigen::VectorXd y = unit(histogram);
+    double mass = 0;
+    Eigen::ArrayXd dist(n);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const Eigen::VectorXd ref = st.references.row(i).transpose();
+      mass += ref.lpNorm<1>();
+      dist[i] = (unit(ref) - y).lpNorm<1>();
+    }
+    // Distances between unit-mass histograms: the temperature in the same units.
+    const double temperature = mass > 0 ? st.temperature / (mass / static_cast<double>(n)) : st.temperature;
+    answer_from_distances(st, std::move(dist), temperature, out);
+    return out;
+  }
+  const Eigen::VectorXd y = project_row(st.pca, histogram);
+  Eigen::ArrayXd dist;
+  l1_to_rows(st.references, y, dist);
+  out.residual = (histogram - st.pca.mean - st.pca.basis * y).lpNorm<1>();
+  answer_from_distances(st, std::move(dist), st.temperature, out);
   return out;
+}
+
+void decide_rows_with_distances(const DecisionStage& st, const Eigen::MatrixXd& histograms,
+                                const std::vector<Eigen::Index>& rows, int threads,
+                                const std::function<void(size_t, StageScores&&)>& visit) {
+  const Eigen::Index count = static_cast<Eigen::Index>(rows.size());
+  const Eigen::Index passes = (count + kQueriesPerPass - 1) / kQueriesPerPass;
+  const int workers = threads > 0 ? threads : std::max(1, omp_get_max_threads());
+#pragma omp parallel for num_threads(workers) schedule(dynamic, 1)
+  for (Eigen::Index pass = 0; pass < passes; ++pass) {
+    const Eigen::Index first = pass * kQueriesPerPass, k = std::min(kQueriesPerPass, count - first);
+    // Each query projected alone, as decide_with_distances does (a product of many rows at once may
+    // round otherwise).
+    std::vector<StageScores> out(static_cast<size_t>(k));
+    Eigen::MatrixXd y;
+    for (Eigen::Index q = 0; q < k; ++q) {
+      const Eigen::VectorXd h = histograms.row(rows[static_cast<size_t>(first + q)]).transpose();
+      const Eigen::VectorXd p = project_row(st.pca, h);
+      if (q == 0) y.resize(k, p.size());
+      y.row(q) = p.transpose();
+      out[static_cast<size_t>(q)].residual = (h - st.pca.mean - st.pca.basis * p).lpNorm<1>();
+    }
+    Eigen::ArrayXXd dist;
+    l1_to_rows_many(st.references, y, dist);
+    for (Eigen::Index q = 0; q < k; ++q) {
+      answer_from_distances(st, Eigen::ArrayXd(dist.col(q)), st.temperature, out[static_cast<size_t>(q)]);
+      visit(static_cast<size_t>(first + q), std::move(out[static_cast<size_t>(q)]));
+    }
+  }
 }
 
 Eigen::VectorXd nearest_objects_distance(const DecisionStage& st, const Eigen::ArrayXd& distance,

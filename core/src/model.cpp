@@ -305,7 +305,7 @@ Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainP
   if (needs(model.methods, MethodId::kFusion) && params.fusion_head.c > 0 && model.categories.size() >= 2 &&
       !fusion_head_methods(*impl).empty()) {
     auto head = fit_chi2_logistic(fusion_head_rows(*impl, histograms), labels, static_cast<int>(model.categories.size()),
-                                  params.fusion_head);
+                                  params.fusion_head, threads);
     if (!head.ok()) return with_method(MethodId::kFusion, head.error());
     impl->fusion_head = std::move(*head);
   }

@@ -2,7 +2,10 @@
 // each vector's distance to the nearest one of another object (its temperature), quadratic in the
 // training vectors. With training views from three elevations and their prefixes a SHREC fold holds
 // ~20k vectors, and the model's calibration fits four more stages. BM_NearestOtherObjectRowwise is
-// the row-at-a-time loop fit_decision used before, run in the same process as the ratio's baseline.
+// the row-at-a-time loop fit_decision used first, BM_NearestOtherObjectColumnPass the one-query
+// column-wise pass it used next (stop 37), run in the same process as the ratios' baselines.
+// BM_DecideRows: calibration's held-out decisions, a few queries per tiled pass, against
+// BM_DecideOneByOne, decide_with_distances per query as calibration did before.
 #include <benchmark/benchmark.h>
 
 #include <cmath>
@@ -71,6 +74,76 @@ void BM_NearestOtherObjectRowwise(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_NearestOtherObjectRowwise)->Arg(2000)->Arg(8000)->Unit(benchmark::kMillisecond);
+
+// The baseline of the tiled passes: each row's distances to every row in one column-wise pass (the
+// loop of stop 37), one row at a time, rows shared among threads.
+void BM_NearestOtherObjectColumnPass(benchmark::State& state) {
+  const Training t = training(static_cast<int>(state.range(0)));
+  auto pca = fit_pca(t.histograms, 0.98, 65);
+  if (!pca.ok()) {
+    state.SkipWithError("fit_pca failed");
+    return;
+  }
+  const Eigen::MatrixXd y = project(*pca, t.histograms);
+  const int threads = static_cast<int>(state.range(1));
+  for (auto _ : state) {
+    std::vector<double> nearest(static_cast<size_t>(y.rows()), INFINITY);
+#pragma omp parallel num_threads(threads)
+    {
+      Eigen::ArrayXd dist;
+#pragma omp for schedule(dynamic, 16)
+      for (Eigen::Index i = 0; i < y.rows(); ++i) {
+        dist.setZero(y.rows());
+        for (Eigen::Index c = 0; c < y.cols(); ++c) dist += (y.col(c).array() - y(i, c)).abs();
+        double best = INFINITY;
+        for (Eigen::Index j = 0; j < y.rows(); ++j)
+          if (j != i && t.groups[static_cast<size_t>(i)] != t.groups[static_cast<size_t>(j)]) best = std::min(best, dist[j]);
+        nearest[static_cast<size_t>(i)] = best;
+      }
+    }
+    benchmark::DoNotOptimize(nearest);
+  }
+}
+BENCHMARK(BM_NearestOtherObjectColumnPass)->Args({8000, 1})->Args({8000, 2})->Unit(benchmark::kMillisecond);
+
+// 2000 held-out queries against a stage of 8000 references.
+struct Decisions {
+  DecisionStage stage;
+  Eigen::MatrixXd queries;
+  std::vector<Eigen::Index> rows;
+};
+Decisions decisions() {
+  const Training t = training(10000);
+  DecisionParams p;
+  p.pca_explained_variance = 0.98;
+  Decisions d;
+  d.stage = *fit_decision(t.histograms.topRows(8000), std::vector<int>(t.labels.begin(), t.labels.begin() + 8000), 5, p,
+                          42, 0, std::vector<int>(t.groups.begin(), t.groups.begin() + 8000));
+  d.queries = t.histograms.bottomRows(2000);
+  for (Eigen::Index r = 0; r < d.queries.rows(); ++r) d.rows.push_back(r);
+  return d;
+}
+
+void BM_DecideOneByOne(benchmark::State& state) {
+  const Decisions d = decisions();
+  for (auto _ : state) {
+    double sum = 0;
+    for (Eigen::Index r : d.rows) sum += decide_with_distances(d.stage, d.queries.row(r).transpose()).nearest_distance[0];
+    benchmark::DoNotOptimize(sum);
+  }
+}
+BENCHMARK(BM_DecideOneByOne)->Unit(benchmark::kMillisecond);
+
+void BM_DecideRows(benchmark::State& state) {
+  const Decisions d = decisions();
+  for (auto _ : state) {
+    std::vector<double> first(d.rows.size());
+    decide_rows_with_distances(d.stage, d.queries, d.rows, static_cast<int>(state.range(0)),
+                               [&](size_t k, StageScores&& s) { first[k] = s.nearest_distance[0]; });
+    benchmark::DoNotOptimize(first);
+  }
+}
+BENCHMARK(BM_DecideRows)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

@@ -111,6 +111,13 @@ TEST(Chi2Logistic, LearnsSeparableCategoriesAndGivesADistribution) {
   ASSERT_TRUE(again.ok());
   EXPECT_EQ(again->weights, head->weights);
   EXPECT_EQ(again->bias, head->bias);
+  // The categories' problems shared among threads: the same weights on one thread or all.
+  for (int threads : {2, 0}) {
+    auto shared = fit_chi2_logistic(train.features, train.labels, 3, {}, threads);
+    ASSERT_TRUE(shared.ok());
+    EXPECT_EQ(shared->weights, head->weights) << threads << " threads";
+    EXPECT_EQ(shared->bias, head->bias);
+  }
   // A feature vector of another length is no answer, not a wrong one.
   EXPECT_EQ(chi2_logistic_probabilities(*head, Eigen::VectorXd::Zero(5)).size(), 0);
 }

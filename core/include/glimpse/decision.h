@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "glimpse/codebook.h"
@@ -49,6 +50,12 @@ struct StageScores {
   Eigen::ArrayXd distance;  // to every reference (rows of stage.references), in the same space
 };
 StageScores decide_with_distances(const DecisionStage& stage, const Eigen::VectorXd& histogram, bool by_shape = false);
+// decide_with_distances of the given rows of `histograms`, the same answers to the bit, computed a few
+// queries per pass over the references (their sums held in registers) and the passes shared among `threads` (0: all cores):
+// visit(k, answer) for rows[k], each once, from any of the threads.
+void decide_rows_with_distances(const DecisionStage& stage, const Eigen::MatrixXd& histograms,
+                                const std::vector<Eigen::Index>& rows, int threads,
+                                const std::function<void(size_t, StageScores&&)>& visit);
 
 // Per category c, the mean over its objects[c] nearest training objects of the distance to each one's
 // nearest reference (`distance` from decide_with_distances; `reference_object`: the training object of each
