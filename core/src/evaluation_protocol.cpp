@@ -91,7 +91,8 @@ Status train_and_classify(Protocol& P) {
       for (size_t k = 0; k < P.train_slots[v].size(); ++k) {  // the whole (learnt) view, then its prefixes
         const FeatureSlot& slot = P.slots[static_cast<size_t>(P.train_slots[v][k])];
         if (!slot.ok) continue;
-        const bool augmented = P.views[v].train_condition >= 0 || (zoo_added && object.source == "zoo");
+        const bool augmented = P.params.novelty_models &&
+                               (P.views[v].train_condition >= 0 || (zoo_added && object.source == "zoo"));
         samples.push_back({object.category, id, slot.features, k == 0, std::nullopt, augmented});
         const FeatureSlot& seen = P.slots[static_cast<size_t>(P.seen_slots[v][k])];
         if (&seen != &slot && seen.ok) samples.back().as_seen = seen.features;

@@ -33,12 +33,15 @@ Status size_blind_ablation(EvalResult& result, const std::vector<EvalObject>& ob
   p.explore_max_keypoints = 0;
   p.matrix.clear();
   p.export_histograms_dir.clear();  // --export-histograms holds the main run's histograms only
+  p.novelty_models = false;         // the ablation's rows are its winners' accuracies: novelty is not read
   const bool keypoints = std::any_of(p.methods.begin(), p.methods.end(), [](MethodId m) {
     return m == MethodId::kBoK || m == MethodId::kBoG || m == MethodId::kKGH;
   });
   if (!keypoints) std::erase_if(p.stages, [](const Stage& s) { return s.kind == StageKind::kKeypoints; });
   const auto t0 = std::chrono::steady_clock::now();
-  auto blind = run_evaluation(common_height(objects, 1.0f), p, result.source + ", every object 1 m tall",
+  std::vector<EvalObject> known = objects;  // nor are the unknown objects'
+  std::erase_if(known, [](const EvalObject& o) { return o.role == EvalRole::kUnknown; });
+  auto blind = run_evaluation(common_height(std::move(known), 1.0f), p, result.source + ", every object 1 m tall",
                               [&bar](const EvalProgress& e) { bar({"size-blind: " + e.phase, e.done, e.total}); });
   if (!blind.ok()) return blind.error();
   add_ablation(result, *blind, "size-blind: every object 1 m tall, train and test");

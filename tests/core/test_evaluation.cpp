@@ -520,11 +520,15 @@ TEST(RunEvaluation, SensorTestViewsAndTheRobustnessMatrix) {
   EXPECT_GE(full, 93.0);                      // measured 95.0
   EXPECT_GE(residue.accuracy[0], 85.0);       // measured 90
   EXPECT_GE(residue.accuracy[2], 80.0);       // measured 85
-  // Same answers on one thread.
+  // Same answers on one thread, and without the novelty models (which the size-blind ablation skips):
+  // they weigh on novelty alone, never on a decision's scores.
+  EXPECT_EQ(r->novelty_models, 2u);  // each fold's model learnt the ideal views apart
   EvalParams one = p;
   one.threads = 1;
+  one.novelty_models = false;
   auto r1 = run_evaluation(objects, one, "zoo, depth camera");
   ASSERT_TRUE(r1.ok());
+  EXPECT_EQ(r1->novelty_models, 0u);
   for (size_t i = 0; i < r->robustness.size(); ++i) EXPECT_EQ(r1->robustness[i].accuracy, r->robustness[i].accuracy);
   ASSERT_EQ(r1->decisions.size(), r->decisions.size());
   for (size_t i = 0; i < r->decisions.size(); ++i) EXPECT_EQ(r1->decisions[i].scores, r->decisions[i].scores) << i;

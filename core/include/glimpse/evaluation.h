@@ -190,6 +190,9 @@ struct EvalParams {
   size_t matrix_views_per_object = 2;
   int threads = 0;  // 0 = all cores; results do not depend on it
   uint64_t seed = 42;
+  // false: no training cloud is marked augmented, so no model learns apart the clouds novelty measures
+  // against (half the training time again; for ablations that read only the decisions' winners).
+  bool novelty_models = true;
   // Non-empty: every fold's model writes the histograms it computes, of its training clouds and of
   // every tested stage, to DIR/fold<k>.csv (other classifiers can then be tried on exactly what the
   // decision stages see). The folder must exist.
