@@ -209,11 +209,8 @@ Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainP
   }
 
   // What novelty measures against when some clouds were augmented: the others, learnt apart (step 5).
-  std::vector<TrainingSample> given;
   const size_t augmented = static_cast<size_t>(std::count_if(data.begin(), data.end(), [](const TrainingSample& d) { return d.augmented; }));
-  if (augmented > 0 && augmented < data.size())
-    for (const TrainingSample& d : data)
-      if (!d.augmented) given.push_back(d);
+  const bool novelty_apart = augmented > 0 && augmented < data.size();
 
   const std::vector<MethodId> base = base_methods(params);
   const int threads = resolve_threads(params.threads);
@@ -319,18 +316,6 @@ Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainP
                                 static_cast<int>(model.categories.size()), threads, cancel);
   report("calibration", 1, 1);
   if (cancelled_now()) return cancelled("training cancelled");
-  // 5. Novelty from the clouds given as they are: the augmented ones widen the decision, not what is
-  // known. Without a calibrated novelty there (too few objects of a category, or a category only
-  // augmented clouds have), novelty stays the model's own.
-  if (!given.empty()) {
-    report("novelty", 0, 1);
-    auto novelty = train_on_features(std::move(given), params, {}, cancel);
-    if (cancelled_now()) return cancelled("training cancelled");
-    if (novelty.ok() && novelty->categories == model.categories && novelty->impl &&
-        !novelty->impl->calibration.novelty_scale.empty() && novelty->impl->calibration.method == impl->calibration.method)
-      impl->novelty = novelty->impl;
-    report("novelty", 1, 1);
-  }
   model.stats.clouds = data.size();
   std::set<std::string> objects;
   for (const auto& d : data) objects.insert(d.category + "/" + d.object_id);
@@ -344,6 +329,25 @@ Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainP
   model.stats.categories = model.categories;
   model.stats.clouds_per_category.assign(model.categories.size(), 0);
   for (int l : labels) ++model.stats.clouds_per_category[static_cast<size_t>(l)];
+
+  // 5. Novelty from the clouds given as they are: the augmented ones widen the decision, not what is
+  // known. Without a calibrated novelty there (too few objects of a category, or a category only
+  // augmented clouds have), novelty stays the model's own. Their features move there (the stats
+  // above were the last to read them), so they are never held twice.
+  if (novelty_apart) {
+    std::vector<TrainingSample> given;
+    for (size_t i = 0; i < data.size(); ++i)
+      if (!data[i].augmented)
+        given.push_back({std::move(data[i].category), std::move(data[i].object_id), std::move(f[i]), data[i].whole,
+                         std::move(as_seen[i]), false});
+    report("novelty", 0, 1);
+    auto novelty = train_on_features(std::move(given), params, {}, cancel);
+    if (cancelled_now()) return cancelled("training cancelled");
+    if (novelty.ok() && novelty->categories == model.categories && novelty->impl &&
+        !novelty->impl->calibration.novelty_scale.empty() && novelty->impl->calibration.method == impl->calibration.method)
+      impl->novelty = novelty->impl;
+    report("novelty", 1, 1);
+  }
   model.stats.seconds = ms_since(t0) / 1000.0;
   model.impl = std::move(impl);
   report("done", 1, 1);
