@@ -35,7 +35,6 @@ std::mutex& device_mutex() {
 struct RayScene::Impl {
   RTCScene scene = nullptr;
   unsigned floor_id = RTC_INVALID_GEOMETRY_ID;
-  Eigen::Vector3d lo, hi;  // every triangle's bounding box, the floor's included, padded (may_hit)
   ~Impl() {
     if (scene) rtcReleaseScene(scene);
   }
@@ -88,43 +87,11 @@ Expected<RayScene> RayScene::build(const Mesh& mesh, float floor_half_size_m) {
     if (impl->floor_id == RTC_INVALID_GEOMETRY_ID)
       return resource_exhausted("ray scene: Embree could not allocate the floor's buffers");
   }
-  {
-    Bounds all = out.bounds_;
-    if (floor_half_size_m > 0) {
-      const Vec3 c = out.bounds_.centre();
-      all.min = all.min.cwiseMin(Vec3(c.x() - floor_half_size_m, c.y() - floor_half_size_m, 0.f));
-      all.max = all.max.cwiseMax(Vec3(c.x() + floor_half_size_m, c.y() + floor_half_size_m, 0.f));
-    }
-    // Padded well beyond float rounding, so a ray Embree could hit is never ruled out.
-    const double pad = 1e-4 * double(all.extent().norm()) + 1e-6;
-    impl->lo = all.min.cast<double>() - Eigen::Vector3d::Constant(pad);
-    impl->hi = all.max.cast<double>() + Eigen::Vector3d::Constant(pad);
-  }
   rtcCommitScene(impl->scene);
   if (const RTCError e = rtcGetDeviceError(device); e != RTC_ERROR_NONE)
     return internal_error("ray scene: Embree failed to build the scene (error " + std::to_string(int(e)) + ")");
   out.impl_ = std::move(impl);
   return out;
-}
-
-bool RayScene::may_hit(const Vec3& origin, const Vec3& dir, float max_distance) const {
-  if (!impl_) return false;
-  const Eigen::Vector3d o = origin.cast<double>(), d = dir.cast<double>();
-  const double len = d.norm();
-  if (!(len > 0) || !(max_distance > 0)) return false;
-  // Slabs: the part of the ray within [0, max_distance] (along the unit direction) inside the box.
-  double t0 = 0, t1 = double(max_distance) / len;
-  for (int k = 0; k < 3; ++k) {
-    if (d[k] == 0) {
-      if (o[k] < impl_->lo[k] || o[k] > impl_->hi[k]) return false;
-      continue;
-    }
-    double a = (impl_->lo[k] - o[k]) / d[k], b = (impl_->hi[k] - o[k]) / d[k];
-    if (a > b) std::swap(a, b);
-    t0 = std::max(t0, a), t1 = std::min(t1, b);
-    if (t0 > t1) return false;
-  }
-  return true;
 }
 
 RayScene::Hit RayScene::cast(const Vec3& origin, const Vec3& dir, float max_distance) const {
@@ -196,8 +163,6 @@ Cloud depth_camera_scan(const RayScene& scene, const SensorPose& pose, const Dep
       const Vec3 ray = forward + ((float(u) + 0.5f - 0.5f * float(p.width)) / fx) * right +
                        ((0.5f * float(p.height) - float(v) - 0.5f) / fy) * up;
       const float per_depth = ray.norm();  // distance along the ray per metre of depth
-      // A ray past the scene's box hits nothing (and draws no random number): not cast.
-      if (!scene.may_hit(pose.position, ray, p.max_range_m * per_depth)) continue;
       const RayScene::Hit hit = scene.cast(pose.position, ray, p.max_range_m * per_depth);
       if (!hit.hit) continue;
       const Vec3 dir = ray / per_depth;
@@ -230,7 +195,6 @@ Cloud lidar_scan(const RayScene& scene, const SensorPose& pose, const LidarParam
     for (int a = 0; a < steps; ++a) {
       const float az = float(a) * 360.f / float(steps) * kDeg;
       const Vec3 dir(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
-      if (!scene.may_hit(pose.position, dir, p.max_range_m)) continue;
       const RayScene::Hit hit = scene.cast(pose.position, dir, p.max_range_m);
       if (!hit.hit || hit.distance < p.min_range_m) continue;
       if (!returns_at_incidence(-hit.normal.dot(dir), p.max_incidence_deg, p.max_incidence_deg, rng)) continue;

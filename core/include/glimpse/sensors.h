@@ -32,9 +32,6 @@ class RayScene {
 
   // The first surface along origin + t dir, t in (0, max_distance]; `dir` need not be unit.
   Hit cast(const Vec3& origin, const Vec3& dir, float max_distance) const;
-  // False only when that ray misses the box of every triangle (the floor's included), so cast() would
-  // find nothing: a cheap test that spares the scans the rays past the object.
-  bool may_hit(const Vec3& origin, const Vec3& dir, float max_distance) const;
 
   const Bounds& object_bounds() const { return bounds_; }
 
