@@ -191,7 +191,7 @@ struct EvalParams {
   int threads = 0;  // 0 = all cores; results do not depend on it
   uint64_t seed = 42;
   // false: no training cloud is marked augmented, so no model learns apart the clouds novelty measures
-  // against (half the training time again; for ablations that read only the decisions' winners).
+  // against (a second training, of the unmarked clouds alone; for ablations that read only the winners).
   bool novelty_models = true;
   // Non-empty: every fold's model writes the histograms it computes, of its training clouds and of
   // every tested stage, to DIR/fold<k>.csv (other classifiers can then be tried on exactly what the
