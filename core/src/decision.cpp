@@ -35,9 +35,8 @@ void l1_to_rows(const Eigen::MatrixXd& m, const Vector& x, Eigen::ArrayXd& out) 
 // x queries): blocks of kRows references against kQueries queries at a time, the sums held in
 // registers while the block's columns are read once for all the queries (l1_to_rows streams the whole
 // matrix and its sums through memory per query). Every distance adds its columns in order from zero,
-// as l1_to_rows, so the two give the same bits.
-// Plain loops the compiler vectorises, built twice (AVX2 where the processor has it, SSE2 otherwise;
-// the same operations element by element, so the same bits either way).
+// as l1_to_rows, so the two give the same bits. Plain loops the compiler vectorises, built twice: AVX2
+// where the processor has it, SSE2 otherwise (the same operations element by element either way).
 __attribute__((target_clones("avx2", "default")))
 void l1_to_rows_many(const Eigen::MatrixXd& m, const Eigen::MatrixXd& x, Eigen::ArrayXXd& out) {
   constexpr int kRows = 8, kQueries = 4;

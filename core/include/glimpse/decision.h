@@ -51,8 +51,8 @@ struct StageScores {
 };
 StageScores decide_with_distances(const DecisionStage& stage, const Eigen::VectorXd& histogram, bool by_shape = false);
 // decide_with_distances of the given rows of `histograms`, the same answers to the bit, computed a few
-// queries per pass over the references (their sums held in registers) and the passes shared among `threads` (0: all cores):
-// visit(k, answer) for rows[k], each once, from any of the threads.
+// queries per pass over the references (their sums held in registers), the passes shared among
+// `threads` (0: all cores): visit(k, answer) for rows[k], each once, from any of the threads.
 void decide_rows_with_distances(const DecisionStage& stage, const Eigen::MatrixXd& histograms,
                                 const std::vector<Eigen::Index>& rows, int threads,
                                 const std::function<void(size_t, StageScores&&)>& visit);
