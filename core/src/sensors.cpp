@@ -94,6 +94,19 @@ Expected<RayScene> RayScene::build(const Mesh& mesh, float floor_half_size_m) {
   return out;
 }
 
+namespace {
+
+// A hit at `distance` along the unit ray `d`: the face's geometric normal made unit and turned to
+// face the ray's origin.
+RayScene::Hit found(const Vec3& d, float distance, Vec3 n, bool floor) {
+  const float nn = n.norm();
+  n = nn > 0 ? Vec3(n / nn) : Vec3(-d);
+  if (n.dot(d) > 0) n = -n;
+  return {true, distance, n, floor};
+}
+
+}  // namespace
+
 RayScene::Hit RayScene::cast(const Vec3& origin, const Vec3& dir, float max_distance) const {
   Hit hit;
   const float len = dir.norm();
@@ -114,15 +127,44 @@ RayScene::Hit RayScene::cast(const Vec3& origin, const Vec3& dir, float max_dist
   rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
   rtcIntersect1(impl_->scene, &context, &rh);
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return hit;
-  Vec3 n(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
-  const float nn = n.norm();
-  n = nn > 0 ? Vec3(n / nn) : Vec3(-d);
-  if (n.dot(d) > 0) n = -n;
-  hit.hit = true;
-  hit.distance = rh.ray.tfar;
-  hit.normal = n;
-  hit.floor = rh.hit.geomID == impl_->floor_id;
-  return hit;
+  return found(d, rh.ray.tfar, Vec3(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z), rh.hit.geomID == impl_->floor_id);
+}
+
+void RayScene::cast_many(const Vec3& origin, std::span<const Vec3> dirs, std::span<const float> max_distances,
+                         std::span<Hit> out) const {
+  std::fill(out.begin(), out.end(), Hit{});
+  if (!impl_) return;
+  const size_t n = std::min({dirs.size(), max_distances.size(), out.size()});
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  for (size_t first = 0; first < n; first += 8) {
+    alignas(32) RTCRayHit8 rh;
+    alignas(32) int valid[8];
+    Vec3 unit[8];
+    for (size_t k = 0; k < 8; ++k) {
+      const size_t i = first + k;
+      const float len = i < n ? dirs[i].norm() : 0.f;
+      valid[k] = i < n && len > 0 && max_distances[i] > 0 ? -1 : 0;
+      unit[k] = valid[k] ? Vec3(dirs[i] / len) : Vec3::UnitX();
+      rh.ray.org_x[k] = origin.x(), rh.ray.org_y[k] = origin.y(), rh.ray.org_z[k] = origin.z();
+      rh.ray.dir_x[k] = unit[k].x(), rh.ray.dir_y[k] = unit[k].y(), rh.ray.dir_z[k] = unit[k].z();
+      rh.ray.tnear[k] = 0.f;
+      rh.ray.tfar[k] = valid[k] ? max_distances[i] : 0.f;
+      rh.ray.time[k] = 0.f;
+      rh.ray.mask[k] = std::numeric_limits<unsigned>::max();
+      rh.ray.id[k] = static_cast<unsigned>(k);
+      rh.ray.flags[k] = 0;
+      rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+      rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+    }
+    rtcIntersect8(valid, impl_->scene, &context, &rh);
+    for (size_t k = 0; k < 8 && first + k < n; ++k) {
+      if (valid[k] && rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID)
+        out[first + k] = found(unit[k], rh.ray.tfar[k], Vec3(rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]),
+                               rh.hit.geomID[k] == impl_->floor_id);
+    }
+  }
 }
 
 SensorPose orbit_pose(const Vec3& target, float azimuth_deg, float elevation_deg, float distance_m) {
@@ -157,13 +199,21 @@ Cloud depth_camera_scan(const RayScene& scene, const SensorPose& pose, const Dep
   const float fy = 0.5f * float(p.height) / std::tan(0.5f * p.fov_v_deg * kDeg);
   const double focal_baseline = double(fx) * p.baseline_m;  // disparity (px) x depth (m)
   std::mt19937_64 rng(seed);
-  for (int v = 0; v < p.height; ++v)
+  std::vector<Vec3> rays(static_cast<size_t>(p.width));
+  std::vector<float> reach(rays.size());
+  std::vector<RayScene::Hit> hits(rays.size());
+  for (int v = 0; v < p.height; ++v) {
+    // A row's rays through the pixel centres, with unit depth along the optical axis, cast together.
     for (int u = 0; u < p.width; ++u) {
-      // Ray through the pixel centre with unit depth along the optical axis.
-      const Vec3 ray = forward + ((float(u) + 0.5f - 0.5f * float(p.width)) / fx) * right +
-                       ((0.5f * float(p.height) - float(v) - 0.5f) / fy) * up;
+      rays[size_t(u)] = forward + ((float(u) + 0.5f - 0.5f * float(p.width)) / fx) * right +
+                        ((0.5f * float(p.height) - float(v) - 0.5f) / fy) * up;
+      reach[size_t(u)] = p.max_range_m * rays[size_t(u)].norm();
+    }
+    scene.cast_many(pose.position, rays, reach, hits);
+    for (int u = 0; u < p.width; ++u) {
+      const Vec3& ray = rays[size_t(u)];
       const float per_depth = ray.norm();  // distance along the ray per metre of depth
-      const RayScene::Hit hit = scene.cast(pose.position, ray, p.max_range_m * per_depth);
+      const RayScene::Hit& hit = hits[size_t(u)];
       if (!hit.hit) continue;
       const Vec3 dir = ray / per_depth;
       const double depth = double(hit.distance) / per_depth;
@@ -179,6 +229,7 @@ Cloud depth_camera_scan(const RayScene& scene, const SensorPose& pose, const Dep
       }
       out.points.push_back(pose.position + float(z * per_depth) * dir);
     }
+  }
   return out;
 }
 

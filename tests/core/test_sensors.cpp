@@ -98,6 +98,42 @@ TEST(RayScene, FloorPatchLiesAtZeroUnderTheObject) {
   EXPECT_FALSE(scene->cast({3.8f, 0.f, 1.f}, {0, 0, -1}, 10.f).hit);  // beyond the 1 m patch
 }
 
+// Packets of 8 rays find what single rays find: a sphere on the floor seen through a camera's pixel
+// grid (hits on both, misses, grazing rays at the silhouette), a count of rays that leaves the last
+// packet part-filled, a zero direction and a zero reach (no hit, as cast() says). Where two faces lie
+// at the same distance (an edge, a duplicated face) either may be reported: this sphere has none.
+TEST(RayScene, CastManyFindsWhatCastFindsRayByRay) {
+  auto scene = RayScene::build(sphere_mesh(0.3f, {0.f, 0.f, 0.3f}), 1.f);
+  ASSERT_TRUE(scene.ok());
+  const Vec3 origin(1.2f, 0.3f, 0.8f);
+  std::vector<Vec3> dirs;
+  std::vector<float> reach;
+  for (int v = 0; v < 61; ++v)
+    for (int u = 0; u < 61; ++u) {
+      dirs.push_back(Vec3(-1.f, 0.02f * float(u - 30), 0.02f * float(v - 45)) - Vec3(0, 0.25f, 0));
+      reach.push_back(u % 17 == 3 ? 1.f : 4.f);  // some rays stop short of the sphere's far side
+    }
+  dirs.push_back(Vec3::Zero()), reach.push_back(4.f);
+  dirs.push_back(Vec3(-1, 0, -0.5f)), reach.push_back(0.f);
+  ASSERT_NE(dirs.size() % 8, 0u);
+  std::vector<RayScene::Hit> many(dirs.size());
+  scene->cast_many(origin, dirs, reach, many);
+  size_t hits = 0, floor = 0;
+  for (size_t i = 0; i < dirs.size(); ++i) {
+    const RayScene::Hit one = scene->cast(origin, dirs[i], reach[i]);
+    ASSERT_EQ(many[i].hit, one.hit) << "ray " << i;
+    EXPECT_EQ(many[i].distance, one.distance) << "ray " << i;
+    EXPECT_EQ(many[i].normal, one.normal) << "ray " << i;
+    EXPECT_EQ(many[i].floor, one.floor) << "ray " << i;
+    hits += one.hit, floor += one.floor;
+  }
+  EXPECT_GT(hits - floor, 300u);  // the sphere and the floor both seen, and rays that miss both
+  EXPECT_GT(floor, 300u);
+  EXPECT_LT(hits, dirs.size() - 300);
+  EXPECT_FALSE(many[dirs.size() - 2].hit);
+  EXPECT_FALSE(many.back().hit);
+}
+
 TEST(DepthCamera, PlaneAtTwoMetresHasNguyensAxialSigma) {
   // Camera at the origin looking along +x at a 6 m wide wall 2 m away: every pixel has depth 2 m.
   auto scene = RayScene::build(wall(2.f, 3.f));
