@@ -281,7 +281,10 @@ Calibration calibrate(const ModelImpl& impl, MethodId method, const std::vector<
     // The fusion's logistic decision, learnt on this fold's training rows like the stages.
     Eigen::MatrixXd probabilities;
     if (with_head && !(cancel && cancel())) {
-      auto head = fit_chi2_logistic(fusion_head_rows(impl, histograms, train_rows), train_labels, categories, p.fusion_head, threads);
+      // Started from the model's own head (all the rows): LIBLINEAR stops at the same tolerance of the
+      // same problem, in fewer steps.
+      auto head = fit_chi2_logistic(fusion_head_rows(impl, histograms, train_rows), train_labels, categories, p.fusion_head, threads,
+                                    &*impl.fusion_head);
       if (head.ok()) {
         const Eigen::MatrixXd x = fusion_head_rows(impl, queries, test_rows);
         probabilities.resize(x.rows(), categories);

@@ -43,7 +43,7 @@ void quiet(const char*) {}
 }  // namespace
 
 Expected<Chi2Logistic> fit_chi2_logistic(const Eigen::MatrixXd& features, const std::vector<int>& labels, int categories,
-                                         const Chi2LogisticParams& params, int threads) {
+                                         const Chi2LogisticParams& params, int threads, const Chi2Logistic* start) {
   if (categories < 2) return invalid_argument("a logistic decision needs at least 2 categories");
   if (features.rows() != static_cast<Eigen::Index>(labels.size()) || features.rows() < 2 || features.cols() < 1)
     return invalid_argument("the logistic decision needs at least 2 labelled training rows");
@@ -93,17 +93,25 @@ Expected<Chi2Logistic> fit_chi2_logistic(const Eigen::MatrixXd& features, const 
     for (int positive = 1; positive >= 0; --positive)
       for (size_t r = 0; r < labels.size(); ++r)
         if ((labels[r] == k) == bool(positive)) rows.push_back(nodes.data() + starts[r]), y.push_back(positive ? 1 : -1);
+    std::vector<double> init;
+    parameter own = param;
+    if (start && start->weights.rows() == categories && start->weights.cols() == n) {
+      init.resize(static_cast<size_t>(n) + 1);
+      for (int f = 0; f < n; ++f) init[static_cast<size_t>(f)] = start->weights(k, f);
+      init[static_cast<size_t>(n)] = start->bias[k];
+      own.init_sol = init.data();
+    }
     problem prob{};
     prob.l = static_cast<int>(rows.size());
     prob.n = n + 1;
     prob.y = y.data();
     prob.x = rows.data();
     prob.bias = 1;
-    if (const char* why = check_parameter(&prob, &param)) {
+    if (const char* why = check_parameter(&prob, &own)) {
       failed[static_cast<size_t>(k)] = std::string("LIBLINEAR: ") + why;
       continue;
     }
-    std::unique_ptr<model, void (*)(model*)> fitted(train(&prob, &param), [](model* m) { free_and_destroy_model(&m); });
+    std::unique_ptr<model, void (*)(model*)> fitted(train(&prob, &own), [](model* m) { free_and_destroy_model(&m); });
     if (!fitted || get_nr_class(fitted.get()) != 2) {
       failed[static_cast<size_t>(k)] = "LIBLINEAR trained no model";
       continue;
