@@ -23,23 +23,16 @@ double l1_rows(const Eigen::MatrixXd& m, Eigen::Index i, const Eigen::VectorXd& 
   return (m.row(i).transpose() - x).lpNorm<1>();
 }
 
-// L1 distances from x to every row of m, accumulated column by column: each column is contiguous in
-// Eigen's column-major storage, so this runs at memory speed where a row at a time strides across it.
-template <typename Vector>
-void l1_to_rows(const Eigen::MatrixXd& m, const Vector& x, Eigen::ArrayXd& out) {
-  out.setZero(m.rows());
-  for (Eigen::Index c = 0; c < m.cols(); ++c) out += (m.col(c).array() - x[c]).abs();
-}
-
 // L1 distances from each row of x (a few queries) to every row of m, into the columns of out (m's rows
 // x queries): blocks of kRows references against kQueries queries at a time, the sums held in
-// registers while the block's columns are read once for all the queries (l1_to_rows streams the whole
-// matrix and its sums through memory per query). Every distance adds its columns in order from zero,
-// as l1_to_rows, so the two give the same bits. Plain loops the compiler vectorises, built twice: AVX2
-// where the processor has it, SSE2 otherwise (the same operations element by element either way).
-__attribute__((target_clones("avx2", "default")))
-void l1_to_rows_many(const Eigen::MatrixXd& m, const Eigen::MatrixXd& x, Eigen::ArrayXXd& out) {
-  constexpr int kRows = 8, kQueries = 4;
+// registers while the block's columns are read once for all the queries (a column at a time over the
+// whole matrix would stream the sums through memory). Every distance adds its columns in order from
+// zero, whatever kQueries, so one query alone and many at once give the same bits. Plain loops the
+// compiler vectorises, inlined into entry points built twice: AVX2 where the processor has it, SSE2
+// otherwise (the same operations element by element either way).
+template <int kQueries>
+[[gnu::always_inline]] inline void l1_block_kernel(const Eigen::MatrixXd& m, const Eigen::MatrixXd& x, Eigen::ArrayXXd& out) {
+  constexpr int kRows = 8;
   const Eigen::Index n = m.rows(), d = m.cols();
   out.resize(n, x.rows());
   std::vector<double> xq(static_cast<size_t>(kQueries * d));  // xq[c * kQueries + q]
@@ -68,6 +61,24 @@ void l1_to_rows_many(const Eigen::MatrixXd& m, const Eigen::MatrixXd& x, Eigen::
         out(j0, q0 + q) = sum;
       }
   }
+}
+
+// Many queries: 4 at a time (training's temperature, calibration's held-out decisions).
+__attribute__((target_clones("avx2", "default")))
+void l1_to_rows_many(const Eigen::MatrixXd& m, const Eigen::MatrixXd& x, Eigen::ArrayXXd& out) {
+  l1_block_kernel<4>(m, x, out);
+}
+
+// One query (a Classify, a stream's chunk): the same kernel, one query wide.
+__attribute__((target_clones("avx2", "default")))
+void l1_to_rows_one(const Eigen::MatrixXd& m, const Eigen::MatrixXd& x, Eigen::ArrayXXd& out) {
+  l1_block_kernel<1>(m, x, out);
+}
+
+void l1_to_rows(const Eigen::MatrixXd& m, const Eigen::VectorXd& x, Eigen::ArrayXd& out) {
+  Eigen::ArrayXXd dist;
+  l1_to_rows_one(m, x.transpose(), dist);
+  out = dist.col(0);
 }
 constexpr Eigen::Index kQueriesPerPass = 8;
 
@@ -120,23 +131,30 @@ Expected<DecisionStage> fit_decision(const Eigen::MatrixXd& histograms, const st
     st.labels = labels;
     // Scale: the median distance from a training vector to its nearest one of another object (the
     // distance a new object is from the training set; another view of the same object is closer).
-    // Quadratic in the training vectors (tens of thousands with several elevations and prefixes):
-    // a few rows' distances per pass over the rows (l1_to_rows_many), passes shared among threads
-    // (each writes its own rows' slots, so the result does not depend on the thread count).
-    std::vector<double> nearest(static_cast<size_t>(y.rows()), INFINITY);
+    // Quadratic in the training vectors (tens of thousands with several elevations and prefixes), so
+    // the median is over params.temperature_queries of them, evenly spaced in training order (each
+    // against every vector): a few rows' distances per pass over the rows (l1_to_rows_many), passes
+    // shared among threads (each writes its own slots: the result does not depend on the thread count).
+    const Eigen::Index n = y.rows();
+    const Eigen::Index m = params.temperature_queries > 0 ? std::min<Eigen::Index>(n, params.temperature_queries) : n;
+    std::vector<Eigen::Index> queries(static_cast<size_t>(m));
+    for (Eigen::Index j = 0; j < m; ++j) queries[static_cast<size_t>(j)] = j * n / m;
+    std::vector<double> nearest(static_cast<size_t>(m), INFINITY);
     const int workers = threads > 0 ? threads : std::max(1, omp_get_max_threads());
-    const Eigen::Index passes = (y.rows() + kQueriesPerPass - 1) / kQueriesPerPass;
+    const Eigen::Index passes = (m + kQueriesPerPass - 1) / kQueriesPerPass;
 #pragma omp parallel for num_threads(workers) schedule(dynamic, 2)
     for (Eigen::Index pass = 0; pass < passes; ++pass) {
-      const Eigen::Index first = pass * kQueriesPerPass, count = std::min(kQueriesPerPass, y.rows() - first);
+      const Eigen::Index first = pass * kQueriesPerPass, count = std::min(kQueriesPerPass, m - first);
+      Eigen::MatrixXd rows(count, y.cols());
+      for (Eigen::Index q = 0; q < count; ++q) rows.row(q) = y.row(queries[static_cast<size_t>(first + q)]);
       Eigen::ArrayXXd dist;
-      l1_to_rows_many(y, y.middleRows(first, count), dist);
+      l1_to_rows_many(y, rows, dist);
       for (Eigen::Index q = 0; q < count; ++q) {
-        const Eigen::Index i = first + q;
+        const Eigen::Index i = queries[static_cast<size_t>(first + q)];
         double best = INFINITY;
-        for (Eigen::Index j = 0; j < y.rows(); ++j)
+        for (Eigen::Index j = 0; j < n; ++j)
           if (j != i && !same_object(i, j)) best = std::min(best, dist(j, q));
-        nearest[static_cast<size_t>(i)] = best;
+        nearest[static_cast<size_t>(first + q)] = best;
       }
     }
     for (double best : nearest)

@@ -52,6 +52,7 @@ void visit_params(TrainParams& p, F&& f) {
   f("decision.neighbours", p.decision.neighbours);
   f("decision.pca_explained_variance", p.decision.pca_explained_variance);
   f("decision.max_pca_dims", p.decision.max_pca_dims);
+  f("decision.temperature_queries", p.decision.temperature_queries);
   f("fusion_head.c", p.fusion_head.c);
   f("fusion_head.sample_steps", p.fusion_head.sample_steps);
   f("fusion_head.sample_interval", p.fusion_head.sample_interval);

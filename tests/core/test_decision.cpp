@@ -1,5 +1,5 @@
 // The decision stage's batched distances: many queries per pass over the references, the same bits as
-// one query at a time.
+// one query at a time; the temperature over all training rows or an evenly spaced sample of them.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -31,11 +31,12 @@ Rows random_rows(size_t n, uint64_t seed) {
   return r;
 }
 
-// The temperature as the comment of fit_decision defines it, one pair at a time: each row's nearest
-// row of another object (columns added in order), then the median.
-double temperature_pair_by_pair(const Eigen::MatrixXd& y, const std::vector<int>& objects) {
+// The temperature as the comment of fit_decision defines it, one pair at a time: for each of m rows
+// evenly spaced (row j n / m), its nearest row of another object (columns added in order); the median.
+double temperature_pair_by_pair(const Eigen::MatrixXd& y, const std::vector<int>& objects, Eigen::Index m) {
   std::vector<double> nearest;
-  for (Eigen::Index i = 0; i < y.rows(); ++i) {
+  for (Eigen::Index k = 0; k < m; ++k) {
+    const Eigen::Index i = k * y.rows() / m;
     double best = INFINITY;
     for (Eigen::Index j = 0; j < y.rows(); ++j) {
       if (objects[static_cast<size_t>(i)] == objects[static_cast<size_t>(j)]) continue;
@@ -55,10 +56,17 @@ TEST(DecisionStage, TemperatureAndManyQueriesAtOnceGiveTheBitsOfOneAtATime) {
     DecisionParams p;
     p.kind = kind;
     p.neighbours = 5;
+    p.temperature_queries = 0;  // every row
+    auto all = fit_decision(train.h, train.labels, 3, p, 1, 2, train.objects);
+    ASSERT_TRUE(all.ok()) << all.error().message;
+    EXPECT_EQ(all->temperature, temperature_pair_by_pair(all->references, train.objects, 1500));
+    p.temperature_queries = 300;  // a fifth of the rows
     auto st = fit_decision(train.h, train.labels, 3, p, 1, 2, train.objects);
     ASSERT_TRUE(st.ok()) << st.error().message;
     ASSERT_TRUE(st->projected);
-    EXPECT_EQ(st->temperature, temperature_pair_by_pair(st->references, train.objects));
+    EXPECT_EQ(st->temperature, temperature_pair_by_pair(st->references, train.objects, 300));
+    EXPECT_NE(st->temperature, all->temperature);
+    EXPECT_NEAR(st->temperature, all->temperature, 0.03 * all->temperature);  // the sample's median is the median
     auto one = fit_decision(train.h, train.labels, 3, p, 1, 1, train.objects);
     ASSERT_TRUE(one.ok());
     EXPECT_EQ(one->temperature, st->temperature);

@@ -32,6 +32,10 @@ struct DecisionParams {
   double pca_explained_variance = 0.98;  // PCA of the training histograms (sec. 3.3.2); <= 0: none, L1 on
                                          // the histograms themselves (BoG still reduced to bog_pca_dims)
   int max_pca_dims = 65;
+  // The scores' temperature (kNearestReference, kNearestNeighbours) is a median over training vectors
+  // of the distance to the nearest vector of another object: taken over this many of them, evenly
+  // spaced in training order (each still against every vector); <= 0: over all.
+  int temperature_queries = 4096;
 };
 
 struct TrainParams {
