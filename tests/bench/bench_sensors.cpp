@@ -23,19 +23,26 @@ SensorPose camera_pose() {
 }
 
 // The camera's pixel rays, row after row, and their reach (max range along each ray).
-void pixel_rays(std::vector<Vec3>& rays, std::vector<float>& reach) {
+struct Frame {
+  Vec3 origin;
+  std::vector<Vec3> rays;
+  std::vector<float> reach;
+};
+Frame camera_frame() {
   const DepthCameraParams p;
   const SensorPose pose = camera_pose();
+  Frame f{pose.position, {}, {}};
   const Vec3 forward = (pose.target - pose.position).normalized();
   const Vec3 right = forward.cross(Vec3::UnitZ()).normalized(), up = right.cross(forward);
   const float fx = 0.5f * float(p.width) / std::tan(0.5f * p.fov_h_deg * float(M_PI) / 180.f);
   const float fy = 0.5f * float(p.height) / std::tan(0.5f * p.fov_v_deg * float(M_PI) / 180.f);
   for (int v = 0; v < p.height; ++v)
     for (int u = 0; u < p.width; ++u) {
-      rays.push_back(forward + ((float(u) + 0.5f - 0.5f * float(p.width)) / fx) * right +
-                     ((0.5f * float(p.height) - float(v) - 0.5f) / fy) * up);
-      reach.push_back(p.max_range_m * rays.back().norm());
+      f.rays.push_back(forward + ((float(u) + 0.5f - 0.5f * float(p.width)) / fx) * right +
+                       ((0.5f * float(p.height) - float(v) - 0.5f) / fy) * up);
+      f.reach.push_back(p.max_range_m * f.rays.back().norm());
     }
+  return f;
 }
 
 void BM_DepthCameraScan(benchmark::State& state) {
@@ -49,13 +56,10 @@ BENCHMARK(BM_DepthCameraScan)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 // The baseline: every pixel's ray on its own.
 void BM_CastOneByOne(benchmark::State& state) {
   const RayScene& scene = chair_scene(state.range(0) != 0);
-  std::vector<Vec3> rays;
-  std::vector<float> reach;
-  pixel_rays(rays, reach);
-  const Vec3 origin = camera_pose().position;
+  const Frame f = camera_frame();
   for (auto _ : state) {
     size_t hits = 0;
-    for (size_t i = 0; i < rays.size(); ++i) hits += scene.cast(origin, rays[i], reach[i]).hit;
+    for (size_t i = 0; i < f.rays.size(); ++i) hits += scene.cast(f.origin, f.rays[i], f.reach[i]).hit;
     benchmark::DoNotOptimize(hits);
   }
 }
@@ -64,16 +68,13 @@ BENCHMARK(BM_CastOneByOne)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 // Row by row, as the camera casts them.
 void BM_CastRows(benchmark::State& state) {
   const RayScene& scene = chair_scene(state.range(0) != 0);
-  std::vector<Vec3> rays;
-  std::vector<float> reach;
-  pixel_rays(rays, reach);
-  const Vec3 origin = camera_pose().position;
+  const Frame f = camera_frame();
   const size_t width = size_t(DepthCameraParams{}.width);
   std::vector<RayScene::Hit> out(width);
   for (auto _ : state) {
     size_t hits = 0;
-    for (size_t first = 0; first < rays.size(); first += width) {
-      scene.cast_many(origin, std::span(rays).subspan(first, width), std::span(reach).subspan(first, width), out);
+    for (size_t first = 0; first < f.rays.size(); first += width) {
+      scene.cast_many(f.origin, std::span(f.rays).subspan(first, width), std::span(f.reach).subspan(first, width), out);
       for (const RayScene::Hit& h : out) hits += h.hit;
     }
     benchmark::DoNotOptimize(hits);
