@@ -806,7 +806,7 @@ TEST(RunEvaluation, ReducedProtocolOnShrec) {
   // as recognition improves.
   EXPECT_GE(accuracy(r->decisions, "full", MethodId::kFusion).percent(), 94.0);  // measured 95.3 (95.3 before both)
   EXPECT_GE(accuracy(r->decisions, "20%", MethodId::kFusion).percent(), 96.5);   // measured 98.0 (96.0)
-  EXPECT_GE(accuracy(r->decisions, "full", MethodId::kBoK).percent(), 50.0);     // measured 52.0 (50.7)
+  EXPECT_GE(accuracy(r->decisions, "full", MethodId::kBoK).percent(), 57.5);     // measured 59.3 at stop 39 (52.0 when set, stop 34)
   const SettleRow settled = settle_summary(r->streams, -1);
   // Settling needs the winner to hold a whole window, the newest chunk included: later, righter.
   // "Unknown" settles like a category and counts wrong here (every view is known): 79.3 % settled, 90.8 %
