@@ -23,16 +23,23 @@ double l1_rows(const Eigen::MatrixXd& m, Eigen::Index i, const Eigen::VectorXd& 
   return (m.row(i).transpose() - x).lpNorm<1>();
 }
 
+// L1 distances from x to every row of m, accumulated column by column: each column is contiguous in
+// Eigen's column-major storage, so this runs at memory speed where a row at a time strides across it.
+template <typename Vector>
+void l1_to_rows(const Eigen::MatrixXd& m, const Vector& x, Eigen::ArrayXd& out) {
+  out.setZero(m.rows());
+  for (Eigen::Index c = 0; c < m.cols(); ++c) out += (m.col(c).array() - x[c]).abs();
+}
+
 // L1 distances from each row of x (a few queries) to every row of m, into the columns of out (m's rows
 // x queries): blocks of kRows references against kQueries queries at a time, the sums held in
-// registers while the block's columns are read once for all the queries (a column at a time over the
-// whole matrix would stream the sums through memory). Every distance adds its columns in order from
-// zero, whatever kQueries, so one query alone and many at once give the same bits. Plain loops the
-// compiler vectorises, inlined into entry points built twice: AVX2 where the processor has it, SSE2
-// otherwise (the same operations element by element either way).
-template <int kQueries>
-[[gnu::always_inline]] inline void l1_block_kernel(const Eigen::MatrixXd& m, const Eigen::MatrixXd& x, Eigen::ArrayXXd& out) {
-  constexpr int kRows = 8;
+// registers while the block's columns are read once for all the queries (l1_to_rows streams the whole
+// matrix and its sums through memory per query). Every distance adds its columns in order from zero,
+// as l1_to_rows, so the two give the same bits. Plain loops the compiler vectorises, built twice: AVX2
+// where the processor has it, SSE2 otherwise (the same operations element by element either way).
+__attribute__((target_clones("avx2", "default")))
+void l1_to_rows_many(const Eigen::MatrixXd& m, const Eigen::MatrixXd& x, Eigen::ArrayXXd& out) {
+  constexpr int kRows = 8, kQueries = 4;
   const Eigen::Index n = m.rows(), d = m.cols();
   out.resize(n, x.rows());
   std::vector<double> xq(static_cast<size_t>(kQueries * d));  // xq[c * kQueries + q]
@@ -61,24 +68,6 @@ template <int kQueries>
         out(j0, q0 + q) = sum;
       }
   }
-}
-
-// Many queries: 4 at a time (training's temperature, calibration's held-out decisions).
-__attribute__((target_clones("avx2", "default")))
-void l1_to_rows_many(const Eigen::MatrixXd& m, const Eigen::MatrixXd& x, Eigen::ArrayXXd& out) {
-  l1_block_kernel<4>(m, x, out);
-}
-
-// One query (a Classify, a stream's chunk): the same kernel, one query wide.
-__attribute__((target_clones("avx2", "default")))
-void l1_to_rows_one(const Eigen::MatrixXd& m, const Eigen::MatrixXd& x, Eigen::ArrayXXd& out) {
-  l1_block_kernel<1>(m, x, out);
-}
-
-void l1_to_rows(const Eigen::MatrixXd& m, const Eigen::VectorXd& x, Eigen::ArrayXd& out) {
-  Eigen::ArrayXXd dist;
-  l1_to_rows_one(m, x.transpose(), dist);
-  out = dist.col(0);
 }
 constexpr Eigen::Index kQueriesPerPass = 8;
 

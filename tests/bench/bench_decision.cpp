@@ -5,9 +5,7 @@
 // the row-at-a-time loop fit_decision used first, BM_NearestOtherObjectColumnPass the one-query
 // column-wise pass it used next (stop 37), run in the same process as the ratios' baselines.
 // BM_DecideRows: calibration's held-out decisions, a few queries per tiled pass, against
-// BM_DecideOneByOne, decide_with_distances per query as calibration did before; and
-// BM_DecideOneByOne against BM_OneQueryColumnPass, a single query's distances as they were computed
-// before the one-query kernel (stop 39).
+// BM_DecideOneByOne, decide_with_distances per query as calibration did before.
 #include <benchmark/benchmark.h>
 
 #include <cmath>
@@ -134,24 +132,6 @@ void BM_DecideOneByOne(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_DecideOneByOne)->Unit(benchmark::kMillisecond);
-
-// The baseline of a single decision's distances (Classify, a stream's chunk): the column-wise pass
-// decide_with_distances used before the register-blocked kernel, its distances alone (no answer).
-void BM_OneQueryColumnPass(benchmark::State& state) {
-  const Decisions d = decisions();
-  for (auto _ : state) {
-    double sum = 0;
-    Eigen::ArrayXd dist;
-    for (Eigen::Index r : d.rows) {
-      const Eigen::VectorXd y = project_row(d.stage.pca, d.queries.row(r).transpose());
-      dist.setZero(d.stage.references.rows());
-      for (Eigen::Index c = 0; c < d.stage.references.cols(); ++c) dist += (d.stage.references.col(c).array() - y[c]).abs();
-      sum += dist.minCoeff();
-    }
-    benchmark::DoNotOptimize(sum);
-  }
-}
-BENCHMARK(BM_OneQueryColumnPass)->Unit(benchmark::kMillisecond);
 
 void BM_DecideRows(benchmark::State& state) {
   const Decisions d = decisions();
