@@ -126,8 +126,7 @@ Expected<DecisionStage> fit_decision(const Eigen::MatrixXd& histograms, const st
     // shared among threads (each writes its own slots: the result does not depend on the thread count).
     const Eigen::Index n = y.rows();
     const Eigen::Index m = params.temperature_queries > 0 ? std::min<Eigen::Index>(n, params.temperature_queries) : n;
-    std::vector<Eigen::Index> queries(static_cast<size_t>(m));
-    for (Eigen::Index j = 0; j < m; ++j) queries[static_cast<size_t>(j)] = j * n / m;
+    auto query = [&](Eigen::Index k) { return k * n / m; };  // the k-th of the m, in training order
     std::vector<double> nearest(static_cast<size_t>(m), INFINITY);
     const int workers = threads > 0 ? threads : std::max(1, omp_get_max_threads());
     const Eigen::Index passes = (m + kQueriesPerPass - 1) / kQueriesPerPass;
@@ -135,11 +134,11 @@ Expected<DecisionStage> fit_decision(const Eigen::MatrixXd& histograms, const st
     for (Eigen::Index pass = 0; pass < passes; ++pass) {
       const Eigen::Index first = pass * kQueriesPerPass, count = std::min(kQueriesPerPass, m - first);
       Eigen::MatrixXd rows(count, y.cols());
-      for (Eigen::Index q = 0; q < count; ++q) rows.row(q) = y.row(queries[static_cast<size_t>(first + q)]);
+      for (Eigen::Index q = 0; q < count; ++q) rows.row(q) = y.row(query(first + q));
       Eigen::ArrayXXd dist;
       l1_to_rows_many(y, rows, dist);
       for (Eigen::Index q = 0; q < count; ++q) {
-        const Eigen::Index i = queries[static_cast<size_t>(first + q)];
+        const Eigen::Index i = query(first + q);
         double best = INFINITY;
         for (Eigen::Index j = 0; j < n; ++j)
           if (j != i && !same_object(i, j)) best = std::min(best, dist(j, q));
