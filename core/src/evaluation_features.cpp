@@ -46,8 +46,8 @@ void eval_internal::full_view_features(Protocol& P) {
     if (keypoint_stages && P.tested(v) && P.views[v].cloud.points.size() > 1) {
       SurfaceParams sp = P.tp.features.surface;
       sp.threads = 1;
-      const KdTree tree(P.views[v].cloud.points);
-      P.margin[v] = P.params.cut_margin_supports * support_radius(tree, sp);
+      const Points& pts = P.views[v].cloud.points;
+      P.margin[v] = P.params.cut_margin_supports * support_radius(CellGrid(pts, first_guess_cell(pts)), sp);
     }
   });
   double cpu = 0;

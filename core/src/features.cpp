@@ -85,8 +85,10 @@ Expected<FeatureState> extract(const Cloud& input, const FeatureParams& params, 
                             " are needed");
 
   t0 = std::chrono::steady_clock::now();
-  const KdTree tree(f.cloud.points);
-  diag.density = estimate_density(tree, params.surface.support_radius_m, params.surface.support_neighbours);
+  // Cells of a first guess answer the density's queries; cells of r then answer every later one (about
+  // twice as fast as a kd-tree, the same neighbourhoods to the bit).
+  diag.density = estimate_density(CellGrid(f.cloud.points, first_guess_cell(f.cloud.points)),
+                                  params.surface.support_radius_m, params.surface.support_neighbours);
   diag.support_radius_m = diag.density.support_radius_m;
   diag.index_ms = ms_since(t0);
   if (!(diag.support_radius_m > 0)) {
@@ -94,7 +96,8 @@ Expected<FeatureState> extract(const Cloud& input, const FeatureParams& params, 
     return f;
   }
   t0 = std::chrono::steady_clock::now();
-  f.surfaces = local_surfaces(tree, diag.support_radius_m, f.cloud.sensor, params.surface, cancel);
+  const CellGrid grid(f.cloud.points, diag.support_radius_m);
+  f.surfaces = local_surfaces(grid, diag.support_radius_m, f.cloud.sensor, params.surface, cancel);
   if (stopped()) return cancelled("feature extraction cancelled");
   count_valid_surfaces(f);
   diag.surfaces_ms = ms_since(t0);
@@ -103,7 +106,7 @@ Expected<FeatureState> extract(const Cloud& input, const FeatureParams& params, 
     return f;
   }
   if (stopped()) return cancelled("feature extraction cancelled");
-  if (params.find_keypoints) find_keypoints_and_descriptors(tree, f, params, nullptr, nullptr);
+  if (params.find_keypoints) find_keypoints_and_descriptors(grid, f, params, nullptr, nullptr);
   return f;
 }
 

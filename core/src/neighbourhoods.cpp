@@ -84,6 +84,118 @@ void KdTree::nearest(const Vec3& query, size_t k, std::vector<Neighbour>& out) c
   out.resize(std::min(k, out.size()));
 }
 
+// ---- CellGrid ------------------------------------------------------------------------------------
+
+namespace {
+// A cell count the grid's offsets may take: a few per point, so a stray far point grows the cells
+// instead of the memory.
+double cells_allowed(size_t points) { return std::max(4.0 * double(points), double(1 << 16)); }
+}  // namespace
+
+float first_guess_cell(const Points& points) {
+  if (points.empty()) return 1.f;
+  const float cell = 4.f * bounds(points).extent().maxCoeff() / std::sqrt(float(points.size()));
+  return cell > 0 && std::isfinite(cell) ? cell : 1e-3f;
+}
+
+CellGrid::CellGrid(const Points& points, float cell_m) : points_(&points) {
+  Vec3 lo = Vec3::Constant(std::numeric_limits<float>::max()), hi = -lo;
+  for (const Vec3& p : points)
+    if (p.allFinite()) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  if (!(lo.x() <= hi.x())) lo = hi = Vec3::Zero();  // no finite point
+  origin_ = lo;
+  double cell = cell_m > 0 && std::isfinite(cell_m) ? double(cell_m) : 1.0;
+  const Eigen::Vector3d span = (hi - lo).cast<double>();
+  auto cells = [&](double c) { return (std::floor(span.x() / c) + 1) * (std::floor(span.y() / c) + 1) * (std::floor(span.z() / c) + 1); };
+  while (cells(cell) > cells_allowed(points.size())) cell *= 2;
+  cell_ = static_cast<float>(cell);
+  nx_ = static_cast<int64_t>(std::floor(span.x() / cell_)) + 1;
+  ny_ = static_cast<int64_t>(std::floor(span.y() / cell_)) + 1;
+  nz_ = static_cast<int64_t>(std::floor(span.z() / cell_)) + 1;
+  // In double, as the queries' boxes: the same monotone map from coordinate to cell.
+  auto axis = [&](float v, float o, int64_t n) {
+    const double c = std::floor((double(v) - double(o)) / double(cell_));
+    return c >= 0 ? static_cast<int64_t>(std::min(c, double(n - 1))) : int64_t{0};  // NaN -> 0
+  };
+  std::vector<uint32_t> cell_of(points.size());
+  start_.assign(static_cast<size_t>(nx_ * ny_ * nz_) + 1, 0);
+  for (size_t i = 0; i < points.size(); ++i) {
+    const Vec3& p = points[i];
+    cell_of[i] = static_cast<uint32_t>((axis(p.x(), lo.x(), nx_) * ny_ + axis(p.y(), lo.y(), ny_)) * nz_ +
+                                       axis(p.z(), lo.z(), nz_));
+    ++start_[cell_of[i] + 1];
+  }
+  for (size_t c = 1; c < start_.size(); ++c) start_[c] += start_[c - 1];
+  order_.resize(points.size());
+  binned_.resize(points.size());
+  std::vector<uint32_t> next(start_.begin(), start_.end() - 1);
+  for (size_t i = 0; i < points.size(); ++i) {  // ascending i: each cell's run ascends
+    const uint32_t j = next[cell_of[i]]++;
+    order_[j] = static_cast<uint32_t>(i);
+    binned_[j] = points[i];
+  }
+}
+
+void CellGrid::radius(const Vec3& q, float radius, std::vector<Neighbour>& out) const {
+  out.clear();
+  if (order_.empty() || !(radius >= 0)) return;
+  const float r2 = radius * radius;
+  // The box is a little wider than the ball, so a point the float test below accepts is inside it.
+  const double reach = double(radius) * (1 + 1e-5) + 1e-30;
+  int64_t lo[3], hi[3];
+  const int64_t n[3] = {nx_, ny_, nz_};
+  for (int a = 0; a < 3; ++a) {
+    const double from = std::floor((double(q[a]) - reach - double(origin_[a])) / double(cell_));
+    const double to = std::floor((double(q[a]) + reach - double(origin_[a])) / double(cell_));
+    if (!(to >= 0 && from <= double(n[a] - 1))) return;  // outside the grid (or NaN)
+    lo[a] = static_cast<int64_t>(std::max(from, 0.0));
+    hi[a] = static_cast<int64_t>(std::min(to, double(n[a] - 1)));
+  }
+  // Each column of cells along z is one run of binned_. Every candidate is written and the count
+  // advanced only when it is inside: no branch for the test, which goes either way.
+  size_t candidates = 0;
+  for (int64_t x = lo[0]; x <= hi[0]; ++x)
+    for (int64_t y = lo[1]; y <= hi[1]; ++y) {
+      const int64_t column = (x * ny_ + y) * nz_;
+      candidates += start_[static_cast<size_t>(column + hi[2] + 1)] - start_[static_cast<size_t>(column + lo[2])];
+    }
+  out.resize(candidates);
+  Neighbour* w = out.data();
+  for (int64_t x = lo[0]; x <= hi[0]; ++x)
+    for (int64_t y = lo[1]; y <= hi[1]; ++y) {
+      const int64_t column = (x * ny_ + y) * nz_;
+      const uint32_t from = start_[static_cast<size_t>(column + lo[2])], to = start_[static_cast<size_t>(column + hi[2] + 1)];
+      for (uint32_t j = from; j < to; ++j) {
+        const float d = (binned_[j] - q).squaredNorm();
+        *w = {order_[j], d};
+        w += d <= r2;
+      }
+    }
+  out.resize(static_cast<size_t>(w - out.data()));
+  sort_by_index(out);
+}
+
+void CellGrid::nearest(const Vec3& q, size_t k, std::vector<Neighbour>& out) const {
+  out.clear();
+  k = std::min(k, order_.size());
+  if (k == 0) return;
+  // Grow the search radius until k points are inside it (as VoxelIndex); the k nearest are then exact.
+  const double diagonal = double(cell_) * std::sqrt(double(nx_ * nx_ + ny_ * ny_ + nz_ * nz_));
+  const double far = diagonal + (q - origin_).cast<double>().norm();
+  float radius = cell_;
+  for (;;) {
+    this->radius(q, radius, out);
+    if (out.size() >= k || !(radius < far)) break;
+    radius *= 2;
+  }
+  k = std::min(k, out.size());
+  auto order = [](const Neighbour& a, const Neighbour& b) {
+    return a.distance_sq != b.distance_sq ? a.distance_sq < b.distance_sq : a.index < b.index;
+  };
+  std::partial_sort(out.begin(), out.begin() + static_cast<std::ptrdiff_t>(k), out.end(), order);
+  out.resize(k);
+}
+
 // ---- VoxelIndex ----------------------------------------------------------------------------------
 
 VoxelIndex::VoxelIndex(float cell_m) : cell_(cell_m > 0 ? cell_m : 1.f) {}

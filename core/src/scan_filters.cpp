@@ -152,10 +152,7 @@ DensityProbe probe_density(const Points& finite_points) {
   // The k-th neighbour distances are exact in any index; a hash grid is built in a third of a k-d
   // tree's time, and its cell (about four spacings of a surface sample filling its bounding box) only
   // sets how far a search looks at first.
-  const Bounds b = bounds(finite_points);
-  const float cell = 4.f * b.extent().maxCoeff() / std::sqrt(float(finite_points.size()));
-  VoxelIndex index(cell > 0 ? cell : 1e-3f);
-  for (const Vec3& p : finite_points) index.add(p);
+  const CellGrid index(finite_points, first_guess_cell(finite_points));
   const size_t ks[] = {1, kDensityNeighbours};
   const std::vector<float> d = median_knn_distances(index, ks);
   return {d[0], d[1]};

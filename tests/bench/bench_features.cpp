@@ -10,6 +10,8 @@
 // with a compile job): floor 13.3 ms, extract 21.9 ms = 1.65x.
 #include <benchmark/benchmark.h>
 
+#include <optional>
+
 #include "scene.h"
 #include "glimpse/features.h"
 #include "glimpse/descriptor.h"
@@ -23,32 +25,43 @@ namespace {
 
 using bench::view10k;
 
+// Arg 0: the kd-tree (KdTree, nanoflann); arg 1: cells of r (CellGrid, built inside the loop), which
+// extract() uses. Both find the same neighbourhoods to the bit.
 void BM_RadiusPassFloor(benchmark::State& state) {
   const Cloud& c = view10k();
   const KdTree tree(c.points);
   const float r = support_radius(tree, {});
   std::vector<Neighbour> nb;
   for (auto _ : state) {
+    std::optional<CellGrid> grid;
+    if (state.range(0) == 1) grid.emplace(c.points, r);
+    const NeighbourIndex& index = grid ? static_cast<const NeighbourIndex&>(*grid) : tree;
     size_t total = 0;
     for (const Vec3& p : c.points) {
-      tree.radius(p, r, nb);
+      index.radius(p, r, nb);
       total += nb.size();
     }
     benchmark::DoNotOptimize(total);
   }
   state.counters["points"] = static_cast<double>(c.points.size());
 }
-BENCHMARK(BM_RadiusPassFloor)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_RadiusPassFloor)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
+// Args: threads; the index as above.
 void BM_LocalSurfaces(benchmark::State& state) {
   const Cloud& c = view10k();
   const KdTree tree(c.points);
   SurfaceParams params;
   params.threads = static_cast<int>(state.range(0));
   const float r = support_radius(tree, params);
-  for (auto _ : state) benchmark::DoNotOptimize(local_surfaces(tree, r, c.sensor, params));
+  for (auto _ : state) {
+    std::optional<CellGrid> grid;
+    if (state.range(1) == 1) grid.emplace(c.points, r);
+    const NeighbourIndex& index = grid ? static_cast<const NeighbourIndex&>(*grid) : tree;
+    benchmark::DoNotOptimize(local_surfaces(index, r, c.sensor, params));
+  }
 }
-BENCHMARK(BM_LocalSurfaces)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_LocalSurfaces)->Args({1, 0})->Args({1, 1})->Args({2, 0})->Args({2, 1})->Unit(benchmark::kMillisecond);
 
 // The stages after the surfaces, on the surfaces of the same view (one thread).
 void BM_Keypoints(benchmark::State& state) {
@@ -73,21 +86,29 @@ void BM_Descriptors(benchmark::State& state) {
 }
 BENCHMARK(BM_Descriptors)->Unit(benchmark::kMillisecond);
 
+// Arg 0: a kd-tree; arg 1: cells of the first guess (what extract does before r is known).
 void BM_Index(benchmark::State& state) {
   const Cloud& c = view10k();
-  for (auto _ : state) benchmark::DoNotOptimize(KdTree(c.points));
+  for (auto _ : state) {
+    if (state.range(0) == 1) benchmark::DoNotOptimize(CellGrid(c.points, first_guess_cell(c.points)));
+    else benchmark::DoNotOptimize(KdTree(c.points));
+  }
 }
-BENCHMARK(BM_Index)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Index)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 // Building the neighbour index and choosing the support radius (what extract does before the surfaces).
 void BM_IndexAndSupportRadius(benchmark::State& state) {
   const Cloud& c = view10k();
   for (auto _ : state) {
-    const KdTree tree(c.points);
-    benchmark::DoNotOptimize(support_radius(tree, {}));
+    if (state.range(0) == 1) {
+      benchmark::DoNotOptimize(support_radius(CellGrid(c.points, first_guess_cell(c.points)), {}));
+    } else {
+      const KdTree tree(c.points);
+      benchmark::DoNotOptimize(support_radius(tree, {}));
+    }
   }
 }
-BENCHMARK(BM_IndexAndSupportRadius)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_IndexAndSupportRadius)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 void BM_Extract(benchmark::State& state) {
   const Cloud& c = view10k();

@@ -5,6 +5,7 @@
 #include <Eigen/Geometry>
 #include <Eigen/QR>
 #include <cmath>
+#include <cstring>
 #include <random>
 
 #include "glimpse/descriptor.h"
@@ -462,6 +463,61 @@ TEST(GridCell, ClampsInsteadOfOverflowing) {
   EXPECT_GT(grid_cell<int32_t>(1e30f, 1e-9f), 2'000'000'000);
   EXPECT_LT(grid_cell<int64_t>(-3e38f, 1e-6f), -4'000'000'000'000'000'000LL);
   EXPECT_EQ(grid_cell<int32_t>(NAN, 1.f), 0);
+}
+
+// The three indexes answer every query with the same neighbours, distances and order, to the bit:
+// sums over a neighbourhood must not depend on which index found it.
+TEST(Neighbourhoods, CellGridFindsWhatTheTreeAndTheVoxelHashFind) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(-0.5f, 0.5f);
+  Points pts;
+  for (int i = 0; i < 3000; ++i) pts.push_back(Vec3(u(rng), 0.02f * u(rng), u(rng)));  // a noisy slab
+  for (int i = 0; i < 20; ++i) pts.push_back(pts[size_t(i) * 7]);                   // duplicates
+  pts.push_back(Vec3(40.f, -3.f, 7.f));  // a stray point far away
+  const float cell = 0.03f;
+  const KdTree tree(pts);
+  const CellGrid grid(pts, cell);
+  VoxelIndex voxels(cell);
+  for (const Vec3& p : pts) voxels.add(p);
+  std::vector<Vec3> queries = {Vec3(40.f, -3.f, 7.f), Vec3(0.6f, 0.f, 0.f), Vec3(-9.f, 2.f, 1.f), Vec3(20.f, -1.f, 3.f)};
+  for (int i = 0; i < 300; ++i) queries.push_back(pts[size_t(i) * 10]);
+  for (int i = 0; i < 100; ++i) queries.push_back(Vec3(u(rng), u(rng), u(rng)));
+  auto same = [](const std::vector<Neighbour>& a, const std::vector<Neighbour>& b) {
+    if (a.size() != b.size()) return false;
+    for (size_t i = 0; i < a.size(); ++i)
+      if (a[i].index != b[i].index || std::memcmp(&a[i].distance_sq, &b[i].distance_sq, sizeof(float)) != 0) return false;
+    return true;
+  };
+  std::vector<Neighbour> a, b, c;
+  size_t found = 0;
+  for (size_t qi = 0; qi < queries.size(); ++qi) {
+    const Vec3& q = queries[qi];
+    const bool all = qi < 8;  // queries holding every point: a few (each sorts the whole set)
+    for (float radius : {0.f, 0.3f * cell, cell, 2.5f * cell, 0.4f, 50.f}) {
+      if (radius > 1 && !all) continue;
+      tree.radius(q, radius, a);
+      grid.radius(q, radius, b);
+      voxels.radius(q, radius, c);
+      // (nanoflann finds nothing within 0, not even the point itself)
+      if (radius > 0) ASSERT_TRUE(same(a, b)) << "radius " << radius << " at " << q.transpose();
+      ASSERT_TRUE(same(c, b)) << "radius " << radius << " at " << q.transpose();
+      found += b.size();
+    }
+    for (size_t k : {size_t(1), size_t(12), pts.size(), pts.size() + 3}) {
+      if (k > 12 && !all) continue;
+      tree.nearest(q, k, a);
+      grid.nearest(q, k, b);
+      ASSERT_TRUE(same(a, b)) << "k " << k << " at " << q.transpose();
+    }
+  }
+  EXPECT_GT(found, 8 * pts.size());  // the 50 m queries alone find every point
+  grid.radius(Vec3(NAN, 0.f, 0.f), 1.f, b);
+  EXPECT_TRUE(b.empty());
+  const Points none;
+  const CellGrid empty(none, cell);
+  empty.radius(Vec3::Zero(), 1.f, b);
+  empty.nearest(Vec3::Zero(), 3, c);
+  EXPECT_TRUE(b.empty() && c.empty());
 }
 
 TEST(Clean, AChunkedScanKeepsWhatItsWholeCloudKeeps) {

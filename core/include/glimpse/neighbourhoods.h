@@ -49,6 +49,30 @@ class KdTree final : public NeighbourIndex {
   std::unique_ptr<Impl> impl_;
 };
 
+// A fixed point set binned into cubic cells of one size, each cell's points stored together: a radius
+// query about the cell size scans a few contiguous runs instead of walking a tree. Same neighbourhoods
+// as KdTree and VoxelIndex to the last bit. The points must outlive the grid and stay unchanged.
+class CellGrid final : public NeighbourIndex {
+ public:
+  CellGrid(const Points& points, float cell_m);
+  void radius(const Vec3& query, float radius, std::vector<Neighbour>& out) const override;
+  void nearest(const Vec3& query, size_t k, std::vector<Neighbour>& out) const override;
+  const Points& points() const override { return *points_; }
+
+ private:
+  const Points* points_;
+  float cell_ = 1;
+  Vec3 origin_ = Vec3::Zero();
+  int64_t nx_ = 0, ny_ = 0, nz_ = 0;
+  std::vector<uint32_t> start_;  // cell c's points are order_[start_[c] .. start_[c + 1]), z fastest
+  std::vector<uint32_t> order_;  // point indices, by cell, ascending within a cell
+  Points binned_;                // the points in order_'s order
+};
+
+// A cell for a cloud whose density is not known yet: about four spacings of a surface sample filling
+// the cloud's bounding box. It sets only how much a grid's query scans, never what it finds.
+float first_guess_cell(const Points& points);
+
 // A growing point set hashed into cubic cells (append-only): insertion and queries cost what the
 // neighbourhood holds, not what the set holds. Radius queries are fastest for radius <= cell size.
 class VoxelIndex final : public NeighbourIndex {
