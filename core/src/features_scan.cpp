@@ -54,7 +54,7 @@ void ScanFeatures::Impl::refit_touched(const std::vector<uint32_t>& added) {
   std::vector<uint32_t> touched;
   std::vector<Neighbour> near;
   for (uint32_t i : added) {
-    index->radius(st.cloud.points[i], r, near);
+    index->radius_any_order(st.cloud.points[i], r, near);  // sorted below
     for (const Neighbour& q : near)
       if (epoch[q.index] != epoch_now) epoch[q.index] = epoch_now, touched.push_back(q.index);
   }
@@ -74,12 +74,12 @@ void ScanFeatures::Impl::refit_touched(const std::vector<uint32_t>& added) {
       const float boundary_reach = kp.boundary_radius_supports > 1 ? kp.boundary_radius_supports * r : 0.f;
       memo.boundary[i] = -1;
       if (boundary_reach > 0) {
-        index->radius(st.cloud.points[i], boundary_reach, near);
+        index->radius_any_order(st.cloud.points[i], boundary_reach, near);
         for (const Neighbour& q : near) memo.boundary[q.index] = -1;
       }
       const float touch_reach = boundary_reach + kp.boundary_band_supports * r;
       if (touch_reach > 0) {
-        if (boundary_reach > 0 || touch_reach != r) index->radius(st.cloud.points[i], touch_reach, near);
+        if (boundary_reach > 0 || touch_reach != r) index->radius_any_order(st.cloud.points[i], touch_reach, near);
         for (const Neighbour& q : near) memo.touches_boundary[q.index] = -1;
       } else {
         memo.touches_boundary[i] = -1;
@@ -90,7 +90,7 @@ void ScanFeatures::Impl::refit_touched(const std::vector<uint32_t>& added) {
   // window around the keypoint.
   const float reach = descriptor_reach(r, params.descriptor) + r;
   for (uint32_t i : added) {
-    index->radius(st.cloud.points[i], reach, near);
+    index->radius_any_order(st.cloud.points[i], reach, near);  // resets: any order
     for (const Neighbour& q : near) cache[q.index].reset();
   }
 }
@@ -154,8 +154,8 @@ Expected<size_t> ScanFeatures::add(const Cloud& chunk, const CancelFn& cancel) {
     for (uint32_t i : added) m.index->add(st.cloud.points[i]);
     density = estimate_density(*m.index, m.params.surface.support_radius_m, m.params.surface.support_neighbours);
   } else {
-    density = estimate_density(KdTree(st.cloud.points), m.params.surface.support_radius_m,
-                               m.params.surface.support_neighbours);
+    density = estimate_density(CellGrid(st.cloud.points, first_guess_cell(st.cloud.points)),
+                               m.params.surface.support_radius_m, m.params.surface.support_neighbours);
   }
   diag.index_ms += ms_since(t0);
   if (!(density.support_radius_m > 0)) return added.size();  // every point coincides so far

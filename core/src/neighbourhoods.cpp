@@ -137,6 +137,11 @@ CellGrid::CellGrid(const Points& points, float cell_m) : points_(&points) {
 }
 
 void CellGrid::radius(const Vec3& q, float radius, std::vector<Neighbour>& out) const {
+  radius_any_order(q, radius, out);
+  sort_by_index(out);
+}
+
+void CellGrid::radius_any_order(const Vec3& q, float radius, std::vector<Neighbour>& out) const {
   out.clear();
   if (order_.empty() || !(radius >= 0)) return;
   const float r2 = radius * radius;
@@ -172,7 +177,6 @@ void CellGrid::radius(const Vec3& q, float radius, std::vector<Neighbour>& out) 
       }
     }
   out.resize(static_cast<size_t>(w - out.data()));
-  sort_by_index(out);
 }
 
 void CellGrid::nearest(const Vec3& q, size_t k, std::vector<Neighbour>& out) const {
@@ -184,7 +188,7 @@ void CellGrid::nearest(const Vec3& q, size_t k, std::vector<Neighbour>& out) con
   const double far = diagonal + (q - origin_).cast<double>().norm();
   float radius = cell_;
   for (;;) {
-    this->radius(q, radius, out);
+    radius_any_order(q, radius, out);  // ordered below
     if (out.size() >= k || !(radius < far)) break;
     radius *= 2;
   }
@@ -208,6 +212,11 @@ uint32_t VoxelIndex::add(const Vec3& p) {
 }
 
 void VoxelIndex::radius(const Vec3& q, float radius, std::vector<Neighbour>& out) const {
+  radius_any_order(q, radius, out);
+  sort_by_index(out);
+}
+
+void VoxelIndex::radius_any_order(const Vec3& q, float radius, std::vector<Neighbour>& out) const {
   out.clear();
   const float r2 = radius * radius;
   const CellKey lo = key(q - Vec3::Constant(radius)), hi = key(q + Vec3::Constant(radius));
@@ -219,7 +228,6 @@ void VoxelIndex::radius(const Vec3& q, float radius, std::vector<Neighbour>& out
         const float d = (points_[i] - q).squaredNorm();
         if (d <= r2) out.push_back({i, d});
       }
-    sort_by_index(out);
     return;
   }
   for (int64_t x = lo.x; x <= hi.x; ++x)
@@ -232,7 +240,6 @@ void VoxelIndex::radius(const Vec3& q, float radius, std::vector<Neighbour>& out
           if (d <= r2) out.push_back({i, d});
         }
       }
-  sort_by_index(out);
 }
 
 void VoxelIndex::nearest(const Vec3& q, size_t k, std::vector<Neighbour>& out) const {
@@ -242,7 +249,7 @@ void VoxelIndex::nearest(const Vec3& q, size_t k, std::vector<Neighbour>& out) c
   // Grow the search radius until k points are inside it; the k nearest are then exact.
   float radius = cell_;
   for (;;) {
-    this->radius(q, radius, out);
+    radius_any_order(q, radius, out);  // ordered below
     if (out.size() >= k) break;
     radius *= 2;
   }
@@ -291,7 +298,7 @@ std::vector<float> median_knn_distances(const NeighbourIndex& tree, std::span<co
   for (auto& v : d) v.reserve(at.size());
   auto closer = [](const Neighbour& a, const Neighbour& b) { return a.distance_sq < b.distance_sq; };
   for (size_t i : at) {
-    tree.radius(pts[i], R, nn);
+    tree.radius_any_order(pts[i], R, nn);  // only the k-th distance is read
     for (size_t q = 0; q < ks.size(); ++q) {
       const size_t k = ks[q];
       if (k == 0 || nn.size() < k + 1) {

@@ -501,6 +501,9 @@ TEST(Neighbourhoods, CellGridFindsWhatTheTreeAndTheVoxelHashFind) {
       // (nanoflann finds nothing within 0, not even the point itself)
       if (radius > 0) ASSERT_TRUE(same(a, b)) << "radius " << radius << " at " << q.transpose();
       ASSERT_TRUE(same(c, b)) << "radius " << radius << " at " << q.transpose();
+      grid.radius_any_order(q, radius, c);
+      std::sort(c.begin(), c.end(), [](const Neighbour& x, const Neighbour& y) { return x.index < y.index; });
+      ASSERT_TRUE(same(c, b)) << "any order, radius " << radius << " at " << q.transpose();
       found += b.size();
     }
     for (size_t k : {size_t(1), size_t(12), pts.size(), pts.size() + 3}) {

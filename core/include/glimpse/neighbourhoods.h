@@ -27,6 +27,10 @@ class NeighbourIndex {
   // Every point within `radius` of `query` (the query point itself included when it is in the set),
   // in ascending index order (sums over a neighbourhood do not depend on which index found it).
   virtual void radius(const Vec3& query, float radius, std::vector<Neighbour>& out) const = 0;
+  // The same neighbours in any order, for callers that only count them or rank them by distance.
+  virtual void radius_any_order(const Vec3& query, float radius, std::vector<Neighbour>& out) const {
+    this->radius(query, radius, out);
+  }
   // The `k` nearest points, nearest first (ties by index).
   virtual void nearest(const Vec3& query, size_t k, std::vector<Neighbour>& out) const = 0;
   virtual const Points& points() const = 0;
@@ -56,6 +60,7 @@ class CellGrid final : public NeighbourIndex {
  public:
   CellGrid(const Points& points, float cell_m);
   void radius(const Vec3& query, float radius, std::vector<Neighbour>& out) const override;
+  void radius_any_order(const Vec3& query, float radius, std::vector<Neighbour>& out) const override;
   void nearest(const Vec3& query, size_t k, std::vector<Neighbour>& out) const override;
   const Points& points() const override { return *points_; }
 
@@ -80,6 +85,7 @@ class VoxelIndex final : public NeighbourIndex {
   explicit VoxelIndex(float cell_m);
   uint32_t add(const Vec3& p);  // returns the new point's index
   void radius(const Vec3& query, float radius, std::vector<Neighbour>& out) const override;
+  void radius_any_order(const Vec3& query, float radius, std::vector<Neighbour>& out) const override;
   void nearest(const Vec3& query, size_t k, std::vector<Neighbour>& out) const override;
   const Points& points() const override { return points_; }
   float cell() const { return cell_; }
