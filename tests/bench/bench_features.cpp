@@ -7,7 +7,10 @@
 // the margin thin); 2 threads 1.25x. The per-point fit is single-precision moments in vectorised
 // loops, a Newton-step normal and a block 6x6 solve (LocalSurfaces.AgreeWithATextbookFit checks it
 // against a plain double-precision fit). Re-measured for issue 17 (one feature state, machine shared
-// with a compile job): floor 13.3 ms, extract 21.9 ms = 1.65x.
+// with a compile job): floor 13.3 ms, extract 21.9 ms = 1.65x. Stop 40 (extract answers its queries from
+// CellGrid, the same neighbourhoods as the tree): the kd-tree floor 15.5 ms, the grid's 5.93 ms; local
+// surfaces 19.8 (tree) against 10.3 ms (grid) = 0.52; index + support radius 2.73 against 0.37 ms;
+// extract 11.6 ms = 0.75x the kd-tree floor, 1.96x the grid's (medians of 5, same run).
 #include <benchmark/benchmark.h>
 
 #include <optional>
