@@ -1,5 +1,6 @@
 // Neighbourhoods of a point set (sec. 3.2.1): the queries every stage makes, over a fixed cloud
-// (kd-tree) or a growing scan (voxel hash), and the one density estimate every radius derives from.
+// (cells of one size, or a kd-tree) or a growing scan (voxel hash), and the one density estimate every
+// radius derives from.
 #pragma once
 
 #include <cstddef>
@@ -20,7 +21,7 @@ struct Neighbour {
 };
 
 // Neighbourhood queries over a point set. Every stage that visits neighbourhoods takes this, so a
-// static cloud (KdTree) and a growing scan (VoxelIndex) share the same code.
+// static cloud (CellGrid, KdTree) and a growing scan (VoxelIndex) share the same code.
 class NeighbourIndex {
  public:
   virtual ~NeighbourIndex() = default;
