@@ -3,6 +3,7 @@
 #include "glimpse/features.h"
 
 #include <chrono>
+#include <optional>
 #include <string>
 
 #include "features_impl.h"
@@ -97,7 +98,11 @@ Expected<FeatureState> extract(const Cloud& input, const FeatureParams& params, 
   }
   t0 = std::chrono::steady_clock::now();
   const CellGrid grid(f.cloud.points, diag.support_radius_m);
-  f.surfaces = local_surfaces(grid, diag.support_radius_m, f.cloud.sensor, params.surface, cancel);
+  // A stray point far from the rest makes the cells too coarse: the tree then (the same answers).
+  std::optional<KdTree> tree;
+  if (grid.cell() > 2 * diag.support_radius_m) tree.emplace(f.cloud.points);
+  const NeighbourIndex& index = tree ? static_cast<const NeighbourIndex&>(*tree) : grid;
+  f.surfaces = local_surfaces(index, diag.support_radius_m, f.cloud.sensor, params.surface, cancel);
   if (stopped()) return cancelled("feature extraction cancelled");
   count_valid_surfaces(f);
   diag.surfaces_ms = ms_since(t0);
@@ -106,7 +111,7 @@ Expected<FeatureState> extract(const Cloud& input, const FeatureParams& params, 
     return f;
   }
   if (stopped()) return cancelled("feature extraction cancelled");
-  if (params.find_keypoints) find_keypoints_and_descriptors(grid, f, params, nullptr, nullptr);
+  if (params.find_keypoints) find_keypoints_and_descriptors(index, f, params, nullptr, nullptr);
   return f;
 }
 

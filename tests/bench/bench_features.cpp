@@ -136,6 +136,21 @@ void BM_Extract(benchmark::State& state) {
 }
 BENCHMARK(BM_Extract)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
 
+// The same view with one stray point 10 km away on the diagonal: cells of r would not fit, so extract
+// falls back to the kd-tree (the same answers). Compare with BM_Extract/1 in the same run.
+void BM_ExtractWithAStrayPoint(benchmark::State& state) {
+  Cloud c = view10k();
+  c.points.push_back(Vec3::Constant(1e4f));
+  FeatureParams params;
+  params.surface.threads = 1;
+  for (auto _ : state) {
+    auto f = extract(c, params);
+    if (!f.ok()) state.SkipWithError(f.error().message.c_str());
+    benchmark::DoNotOptimize(f);
+  }
+}
+BENCHMARK(BM_ExtractWithAStrayPoint)->Unit(benchmark::kMillisecond);
+
 }  // namespace
 }  // namespace glimpse
 

@@ -391,6 +391,29 @@ TEST(Extract, DeterministicWhateverTheThreadCount) {
   }
 }
 
+// A stray point far away makes cells of r too many to hold: extract answers from the kd-tree instead.
+// Every other point's neighbourhood is the same, so its surface, keypoints and descriptors must be.
+TEST(Extract, AStrayFarPointChangesNoOtherPointsFeatures) {
+  Cloud c{test::jitter(test::cube(0.3f, 0.005f), 0.0003f, 11), Vec3(1, 1, 1)};
+  Cloud stray = c;
+  stray.points.push_back(Vec3::Constant(5e3f));
+  auto a = extract(c), b = extract(stray);
+  ASSERT_TRUE(a.ok() && b.ok());
+  ASSERT_GT(a->diagnostics.support_radius_m, 0.f);
+  EXPECT_GT(CellGrid(stray.points, a->diagnostics.support_radius_m).cell(), 2 * a->diagnostics.support_radius_m);
+  ASSERT_EQ(a->diagnostics.support_radius_m, b->diagnostics.support_radius_m);
+  for (size_t i = 0; i < a->surfaces.size(); ++i) {
+    ASSERT_EQ(a->surfaces[i].normal, b->surfaces[i].normal) << i;
+    ASSERT_EQ(a->surfaces[i].k1, b->surfaces[i].k1) << i;
+  }
+  ASSERT_EQ(a->keypoints.size(), b->keypoints.size());
+  ASSERT_FALSE(a->keypoints.empty());
+  for (size_t i = 0; i < a->keypoints.size(); ++i) {
+    EXPECT_EQ(a->keypoints[i].index, b->keypoints[i].index);
+    EXPECT_EQ(a->descriptors[i], b->descriptors[i]);
+  }
+}
+
 TEST(Extract, BadInput) {
   auto empty = extract({});
   ASSERT_FALSE(empty.ok());

@@ -64,6 +64,9 @@ class CellGrid final : public NeighbourIndex {
   void radius_any_order(const Vec3& query, float radius, std::vector<Neighbour>& out) const override;
   void nearest(const Vec3& query, size_t k, std::vector<Neighbour>& out) const override;
   const Points& points() const override { return *points_; }
+  // The cells' size: the one asked for, or larger when that many cells would not fit (a stray far
+  // point), where a kd-tree answers faster.
+  float cell() const { return cell_; }
 
  private:
   const Points* points_;
