@@ -3,7 +3,6 @@
 #include "glimpse/features.h"
 
 #include <chrono>
-#include <optional>
 #include <string>
 
 #include "features_impl.h"
@@ -97,11 +96,8 @@ Expected<FeatureState> extract(const Cloud& input, const FeatureParams& params, 
     return f;
   }
   t0 = std::chrono::steady_clock::now();
-  const CellGrid grid(f.cloud.points, diag.support_radius_m);
-  // A stray point far from the rest makes the cells too coarse: the tree then (the same answers).
-  std::optional<KdTree> tree;
-  if (grid.cell() > 2 * diag.support_radius_m) tree.emplace(f.cloud.points);
-  const NeighbourIndex& index = tree ? static_cast<const NeighbourIndex&>(*tree) : grid;
+  const std::unique_ptr<NeighbourIndex> index_of_r = fixed_cloud_index(f.cloud.points, diag.support_radius_m);
+  const NeighbourIndex& index = *index_of_r;
   f.surfaces = local_surfaces(index, diag.support_radius_m, f.cloud.sensor, params.surface, cancel);
   if (stopped()) return cancelled("feature extraction cancelled");
   count_valid_surfaces(f);

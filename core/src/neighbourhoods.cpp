@@ -136,6 +136,12 @@ CellGrid::CellGrid(const Points& points, float cell_m) : points_(&points) {
   }
 }
 
+std::unique_ptr<NeighbourIndex> fixed_cloud_index(const Points& points, float radius) {
+  auto grid = std::make_unique<CellGrid>(points, radius);
+  if (grid->cell() > 2 * radius) return std::make_unique<KdTree>(points);
+  return grid;
+}
+
 void CellGrid::radius(const Vec3& q, float radius, std::vector<Neighbour>& out) const {
   radius_any_order(q, radius, out);
   sort_by_index(out);

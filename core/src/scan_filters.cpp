@@ -149,9 +149,8 @@ constexpr size_t kDensityNeighbours = 12;  // a square grid's 3rd ring ends at 1
 
 DensityProbe probe_density(const Points& finite_points) {
   if (finite_points.size() <= kDensityNeighbours) return {};
-  // The k-th neighbour distances are exact in any index; a hash grid is built in a third of a k-d
-  // tree's time, and its cell (about four spacings of a surface sample filling its bounding box) only
-  // sets how far a search looks at first.
+  // The k-th neighbour distances are exact in any index; a grid of cells is built in a fraction of a
+  // k-d tree's time, and its cell (the first guess) only sets how much a search scans.
   const CellGrid index(finite_points, first_guess_cell(finite_points));
   const size_t ks[] = {1, kDensityNeighbours};
   const std::vector<float> d = median_knn_distances(index, ks);

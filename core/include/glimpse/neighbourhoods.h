@@ -78,6 +78,11 @@ class CellGrid final : public NeighbourIndex {
   Points binned_;                // the points in order_'s order
 };
 
+// The index for many queries about `radius` wide over a fixed cloud: cells of that size, or a kd-tree
+// when that many cells would not fit (a stray far point would make them hold the whole cloud). Both
+// give the same answers; only the speed differs.
+std::unique_ptr<NeighbourIndex> fixed_cloud_index(const Points& points, float radius);
+
 // A cell for a cloud whose density is not known yet: about four spacings of a surface sample filling
 // the cloud's bounding box. It sets only how much a grid's query scans, never what it finds.
 float first_guess_cell(const Points& points);
