@@ -32,6 +32,11 @@ void sort_by_index(std::vector<Neighbour>& v) {
 
 }  // namespace
 
+void NeighbourIndex::radius(const Vec3& query, float radius, std::vector<Neighbour>& out) const {
+  radius_any_order(query, radius, out);
+  sort_by_index(out);
+}
+
 struct KdTree::Impl {
   explicit Impl(const Points& p) : adaptor{&p}, tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16)) {
     if (!p.empty()) tree.buildIndex();
@@ -46,7 +51,7 @@ KdTree::KdTree(KdTree&&) noexcept = default;
 KdTree& KdTree::operator=(KdTree&&) noexcept = default;
 const Points& KdTree::points() const { return *impl_->adaptor.pts; }
 
-void KdTree::radius(const Vec3& query, float radius, std::vector<Neighbour>& out) const {
+void KdTree::radius_any_order(const Vec3& query, float radius, std::vector<Neighbour>& out) const {
   out.clear();
   if (impl_->adaptor.pts->empty()) return;
   // nanoflann 1.4 returns (index, squared distance) pairs; it wants the squared radius.
@@ -61,7 +66,6 @@ void KdTree::radius(const Vec3& query, float radius, std::vector<Neighbour>& out
   const Points& pts = *impl_->adaptor.pts;
   for (const auto& [i, d] : found)
     if (const float e = (pts[i] - query).squaredNorm(); e <= r2) out.push_back({i, e});
-  sort_by_index(out);
 }
 
 void KdTree::nearest(const Vec3& query, size_t k, std::vector<Neighbour>& out) const {
@@ -142,11 +146,6 @@ std::unique_ptr<NeighbourIndex> fixed_cloud_index(const Points& points, float ra
   return grid;
 }
 
-void CellGrid::radius(const Vec3& q, float radius, std::vector<Neighbour>& out) const {
-  radius_any_order(q, radius, out);
-  sort_by_index(out);
-}
-
 void CellGrid::radius_any_order(const Vec3& q, float radius, std::vector<Neighbour>& out) const {
   out.clear();
   if (order_.empty() || !(radius >= 0)) return;
@@ -215,11 +214,6 @@ uint32_t VoxelIndex::add(const Vec3& p) {
   points_.push_back(p);
   cells_[key(p)].push_back(i);
   return i;
-}
-
-void VoxelIndex::radius(const Vec3& q, float radius, std::vector<Neighbour>& out) const {
-  radius_any_order(q, radius, out);
-  sort_by_index(out);
 }
 
 void VoxelIndex::radius_any_order(const Vec3& q, float radius, std::vector<Neighbour>& out) const {

@@ -27,11 +27,9 @@ class NeighbourIndex {
   virtual ~NeighbourIndex() = default;
   // Every point within `radius` of `query` (the query point itself included when it is in the set),
   // in ascending index order (sums over a neighbourhood do not depend on which index found it).
-  virtual void radius(const Vec3& query, float radius, std::vector<Neighbour>& out) const = 0;
+  void radius(const Vec3& query, float radius, std::vector<Neighbour>& out) const;
   // The same neighbours in any order, for callers that only count them or rank them by distance.
-  virtual void radius_any_order(const Vec3& query, float radius, std::vector<Neighbour>& out) const {
-    this->radius(query, radius, out);
-  }
+  virtual void radius_any_order(const Vec3& query, float radius, std::vector<Neighbour>& out) const = 0;
   // The `k` nearest points, nearest first (ties by index).
   virtual void nearest(const Vec3& query, size_t k, std::vector<Neighbour>& out) const = 0;
   virtual const Points& points() const = 0;
@@ -45,7 +43,7 @@ class KdTree final : public NeighbourIndex {
   KdTree(KdTree&&) noexcept;
   KdTree& operator=(KdTree&&) noexcept;
 
-  void radius(const Vec3& query, float radius, std::vector<Neighbour>& out) const override;
+  void radius_any_order(const Vec3& query, float radius, std::vector<Neighbour>& out) const override;
   void nearest(const Vec3& query, size_t k, std::vector<Neighbour>& out) const override;
   const Points& points() const override;
 
@@ -60,7 +58,6 @@ class KdTree final : public NeighbourIndex {
 class CellGrid final : public NeighbourIndex {
  public:
   CellGrid(const Points& points, float cell_m);
-  void radius(const Vec3& query, float radius, std::vector<Neighbour>& out) const override;
   void radius_any_order(const Vec3& query, float radius, std::vector<Neighbour>& out) const override;
   void nearest(const Vec3& query, size_t k, std::vector<Neighbour>& out) const override;
   const Points& points() const override { return *points_; }
@@ -93,7 +90,6 @@ class VoxelIndex final : public NeighbourIndex {
  public:
   explicit VoxelIndex(float cell_m);
   uint32_t add(const Vec3& p);  // returns the new point's index
-  void radius(const Vec3& query, float radius, std::vector<Neighbour>& out) const override;
   void radius_any_order(const Vec3& query, float radius, std::vector<Neighbour>& out) const override;
   void nearest(const Vec3& query, size_t k, std::vector<Neighbour>& out) const override;
   const Points& points() const override { return points_; }
