@@ -283,10 +283,10 @@ Calibration calibrate(const ModelImpl& impl, MethodId method, const std::vector<
     if (with_head && !(cancel && cancel())) {
       // Started from the model's own head (all the rows): LIBLINEAR stops at the same tolerance of the
       // same problem, in fewer steps.
-      auto head = fit_chi2_logistic(fusion_head_rows(impl, histograms, train_rows), train_labels, categories, p.fusion_head, threads,
+      auto head = fit_chi2_logistic(fusion_head_rows(impl, histograms, train_rows, threads), train_labels, categories, p.fusion_head, threads,
                                     &*impl.fusion_head);
       if (head.ok()) {
-        const Eigen::MatrixXd x = fusion_head_rows(impl, queries, test_rows);
+        const Eigen::MatrixXd x = fusion_head_rows(impl, queries, test_rows, threads);
         probabilities.resize(x.rows(), categories);
         for (Eigen::Index r = 0; r < x.rows(); ++r)
           probabilities.row(r) = chi2_logistic_probabilities(*head, x.row(r).transpose()).transpose();

@@ -59,15 +59,32 @@ Expected<Chi2Logistic> fit_chi2_logistic(const Eigen::MatrixXd& features, const 
   std::call_once(silenced, [] { set_print_string_function(&quiet); });
 
   // The problem in LIBLINEAR's sparse rows: 1-based indices, a bias feature (value 1) last, -1 ends a row.
+  // Rows counted, then written, in blocks shared among threads (each row to its own place); a block
+  // is read column by column, as the matrix is stored.
   const int n = static_cast<int>(features.cols());
-  std::vector<feature_node> nodes;
-  std::vector<size_t> starts;
-  for (Eigen::Index r = 0; r < features.rows(); ++r) {
-    starts.push_back(nodes.size());
+  const Eigen::Index rows_count = features.rows();
+  const int fill_threads = threads > 0 ? threads : omp_get_max_threads();
+  constexpr Eigen::Index kBlock = 256;
+  const Eigen::Index blocks = (rows_count + kBlock - 1) / kBlock;
+  std::vector<size_t> starts(static_cast<size_t>(rows_count) + 1, 2);  // the bias and the end marker
+  starts[0] = 0;
+#pragma omp parallel for num_threads(fill_threads) schedule(static)
+  for (Eigen::Index b = 0; b < blocks; ++b) {
+    const Eigen::Index first = b * kBlock, last = std::min(rows_count, first + kBlock);
     for (int c = 0; c < n; ++c)
-      if (features(r, c) != 0) nodes.push_back({c + 1, features(r, c)});
-    nodes.push_back({n + 1, 1.0});
-    nodes.push_back({-1, 0.0});
+      for (Eigen::Index r = first; r < last; ++r) starts[static_cast<size_t>(r) + 1] += features(r, c) != 0;
+  }
+  for (size_t r = 0; r < static_cast<size_t>(rows_count); ++r) starts[r + 1] += starts[r];
+  std::vector<feature_node> nodes(starts.back());
+#pragma omp parallel for num_threads(fill_threads) schedule(static)
+  for (Eigen::Index b = 0; b < blocks; ++b) {
+    const Eigen::Index first = b * kBlock, last = std::min(rows_count, first + kBlock);
+    feature_node* at[kBlock];
+    for (Eigen::Index r = first; r < last; ++r) at[r - first] = nodes.data() + starts[static_cast<size_t>(r)];
+    for (int c = 0; c < n; ++c)
+      for (Eigen::Index r = first; r < last; ++r)
+        if (const double v = features(r, c); v != 0) *at[r - first]++ = {c + 1, v};
+    for (Eigen::Index r = first; r < last; ++r) *at[r - first]++ = {n + 1, 1.0}, *at[r - first] = {-1, 0.0};
   }
   parameter param{};
   param.solver_type = L2R_LR;

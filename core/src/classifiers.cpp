@@ -22,7 +22,7 @@ Expected<KeypointCodebook> fit_keypoint_codebook(const Eigen::MatrixXd& descript
   KeypointCodebook cb;
   cb.standardiser = fit_standardiser(descriptors);
   const Eigen::MatrixXd z = standardise(cb.standardiser, descriptors);
-  auto pca = fit_pca(z, params.explained_variance);
+  auto pca = fit_pca(z, params.explained_variance, -1, 1, params.threads);
   if (!pca.ok()) return pca.error();
   cb.pca = std::move(*pca);
   KMeansParams km;
@@ -30,7 +30,7 @@ Expected<KeypointCodebook> fit_keypoint_codebook(const Eigen::MatrixXd& descript
   km.restarts = params.restarts;
   km.seed = params.seed;
   km.threads = params.threads;
-  auto clusters = kmeans(project(cb.pca, z), km);
+  auto clusters = kmeans(project(cb.pca, z, params.threads), km);
   if (!clusters.ok()) return clusters.error();
   cb.centres = std::move(clusters->centres);
   return cb;

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <omp.h>
 #include <limits>
 #include <string>
 
@@ -69,19 +70,20 @@ Eigen::VectorXd fusion_head_features(const ModelImpl& impl, const std::function<
 }
 
 Eigen::MatrixXd fusion_head_rows(const ModelImpl& impl, const std::vector<Eigen::MatrixXd>& histograms,
-                                 const std::vector<Eigen::Index>& rows) {
+                                 const std::vector<Eigen::Index>& rows, int threads) {
   const std::vector<MethodId> parts = fusion_head_methods(impl);
   if (parts.empty()) return {};
   const Eigen::Index n = rows.empty() ? histograms[static_cast<size_t>(parts.front())].rows() : static_cast<Eigen::Index>(rows.size());
-  Eigen::MatrixXd out;
-  for (Eigen::Index i = 0; i < n; ++i) {
+  auto features = [&](Eigen::Index i) {
     const Eigen::Index r = rows.empty() ? i : rows[static_cast<size_t>(i)];
-    const Eigen::VectorXd x = fusion_head_features(impl, [&](MethodId m) {
-      return Eigen::VectorXd(histograms[static_cast<size_t>(m)].row(r).transpose());
-    });
-    if (i == 0) out.resize(n, x.size());
-    out.row(i) = x.transpose();
-  }
+    return fusion_head_features(impl, [&](MethodId m) { return Eigen::VectorXd(histograms[static_cast<size_t>(m)].row(r).transpose()); });
+  };
+  if (n == 0) return {};
+  const Eigen::VectorXd first = features(0);
+  Eigen::MatrixXd out(n, first.size());
+  out.row(0) = first.transpose();
+#pragma omp parallel for num_threads(threads > 0 ? threads : omp_get_max_threads()) schedule(static, 64)
+  for (Eigen::Index i = 1; i < n; ++i) out.row(i) = features(i).transpose();
   return out;
 }
 

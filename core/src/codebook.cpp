@@ -216,7 +216,7 @@ VectorXd standardise_row(const Standardiser& s, const VectorXd& row) {
 // ---- PCA
 
 Expected<Pca> fit_pca(const MatrixXd& rows, double explained_variance, int max_components,
-                      int min_components) {
+                      int min_components, int threads) {
   const Index n = rows.rows(), d = rows.cols();
   if (n < 2 || d < 1)
     return invalid_argument("fit_pca: needs at least 2 rows of at least 1 column, got " +
@@ -245,6 +245,7 @@ Expected<Pca> fit_pca(const MatrixXd& rows, double explained_variance, int max_c
   if (n < d) {
     // Fewer samples than dimensions: diagonalise the n x n Gram matrix, v = X^T u / sqrt(lambda).
     MatrixXd gram(n, n);
+#pragma omp parallel for num_threads(resolve_threads(threads)) schedule(dynamic, 8)
     for (Index a = 0; a < n; ++a)
       for (Index b = 0; b <= a; ++b) gram(a, b) = gram(b, a) = dot(xt.col(a).data(), xt.col(b).data(), d);
     Eigen::SelfAdjointEigenSolver<MatrixXd> eig(gram);
@@ -261,6 +262,7 @@ Expected<Pca> fit_pca(const MatrixXd& rows, double explained_variance, int max_c
   } else {
     MatrixXd scatter(d, d);
     MatrixXd x = xt.transpose();  // n x d: each column contiguous
+#pragma omp parallel for num_threads(resolve_threads(threads)) schedule(dynamic, 1)
     for (Index a = 0; a < d; ++a)
       for (Index b = 0; b <= a; ++b) scatter(a, b) = scatter(b, a) = dot(x.col(a).data(), x.col(b).data(), n);
     Eigen::SelfAdjointEigenSolver<MatrixXd> eig(scatter);
@@ -291,12 +293,14 @@ Expected<Pca> fit_pca(const MatrixXd& rows, double explained_variance, int max_c
   return pca;
 }
 
-MatrixXd project(const Pca& pca, const MatrixXd& rows) {
+MatrixXd project(const Pca& pca, const MatrixXd& rows, int threads) {
   assert(rows.cols() == pca.mean.size());
   const Index n = rows.rows(), d = rows.cols(), k = pca.basis.cols();
   MatrixXd out(n, k);
-  VectorXd centred(d);
+#pragma omp parallel for num_threads(resolve_threads(threads)) schedule(static, 256)
   for (Index i = 0; i < n; ++i) {
+    thread_local VectorXd centred;
+    centred.resize(d);
     for (Index j = 0; j < d; ++j) centred[j] = rows(i, j) - pca.mean[j];
     for (Index c = 0; c < k; ++c) out(i, c) = dot(centred.data(), pca.basis.col(c).data(), d);
   }

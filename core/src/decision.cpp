@@ -102,7 +102,7 @@ Expected<DecisionStage> fit_decision(const Eigen::MatrixXd& histograms, const st
   st.categories = categories;
   st.neighbours = std::max(1, params.neighbours);
   if (params.pca_explained_variance > 0) {
-    auto pca = fit_pca(histograms, params.pca_explained_variance, params.max_pca_dims);
+    auto pca = fit_pca(histograms, params.pca_explained_variance, params.max_pca_dims, 1, threads);
     if (!pca.ok()) return pca.error();
     st.pca = std::move(*pca);
   } else {  // no PCA: L1 on the histograms themselves (the identity projection)
@@ -112,7 +112,7 @@ Expected<DecisionStage> fit_decision(const Eigen::MatrixXd& histograms, const st
     st.pca.basis = Eigen::MatrixXd::Identity(d, d);
     st.pca.explained = Eigen::VectorXd::Constant(d, 1.0 / static_cast<double>(std::max<Eigen::Index>(d, 1)));
   }
-  const Eigen::MatrixXd y = project(st.pca, histograms);
+  const Eigen::MatrixXd y = project(st.pca, histograms, threads);
 
   std::vector<double> scale;
   if (params.kind == DecisionRule::kNearestNeighbours || params.kind == DecisionRule::kNearestReference) {

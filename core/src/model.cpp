@@ -301,7 +301,7 @@ Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainP
   if (cancelled_now()) return cancelled("training cancelled");
   if (needs(model.methods, MethodId::kFusion) && params.fusion_head.c > 0 && model.categories.size() >= 2 &&
       !fusion_head_methods(*impl).empty()) {
-    auto head = fit_chi2_logistic(fusion_head_rows(*impl, histograms), labels, static_cast<int>(model.categories.size()),
+    auto head = fit_chi2_logistic(fusion_head_rows(*impl, histograms, {}, threads), labels, static_cast<int>(model.categories.size()),
                                   params.fusion_head, threads);
     if (!head.ok()) return with_method(MethodId::kFusion, head.error());
     impl->fusion_head = std::move(*head);

@@ -128,9 +128,10 @@ Status check_feature_version(const Model& model);
 // and a cloud's mapped features from their histograms (`histogram(m)` of each).
 std::vector<MethodId> fusion_head_methods(const ModelImpl& impl);
 Eigen::VectorXd fusion_head_features(const ModelImpl& impl, const std::function<Eigen::VectorXd(MethodId)>& histogram);
-// The mapped features of every row of `histograms` (indexed by MethodId, rows aligned; `rows` empty: all).
+// The mapped features of every row of `histograms` (indexed by MethodId, rows aligned; `rows` empty: all),
+// rows shared among `threads` (<= 0: all).
 Eigen::MatrixXd fusion_head_rows(const ModelImpl& impl, const std::vector<Eigen::MatrixXd>& histograms,
-                                 const std::vector<Eigen::Index>& rows = {});
+                                 const std::vector<Eigen::Index>& rows, int threads);
 // The fusion's scores: the mean of its components' scores, with `share` of the head's probabilities
 // (`probabilities` empty or share 0: the mean alone).
 Eigen::VectorXd fused_scores(const Eigen::VectorXd& mean, const Eigen::VectorXd& probabilities, double share);

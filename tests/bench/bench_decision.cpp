@@ -5,7 +5,8 @@
 // the row-at-a-time loop fit_decision used first, BM_NearestOtherObjectColumnPass the one-query
 // column-wise pass it used next (stop 37), run in the same process as the ratios' baselines.
 // BM_DecideRows: calibration's held-out decisions, a few queries per tiled pass, against
-// BM_DecideOneByOne, decide_with_distances per query as calibration did before.
+// BM_DecideOneByOne, decide_with_distances per query as calibration did before. BM_FitPcaAndProject:
+// the stage's PCA on 1 and 2 threads.
 #include <benchmark/benchmark.h>
 
 #include <cmath>
@@ -58,6 +59,19 @@ Eigen::MatrixXd projected(const Training& t) {
 
 // The baseline: the former nearest-other-object loop (a row of a column-major matrix at a time), on
 // vectors projected by the same PCA, so only the loop differs.
+// The stage's PCA alone on a model's worth of vectors (21440, as SHREC -> PSB trains): the scatter
+// matrix's entries and the projection shared among 1 or 2 threads (the same bits; same-run ratio).
+void BM_FitPcaAndProject(benchmark::State& state) {
+  const Training t = training(21440);
+  const int threads = static_cast<int>(state.range(0));
+  for (auto _ : state) {
+    auto pca = fit_pca(t.histograms, 0.98, -1, 1, threads);
+    if (!pca.ok()) state.SkipWithError("fit_pca failed");
+    benchmark::DoNotOptimize(project(*pca, t.histograms, threads));
+  }
+}
+BENCHMARK(BM_FitPcaAndProject)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
+
 void BM_NearestOtherObjectRowwise(benchmark::State& state) {
   const Training t = training(static_cast<int>(state.range(0)));
   const Eigen::MatrixXd y = projected(t);

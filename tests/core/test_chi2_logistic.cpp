@@ -122,6 +122,36 @@ TEST(Chi2Logistic, LearnsSeparableCategoriesAndGivesADistribution) {
   EXPECT_EQ(chi2_logistic_probabilities(*head, Eigen::VectorXd::Zero(5)).size(), 0);
 }
 
+// Rows past one block of the sparse problem's fill (256): every row read as given, on any thread
+// count. The same rows in reverse order are the same problem, summed in another order.
+TEST(Chi2Logistic, ManyRowsAreReadAsGivenOnAnyThreadCount) {
+  const Toy train = toy(250, 5), test = toy(20, 2);
+  ASSERT_GT(train.features.rows(), 2 * 256);
+  auto one = fit_chi2_logistic(train.features, train.labels, 3, {}, 1);
+  ASSERT_TRUE(one.ok()) << one.error().message;
+  for (int threads : {2, 3, 0}) {
+    auto shared = fit_chi2_logistic(train.features, train.labels, 3, {}, threads);
+    ASSERT_TRUE(shared.ok());
+    EXPECT_EQ(shared->weights, one->weights) << threads << " threads";
+    EXPECT_EQ(shared->bias, one->bias) << threads << " threads";
+  }
+  const Eigen::MatrixXd reversed = train.features.colwise().reverse();
+  const std::vector<int> reversed_labels(train.labels.rbegin(), train.labels.rend());
+  auto back = fit_chi2_logistic(reversed, reversed_labels, 3, {}, 2);
+  ASSERT_TRUE(back.ok());
+  EXPECT_LT((back->weights - one->weights).norm(), 1e-3 * one->weights.norm());
+  int right = 0;
+  for (Eigen::Index r = 0; r < test.features.rows(); ++r) {
+    const Eigen::VectorXd p = chi2_logistic_probabilities(*one, test.features.row(r).transpose());
+    const Eigen::VectorXd q = chi2_logistic_probabilities(*back, test.features.row(r).transpose());
+    Eigen::Index best = 0, best_back = 0;
+    p.maxCoeff(&best), q.maxCoeff(&best_back);
+    EXPECT_EQ(best, best_back) << "test row " << r;
+    right += best == test.labels[static_cast<size_t>(r)];
+  }
+  EXPECT_GE(right, 57);  // of 60
+}
+
 TEST(Chi2Logistic, TwoCategoriesGetOppositeWeights) {
   Toy t = toy(20, 4);
   std::vector<int> keep;

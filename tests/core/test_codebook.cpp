@@ -143,6 +143,31 @@ TEST(Pca, FewerRowsThanDimensionsMatchesTheCovarianceReference) {
   EXPECT_TRUE(project_row(*pca, pca->mean).isZero(1e-12));
 }
 
+// The scatter (or Gram) matrix's entries and the projected rows shared among threads: the same bits on
+// one thread or several, and the same projection as one row at a time.
+TEST(Pca, AnyThreadCountGivesTheSameBits) {
+  Gauss g(11);
+  for (auto [n, d] : {std::pair{300, 40}, std::pair{20, 60}}) {  // the covariance and the Gram paths
+    MatrixXd rows(n, d);
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < d; ++j) rows(i, j) = g() * (1.0 + j % 7) + (j % 3 == 0 && j > 0 ? 0.5 * rows(i, 0) : 0.0);
+    auto one = fit_pca(rows, 0.95, -1, 1, 1);
+    ASSERT_TRUE(one.ok()) << one.error().message;
+    ASSERT_GT(one->basis.cols(), 1);
+    const MatrixXd projected = project(*one, rows, 1);
+    for (int threads : {2, 3, 0}) {
+      auto shared = fit_pca(rows, 0.95, -1, 1, threads);
+      ASSERT_TRUE(shared.ok());
+      EXPECT_EQ(shared->mean, one->mean) << n << "x" << d << ", " << threads << " threads";
+      EXPECT_EQ(shared->basis, one->basis) << n << "x" << d << ", " << threads << " threads";
+      EXPECT_EQ(shared->explained, one->explained) << n << "x" << d << ", " << threads << " threads";
+      EXPECT_EQ(project(*one, rows, threads), projected) << n << "x" << d << ", " << threads << " threads";
+    }
+    for (int i = 0; i < n; ++i)
+      ASSERT_EQ(project_row(*one, rows.row(i).transpose()), projected.row(i).transpose()) << "row " << i;
+  }
+}
+
 TEST(Pca, DegenerateInputIsAnError) {
   EXPECT_FALSE(fit_pca(MatrixXd(0, 5), 0.9).ok());
   EXPECT_FALSE(fit_pca(MatrixXd::Ones(1, 5), 0.9).ok());

@@ -47,11 +47,13 @@ struct Pca {
 // Gram matrix instead of the d x d covariance.
 // Errors (kInvalidArgument): fewer than 2 rows, non-finite entries, zero total variance (all rows
 // identical), explained_variance outside (0, 1], min_components < 1, max_components == 0 or
-// max_components < min_components.
+// max_components < min_components. `threads` (<= 0: all) share the scatter matrix's entries, each
+// summed alone: the same bits whatever the count.
 Expected<Pca> fit_pca(const Eigen::MatrixXd& rows, double explained_variance, int max_components = -1,
-                      int min_components = 1);
-// (rows - mean) * basis: n x k. rows.cols() must equal pca.mean.size() (asserted).
-Eigen::MatrixXd project(const Pca& pca, const Eigen::MatrixXd& rows);
+                      int min_components = 1, int threads = 1);
+// (rows - mean) * basis: n x k. rows.cols() must equal pca.mean.size() (asserted). Rows shared among
+// `threads` (<= 0: all).
+Eigen::MatrixXd project(const Pca& pca, const Eigen::MatrixXd& rows, int threads = 1);
 Eigen::VectorXd project_row(const Pca& pca, const Eigen::VectorXd& row);
 
 // ---- k-means (sec. 3.2.5, 3.3.3)
