@@ -47,7 +47,7 @@ void eval_internal::full_view_features(Protocol& P) {
       SurfaceParams sp = P.tp.features.surface;
       sp.threads = 1;
       const Points& pts = P.views[v].cloud.points;
-      P.margin[v] = P.params.cut_margin_supports * support_radius(CellGrid(pts, first_guess_cell(pts)), sp);
+      P.margin[v] = P.params.cut_margin_supports * support_radius(*first_guess_index(pts), sp);
     }
   });
   double cpu = 0;

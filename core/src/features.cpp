@@ -86,8 +86,9 @@ Expected<FeatureState> extract(const Cloud& input, const FeatureParams& params, 
 
   t0 = std::chrono::steady_clock::now();
   // Cells of a first guess answer the density's queries; cells of r then answer every later one (about
-  // twice as fast as a kd-tree, the same neighbourhoods to the bit).
-  diag.density = estimate_density(CellGrid(f.cloud.points, first_guess_cell(f.cloud.points)),
+  // twice as fast as a kd-tree, the same neighbourhoods to the bit). Where a stray far point would make
+  // either grid's cells hold the whole cloud, a kd-tree answers instead.
+  diag.density = estimate_density(*first_guess_index(f.cloud.points),
                                   params.surface.support_radius_m, params.surface.support_neighbours);
   diag.support_radius_m = diag.density.support_radius_m;
   diag.index_ms = ms_since(t0);

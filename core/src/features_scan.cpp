@@ -154,7 +154,7 @@ Expected<size_t> ScanFeatures::add(const Cloud& chunk, const CancelFn& cancel) {
     for (uint32_t i : added) m.index->add(st.cloud.points[i]);
     density = estimate_density(*m.index, m.params.surface.support_radius_m, m.params.surface.support_neighbours);
   } else {
-    density = estimate_density(CellGrid(st.cloud.points, first_guess_cell(st.cloud.points)),
+    density = estimate_density(*first_guess_index(st.cloud.points),
                                m.params.surface.support_radius_m, m.params.surface.support_neighbours);
   }
   diag.index_ms += ms_since(t0);

@@ -91,14 +91,35 @@ void KdTree::nearest(const Vec3& query, size_t k, std::vector<Neighbour>& out) c
 // ---- CellGrid ------------------------------------------------------------------------------------
 
 namespace {
-// A cell count the grid's offsets may take: a few per point, so a stray far point grows the cells
-// instead of the memory.
+// A cell count the grid's offsets may take: a few per point, so points spread far wider than the cells
+// (not a few stray ones: they are clamped, below) grow the cells instead of the memory.
 double cells_allowed(size_t points) { return std::max(4.0 * double(points), double(1 << 16)); }
+
+// Each axis's 1st and 99th percentiles over an evenly spaced sample of at most 1024 finite points (no
+// finite point: false).
+bool percentile_box(const Points& points, Vec3& lo, Vec3& hi) {
+  const size_t stride = std::max<size_t>(1, points.size() / 1024);
+  std::vector<float> v;
+  for (int axis = 0; axis < 3; ++axis) {
+    v.clear();
+    for (size_t i = 0; i < points.size(); i += stride)
+      if (points[i].allFinite()) v.push_back(points[i][axis]);
+    if (v.empty()) return false;
+    const size_t a = v.size() / 100, b = v.size() - 1 - a;
+    std::nth_element(v.begin(), v.begin() + std::ptrdiff_t(a), v.end());
+    lo[axis] = v[a];
+    if (b > a) std::nth_element(v.begin() + std::ptrdiff_t(a + 1), v.begin() + std::ptrdiff_t(b), v.end());
+    hi[axis] = v[b];
+  }
+  return true;
+}
 }  // namespace
 
 float first_guess_cell(const Points& points) {
-  if (points.empty()) return 1.f;
-  const float cell = 4.f * bounds(points).extent().maxCoeff() / std::sqrt(float(points.size()));
+  // The percentiles' extent: a few stray far points do not inflate it.
+  Vec3 lo, hi;
+  if (points.empty() || !percentile_box(points, lo, hi)) return 1.f;
+  const float cell = 4.f * (hi - lo).maxCoeff() / std::sqrt(float(points.size()));
   return cell > 0 && std::isfinite(cell) ? cell : 1e-3f;
 }
 
@@ -107,6 +128,15 @@ CellGrid::CellGrid(const Points& points, float cell_m) : points_(&points) {
   for (const Vec3& p : points)
     if (p.allFinite()) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
   if (!(lo.x() <= hi.x())) lo = hi = Vec3::Zero();  // no finite point
+  lowest_ = lo, highest_ = hi;
+  // The cells span the percentiles widened by their span on each side, where that is inside the
+  // bounding box: a few stray far points are clamped into the border cells instead of stretching every
+  // cell (the map from coordinate to cell stays monotone, so a query's cells still hold every point
+  // within its reach).
+  if (Vec3 plo, phi; percentile_box(points, plo, phi)) {
+    const Vec3 widen = phi - plo;
+    lo = lo.cwiseMax(plo - widen), hi = hi.cwiseMin(phi + widen);
+  }
   origin_ = lo;
   double cell = cell_m > 0 && std::isfinite(cell_m) ? double(cell_m) : 1.0;
   const Eigen::Vector3d span = (hi - lo).cast<double>();
@@ -146,6 +176,10 @@ std::unique_ptr<NeighbourIndex> fixed_cloud_index(const Points& points, float ra
   return grid;
 }
 
+std::unique_ptr<NeighbourIndex> first_guess_index(const Points& points) {
+  return fixed_cloud_index(points, first_guess_cell(points));
+}
+
 void CellGrid::radius_any_order(const Vec3& q, float radius, std::vector<Neighbour>& out) const {
   out.clear();
   if (order_.empty() || !(radius >= 0)) return;
@@ -155,11 +189,13 @@ void CellGrid::radius_any_order(const Vec3& q, float radius, std::vector<Neighbo
   int64_t lo[3], hi[3];
   const int64_t n[3] = {nx_, ny_, nz_};
   for (int a = 0; a < 3; ++a) {
+    // A box outside every point finds nothing (nor does a NaN query).
+    if (!(double(q[a]) + reach >= double(lowest_[a]) && double(q[a]) - reach <= double(highest_[a]))) return;
+    // Clamped as the points' cells are: a point outside the cells' span lies in a border cell.
     const double from = std::floor((double(q[a]) - reach - double(origin_[a])) / double(cell_));
     const double to = std::floor((double(q[a]) + reach - double(origin_[a])) / double(cell_));
-    if (!(to >= 0 && from <= double(n[a] - 1))) return;  // outside the grid (or NaN)
-    lo[a] = static_cast<int64_t>(std::max(from, 0.0));
-    hi[a] = static_cast<int64_t>(std::min(to, double(n[a] - 1)));
+    lo[a] = static_cast<int64_t>(std::clamp(from, 0.0, double(n[a] - 1)));
+    hi[a] = static_cast<int64_t>(std::clamp(to, 0.0, double(n[a] - 1)));
   }
   // Each column of cells along z is one run of binned_. Every candidate is written and the count
   // advanced only when it is inside: no branch for the test, which goes either way.
@@ -189,8 +225,7 @@ void CellGrid::nearest(const Vec3& q, size_t k, std::vector<Neighbour>& out) con
   k = std::min(k, order_.size());
   if (k == 0) return;
   // Grow the search radius until k points are inside it (as VoxelIndex); the k nearest are then exact.
-  const double diagonal = double(cell_) * std::sqrt(double(nx_ * nx_ + ny_ * ny_ + nz_ * nz_));
-  const double far = diagonal + (q - origin_).cast<double>().norm();
+  const double far = (highest_ - lowest_).cast<double>().norm() + (q - lowest_).cast<double>().norm();
   float radius = cell_;
   for (;;) {
     radius_any_order(q, radius, out);  // ordered below

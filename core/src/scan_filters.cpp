@@ -150,10 +150,11 @@ constexpr size_t kDensityNeighbours = 12;  // a square grid's 3rd ring ends at 1
 DensityProbe probe_density(const Points& finite_points) {
   if (finite_points.size() <= kDensityNeighbours) return {};
   // The k-th neighbour distances are exact in any index; a grid of cells is built in a fraction of a
-  // k-d tree's time, and its cell (the first guess) only sets how much a search scans.
-  const CellGrid index(finite_points, first_guess_cell(finite_points));
+  // k-d tree's time, and its cell (the first guess) only sets how much a search scans (a kd-tree
+  // where a stray far point would make the cells hold everything).
+  const std::unique_ptr<NeighbourIndex> index = first_guess_index(finite_points);
   const size_t ks[] = {1, kDensityNeighbours};
-  const std::vector<float> d = median_knn_distances(index, ks);
+  const std::vector<float> d = median_knn_distances(*index, ks);
   return {d[0], d[1]};
 }
 
@@ -173,7 +174,7 @@ Cloud remove_isolated_points(const Cloud& cloud, float radius_spacings, int min_
   if (min_neighbours < 1 || finite.size() <= size_t(min_neighbours) + 1) return cloud;
   Points fin;
   for (uint32_t i : finite) fin.push_back(cloud.points[i]);
-  return isolated_removed(cloud, fin, median_knn_distance(KdTree(fin), 1), radius_spacings, min_neighbours, removed);
+  return isolated_removed(cloud, fin, median_knn_distance(*first_guess_index(fin), 1), radius_spacings, min_neighbours, removed);
 }
 
 namespace {

@@ -400,7 +400,12 @@ TEST(Extract, AStrayFarPointChangesNoOtherPointsFeatures) {
   auto a = extract(c), b = extract(stray);
   ASSERT_TRUE(a.ok() && b.ok());
   ASSERT_GT(a->diagnostics.support_radius_m, 0.f);
-  EXPECT_GT(CellGrid(stray.points, a->diagnostics.support_radius_m).cell(), 2 * a->diagnostics.support_radius_m);
+  // The stray point neither inflates the density's first guess nor stretches the cells of r: it lies
+  // in a border cell, and cells answer both.
+  EXPECT_LT(first_guess_cell(stray.points), 1.05f * first_guess_cell(c.points));
+  EXPECT_EQ(CellGrid(stray.points, a->diagnostics.support_radius_m).cell(), a->diagnostics.support_radius_m);
+  EXPECT_NE(dynamic_cast<const CellGrid*>(first_guess_index(stray.points).get()), nullptr);
+  EXPECT_NE(dynamic_cast<const CellGrid*>(fixed_cloud_index(stray.points, a->diagnostics.support_radius_m).get()), nullptr);
   ASSERT_EQ(a->diagnostics.support_radius_m, b->diagnostics.support_radius_m);
   for (size_t i = 0; i < a->surfaces.size(); ++i) {
     ASSERT_EQ(a->surfaces[i].normal, b->surfaces[i].normal) << i;
@@ -544,6 +549,37 @@ TEST(Neighbourhoods, CellGridFindsWhatTheTreeAndTheVoxelHashFind) {
   empty.radius(Vec3::Zero(), 1.f, b);
   empty.nearest(Vec3::Zero(), 3, c);
   EXPECT_TRUE(b.empty() && c.empty());
+}
+
+// Two dense clusters a kilometre apart (half the points each): cells of a few millimetres spanning both
+// would not fit, so the grid's cells grow and fixed_cloud_index answers from the kd-tree instead. The
+// grown cells still answer as the tree does.
+TEST(Neighbourhoods, FixedCloudIndexTakesTheTreeWhereCellsWouldNotFit) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(0.f, 0.2f);
+  Points pts;
+  for (int i = 0; i < 4000; ++i) pts.push_back(Vec3(u(rng) + (i % 2 ? 1000.f : 0.f), u(rng), u(rng)));
+  const float radius = 0.005f;
+  const CellGrid grid(pts, radius);
+  EXPECT_GT(grid.cell(), 2 * radius);
+  EXPECT_NE(dynamic_cast<const KdTree*>(fixed_cloud_index(pts, radius).get()), nullptr);
+  const KdTree tree(pts);
+  std::vector<Neighbour> a, b;
+  size_t found = 0;
+  for (size_t i = 0; i < pts.size(); i += 37) {
+    for (float r : {radius, 10 * radius}) {
+      tree.radius(pts[i], r, a);
+      grid.radius(pts[i], r, b);
+      ASSERT_EQ(a.size(), b.size()) << i;
+      for (size_t j = 0; j < a.size(); ++j) ASSERT_EQ(a[j].index, b[j].index) << i;
+      found += b.size();
+    }
+    tree.nearest(pts[i], 12, a);
+    grid.nearest(pts[i], 12, b);
+    ASSERT_EQ(a.size(), 12u);
+    for (size_t j = 0; j < a.size(); ++j) ASSERT_EQ(a[j].index, b[j].index) << i;
+  }
+  EXPECT_GT(found, 300u);
 }
 
 TEST(Clean, AChunkedScanKeepsWhatItsWholeCloudKeeps) {

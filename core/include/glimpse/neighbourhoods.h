@@ -61,14 +61,16 @@ class CellGrid final : public NeighbourIndex {
   void radius_any_order(const Vec3& query, float radius, std::vector<Neighbour>& out) const override;
   void nearest(const Vec3& query, size_t k, std::vector<Neighbour>& out) const override;
   const Points& points() const override { return *points_; }
-  // The cells' size: the one asked for, or larger when that many cells would not fit (a stray far
-  // point), where a kd-tree answers faster.
+  // The cells' size: the one asked for, or larger when that many cells would not fit (points spread far
+  // wider than the cell), where a kd-tree answers faster. A few stray far points do not count: the
+  // cells span the points' percentiles (widened), and points outside lie in the border cells.
   float cell() const { return cell_; }
 
  private:
   const Points* points_;
   float cell_ = 1;
-  Vec3 origin_ = Vec3::Zero();
+  Vec3 lowest_ = Vec3::Zero(), highest_ = Vec3::Zero();  // the finite points' bounding box
+  Vec3 origin_ = Vec3::Zero();                            // the cells' lowest corner (points below: clamped)
   int64_t nx_ = 0, ny_ = 0, nz_ = 0;
   std::vector<uint32_t> start_;  // cell c's points are order_[start_[c] .. start_[c + 1]), z fastest
   std::vector<uint32_t> order_;  // point indices, by cell, ascending within a cell
@@ -76,13 +78,16 @@ class CellGrid final : public NeighbourIndex {
 };
 
 // The index for many queries about `radius` wide over a fixed cloud: cells of that size, or a kd-tree
-// when that many cells would not fit (a stray far point would make them hold the whole cloud). Both
-// give the same answers; only the speed differs.
+// when that many cells would not fit (points spread far wider than the radius would make each cell hold
+// many). Both give the same answers; only the speed differs.
 std::unique_ptr<NeighbourIndex> fixed_cloud_index(const Points& points, float radius);
 
 // A cell for a cloud whose density is not known yet: about four spacings of a surface sample filling
-// the cloud's bounding box. It sets only how much a grid's query scans, never what it finds.
+// the cloud's extent (between the 1st and 99th percentiles, so a stray far point does not inflate it).
+// It sets only how much a grid's query scans, never what it finds.
 float first_guess_cell(const Points& points);
+// The index for such a cloud (its density's queries): fixed_cloud_index at the first-guess cell.
+std::unique_ptr<NeighbourIndex> first_guess_index(const Points& points);
 
 // A growing point set hashed into cubic cells (append-only): insertion and queries cost what the
 // neighbourhood holds, not what the set holds. Radius queries are fastest for radius <= cell size.
