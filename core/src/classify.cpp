@@ -1,11 +1,12 @@
 // Classification of one cloud, or of a scan fused from several sensor positions: the scan filters the
 // model recorded, the features of its methods, the decision and whether it is none of the learnt
 // categories (sec. 4).
+#include <omp.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <omp.h>
 #include <limits>
 #include <string>
 

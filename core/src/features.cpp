@@ -86,8 +86,8 @@ Expected<FeatureState> extract(const Cloud& input, const FeatureParams& params, 
 
   t0 = std::chrono::steady_clock::now();
   // Cells of a first guess answer the density's queries; cells of r then answer every later one (about
-  // twice as fast as a kd-tree, the same neighbourhoods to the bit). Where a stray far point would make
-  // either grid's cells hold the whole cloud, a kd-tree answers instead.
+  // twice as fast as a kd-tree, the same neighbourhoods to the bit). Where the points spread too wide
+  // for either grid's cells (not a few stray ones: border cells hold those), a kd-tree answers instead.
   diag.density = estimate_density(*first_guess_index(f.cloud.points),
                                   params.surface.support_radius_m, params.surface.support_neighbours);
   diag.support_radius_m = diag.density.support_radius_m;

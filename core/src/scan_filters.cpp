@@ -151,7 +151,7 @@ DensityProbe probe_density(const Points& finite_points) {
   if (finite_points.size() <= kDensityNeighbours) return {};
   // The k-th neighbour distances are exact in any index; a grid of cells is built in a fraction of a
   // k-d tree's time, and its cell (the first guess) only sets how much a search scans (a kd-tree
-  // where a stray far point would make the cells hold everything).
+  // where the points spread too wide for cells).
   const std::unique_ptr<NeighbourIndex> index = first_guess_index(finite_points);
   const size_t ks[] = {1, kDensityNeighbours};
   const std::vector<float> d = median_knn_distances(*index, ks);
