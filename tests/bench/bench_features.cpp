@@ -10,7 +10,9 @@
 // with a compile job): floor 13.3 ms, extract 21.9 ms = 1.65x. Stop 40 (extract answers its queries from
 // CellGrid, the same neighbourhoods as the tree): the kd-tree floor 15.5 ms, the grid's 5.93 ms; local
 // surfaces 19.8 (tree) against 10.3 ms (grid) = 0.52; index + support radius 2.73 against 0.37 ms;
-// extract 11.6 ms = 0.75x the kd-tree floor, 1.96x the grid's (medians of 5, same run).
+// extract 11.6 ms = 0.75x the kd-tree floor, 1.96x the grid's (medians of 5, same run). Stop 41, a
+// faster machine: kd-tree floor 13.3 ms, grid's 4.76; local surfaces 16.5 against 8.20 ms; extract
+// 10.9 ms = 0.82x the kd-tree floor, 2.29x the grid's (stop 40's binary there: 11.0 / 4.63 = 2.37x).
 #include <benchmark/benchmark.h>
 
 #include <optional>
