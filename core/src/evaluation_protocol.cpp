@@ -180,7 +180,7 @@ void stream_views(Protocol& P) {
   const auto t0 = Clock::now();
   std::vector<size_t> tested;
   for (size_t v = 0; v < P.views.size(); ++v)
-    if (P.tested(v) && !P.unknown(v)) tested.push_back(v);
+    if (P.tested(v)) tested.push_back(v);  // views of no learnt category too: does "unknown" settle?
   r.streams.resize(tested.size());
   SessionParams sp = P.params.session;
   sp.method = r.change_method;
@@ -189,6 +189,7 @@ void stream_views(Protocol& P) {
     const int o = P.views[v].object, fold = r.object_fold[static_cast<size_t>(o)];
     StreamTrace& t = r.streams[i];
     t.fold = fold, t.object = o, t.view = P.views[v].view, t.truth = r.object_truth[static_cast<size_t>(o)];
+    t.unknown_class = r.object_unknown_class[static_cast<size_t>(o)];
     auto session = ScanSession::create(P.fold_models[static_cast<size_t>(fold)], sp);
     if (!session.ok()) return;
     const Cloud& cloud = P.views[v].cloud;

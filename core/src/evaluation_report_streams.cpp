@@ -76,9 +76,26 @@ std::string streams_section(const EvalResult& r) {
     o << "| " << r.categories[c] << " | " << s.settled_views << " / " << s.views << " | " << pct(s.precision_percent(), 1)
       << " % | " << pct(s.mean_visible_percent, 1) << " |\n";
   }
+  const SettleRow unknown = unknown_settle_summary(r.streams);
+  if (unknown.views) {
+    o << "\nObjects of no learnt category, streamed the same way (right: the first settled decision is \"unknown\"; a "
+         "known category settled on counts wrong): "
+      << unknown.settled_views << " of " << unknown.views << " views settled (" << pct(unknown.settled_percent(), 1) << " %), "
+      << unknown.correct << " as unknown (" << pct(unknown.precision_percent(), 1) << " % of those settled), at "
+      << pct(unknown.mean_visible_percent, 1) << " % visible on average. \"Unknown\" settles like a category: each of the last "
+      << sp.stability_window << " decisions unknown, the newest chunk's own novelty above the threshold, and confidence >= "
+      << fmt("%.2f", sp.settle_confidence) << " (a smoothed novelty " << fmt("%.2f", 1 + sp.settle_confidence * sp.unknown_full_excess)
+      << " x the threshold).\n\n| class | views settled | settled unknown | mean visible % |\n|---|---:|---:|---:|\n";
+    for (size_t c = 0; c < r.unknown_categories.size(); ++c) {
+      const SettleRow s = unknown_settle_summary(r.streams, static_cast<int>(c));
+      if (s.views)
+        o << "| " << r.unknown_categories[c] << " | " << s.settled_views << " / " << s.views << " | " << pct(s.precision_percent(), 1)
+          << " % | " << pct(s.mean_visible_percent, 1) << " |\n";
+    }
+  }
   size_t final_correct = 0, decided = 0;
   for (const StreamTrace& t : r.streams)
-    if (!t.winners.empty()) ++decided, final_correct += t.winners.back() == t.truth;
+    if (!t.winners.empty() && t.truth >= 0) ++decided, final_correct += t.winners.back() == t.truth;
   o << "\nLast decision of each stream (the whole view seen): " << final_correct << " / " << decided << " correct ("
     << pct(decided ? 100.0 * double(final_correct) / double(decided) : 0, 1) << " %). Every chunk is in "
     << "[streams.csv](streams.csv).\n\n";

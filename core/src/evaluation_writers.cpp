@@ -21,7 +21,7 @@ std::string streams_csv(const EvalResult& r) {
   for (const StreamTrace& t : r.streams)
     for (size_t i = 0; i < t.winners.size(); ++i) {
       o << t.fold << "," << r.object_ids[static_cast<size_t>(t.object)] << "," << t.view << ","
-        << r.categories[static_cast<size_t>(t.truth)] << "," << i << "," << fmt("%.4f", t.visible_fraction[i]) << ","
+        << (t.truth >= 0 ? r.categories[static_cast<size_t>(t.truth)] : "unknown:" + r.unknown_categories[static_cast<size_t>(t.unknown_class)]) << "," << i << "," << fmt("%.4f", t.visible_fraction[i]) << ","
         << (t.winners[i] >= 0 ? r.categories[static_cast<size_t>(t.winners[i])] : std::string()) << ","
         << fmt("%.4f", t.confidence[i]) << "," << int(t.settled[i]) << "," << t.keypoints[i] << ","
         << (i < t.points.size() ? t.points[i] : 0);

@@ -217,6 +217,8 @@ int run_eval(const EvalOptions& o) {
                                                   result->unknown_categories.size()))
       std::printf("  %-6s %.3f %5.1f %% | %5.1f %% %5.1f %% %5.1f -> %5.1f %%\n", row.stage.c_str(), row.auroc, row.far_at_95,
                   row.known_acceptance, row.false_acceptance, row.known_accuracy_closed, row.known_accuracy_open);
+    if (const SettleRow s = unknown_settle_summary(result->streams); s.views)
+      std::printf("  streams of unknown objects: %zu of %zu settled, %zu of them as unknown\n", s.settled_views, s.views, s.correct);
   }
   std::printf("\ntime %.1f s on %d threads\n", result->total_seconds, result->threads);
   std::printf("report: %s\n", (std::filesystem::path(o.out) / "report.md").string().c_str());
@@ -244,7 +246,8 @@ void add_eval_command(CLI::App& app) {
                   "model of the other objects)");
   cmd->add_option("--unknown", o->unknown,
                   "objects of categories no model learns DIR[,DIR...] or zoo:N, tested besides the known ones: the "
-                  "report's open-set section (AUROC of novelty, false acceptance, known accuracy at the operating point)");
+                  "report's open-set section (AUROC of novelty, false acceptance, known accuracy at the operating point) and "
+                  "how their streams settle");
   cmd->add_option("--hold-out", o->hold_out,
                   "categories CAT[,CAT...] of the evaluated sources that no model learns: their objects are tested "
                   "as unknown (the open-set section from known data alone, e.g. each category in turn)");
@@ -306,7 +309,8 @@ void add_eval_command(CLI::App& app) {
   cmd->add_option("--stages", o->stages, "comma-separated stages: full, Nkp (N visible keypoints), N% (of the full cloud)")
       ->capture_default_str();
   cmd->add_option("--stream-chunk", o->stream_chunk,
-                  "stream every test view in chunks of this fraction of the full cloud (0: no streaming)")
+                  "stream every test view (--unknown objects' too) in chunks of this fraction of the full cloud (0: no "
+                  "streaming)")
       ->capture_default_str();
   cmd->add_option("--sensor", o->sensor,
                   "test views from: ideal (HPR on samples, the paper's), depth (Kinect-class camera) or lidar "

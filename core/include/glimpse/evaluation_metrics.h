@@ -113,7 +113,8 @@ double auroc(std::vector<double> negatives, std::vector<double> positives);
 // One test view streamed top to bottom through a ScanSession, one entry per chunk.
 struct StreamTrace {
   int fold = 0, object = 0, view = 0;
-  int truth = 0;
+  int truth = 0;                         // -1: an object of no learnt category
+  int unknown_class = -1;                // then its index into EvalResult::unknown_categories
   std::vector<double> visible_fraction;  // accumulated points / full 3D cloud points
   std::vector<int> winners;              // report category index; -1 while the session cannot decide
   std::vector<double> confidence;
@@ -128,7 +129,7 @@ struct StreamTrace {
 struct SettleRow {
   double threshold = -1;  // confidence threshold; -1: the session's own settled flag
   size_t views = 0, settled_views = 0, correct = 0;
-  size_t unknown = 0;                 // settled as "none of these" (counted wrong: every streamed view is known)
+  size_t unknown = 0;                 // settled as "none of these" (for a known view: counted wrong)
   double mean_visible_percent = 0;    // at the first settled chunk, over settled views
   double median_visible_percent = 0;
   double precision_percent() const { return settled_views ? 100.0 * double(correct) / double(settled_views) : 0.0; }
@@ -136,8 +137,11 @@ struct SettleRow {
 };
 // The session's flags (threshold < 0), or "confidence >= threshold and, when keypoints matter, at
 // least min_keypoints keypoints" recomputed from the recorded confidences: a calibration sweep.
-// `truth_filter` >= 0 restricts to views of that category.
+// Views of learnt categories only; `truth_filter` >= 0 restricts to views of that category.
 SettleRow settle_summary(const std::vector<StreamTrace>& traces, double threshold, size_t min_keypoints = 0,
                          int truth_filter = -1);
+// Streams of objects of no learnt category (of `unknown_class` alone when >= 0), by the session's flags:
+// right (`correct`) when the first settled decision is "unknown"; the rest settled on a category.
+SettleRow unknown_settle_summary(const std::vector<StreamTrace>& traces, int unknown_class = -1);
 
 }  // namespace glimpse
