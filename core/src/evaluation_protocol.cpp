@@ -209,6 +209,7 @@ void stream_views(Protocol& P) {
       t.confidence.push_back(d->confidence);
       t.settled.push_back(d->settled ? 1 : 0);
       t.unknown.push_back(d->unknown ? 1 : 0);
+      t.novelty.push_back(d->novelty);
       t.keypoints.push_back(d->keypoints);
       t.points.push_back(d->points);
       std::vector<double> raw(r.categories.size(), 0.0);

@@ -17,7 +17,7 @@ std::string streams_csv(const EvalResult& r) {
   std::ostringstream o;
   o << "fold,object,view,truth,chunk,visible_fraction,winner,confidence,settled,keypoints,points";
   for (const std::string& c : r.categories) o << ",raw_" << c;
-  o << ",unknown\n";
+  o << ",unknown,novelty\n";
   for (const StreamTrace& t : r.streams)
     for (size_t i = 0; i < t.winners.size(); ++i) {
       o << t.fold << "," << r.object_ids[static_cast<size_t>(t.object)] << "," << t.view << ","
@@ -27,7 +27,8 @@ std::string streams_csv(const EvalResult& r) {
         << (i < t.points.size() ? t.points[i] : 0);
       for (size_t c = 0; c < r.categories.size(); ++c)
         o << "," << (i < t.raw_scores.size() && c < t.raw_scores[i].size() ? fmt("%.4f", t.raw_scores[i][c]) : "");
-      o << "," << (i < t.unknown.size() ? int(t.unknown[i]) : 0) << "\n";
+      o << "," << (i < t.unknown.size() ? int(t.unknown[i]) : 0) << ","
+        << (i < t.novelty.size() && std::isfinite(t.novelty[i]) ? fmt("%.4f", t.novelty[i]) : std::string()) << "\n";
     }
   return o.str();
 }

@@ -710,7 +710,19 @@ TEST(RunEvaluation, AZooCategoryHeldOutComesOutNovel) {
   EXPECT_GE(streamed.settled_views, 15u);
   EXPECT_GE(streamed.correct, 2u);
   EXPECT_NE(report.find("Objects of no learnt category, streamed"), std::string::npos);
-  EXPECT_NE(streams_csv(*r).find(",unknown:fourleg,"), std::string::npos);
+  const std::string csv = streams_csv(*r);
+  EXPECT_NE(csv.find(",unknown:fourleg,"), std::string::npos);
+  // Each chunk's novelty beside its unknown flag: a flagged chunk's is above every unflagged one's of its model.
+  EXPECT_NE(csv.find(",unknown,novelty\n"), std::string::npos);
+  for (int fold = 0; fold < p.folds; ++fold) {
+    double accepted = 0, rejected = INFINITY;
+    for (const StreamTrace& t : r->streams)
+      for (size_t i = 0; t.fold == fold && i < t.novelty.size(); ++i)
+        if (!std::isfinite(t.novelty[i])) continue;
+        else if (t.unknown[i]) rejected = std::min(rejected, t.novelty[i]);
+        else accepted = std::max(accepted, t.novelty[i]);
+    EXPECT_LT(accepted, rejected) << "fold " << fold;
+  }
 }
 
 // USH alone at full view and 20 %, no exploration, streams or matrix: what the training-view tests vary.

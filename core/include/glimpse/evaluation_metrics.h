@@ -120,6 +120,7 @@ struct StreamTrace {
   std::vector<double> confidence;
   std::vector<uint8_t> settled;          // the session's own flag
   std::vector<uint8_t> unknown;          // the session's "none of these" (winners keeps the nearest category)
+  std::vector<double> novelty;           // the session's (smoothed) novelty of the winner; NaN: none
   std::vector<size_t> keypoints;
   std::vector<size_t> points;                    // accumulated after duplicate removal
   std::vector<std::vector<double>> raw_scores;   // per chunk, the chunk's own scores (report's category order)
