@@ -1,5 +1,6 @@
 // The report's sections on the exploration (sec. 4): how often the decision changes category as
 // keypoints appear, and when a streamed decision settles (evaluation_report.cpp puts them in order).
+#include <algorithm>
 #include <map>
 #include <sstream>
 #include <string>
@@ -65,7 +66,8 @@ std::string streams_section(const EvalResult& r) {
   }
   const SettleRow session = settle_summary(r.streams, -1);
   row("**session default** (calibrated margin, confidence >= " + fmt("%.2f", sp.settle_confidence) + ", the winner held " +
-          std::to_string(sp.stability_window) + " chunks, the newest included" +
+          std::to_string(sp.stability_window) + " chunks, the newest included, its novelty at most " +
+          fmt("%.2f", sp.settle_novelty_share) + " x the threshold" +
           (session.unknown ? "; " + std::to_string(session.unknown) + " settled as unknown, counted wrong" : std::string()) + ")",
       session);
   for (double t : r.params.settle_sweep) row("confidence >= " + fmt("%.2f", t), settle_summary(r.streams, t, min_kp));
@@ -82,10 +84,10 @@ std::string streams_section(const EvalResult& r) {
          "known category settled on counts wrong): "
       << unknown.settled_views << " of " << unknown.views << " views settled (" << pct(unknown.settled_percent(), 1) << " %), "
       << unknown.correct << " as unknown (" << pct(unknown.precision_percent(), 1) << " % of those settled), at "
-      << pct(unknown.mean_visible_percent, 1) << " % visible on average. \"Unknown\" settles like a category: each of the last "
-      << sp.stability_window << " decisions unknown, the newest chunk's own novelty above the threshold, and confidence >= "
-      << fmt("%.2f", sp.settle_confidence) << " (a smoothed novelty " << fmt("%.2f", 1 + sp.settle_confidence * sp.unknown_full_excess)
-      << " x the threshold).\n\n| class | views settled | settled unknown | mean visible % |\n|---|---:|---:|---:|\n";
+      << pct(unknown.mean_visible_percent, 1) << " % visible on average. \"Unknown\" settles once each of the last "
+      << std::max(sp.stability_window, sp.unknown_settle_window) << " decisions was unknown, the newest chunk's own novelty "
+         "above the threshold, with confidence >= " << fmt("%.2f", sp.unknown_settle_confidence) << " (a smoothed novelty "
+      << fmt("%.2f", 1 + sp.unknown_settle_confidence * sp.unknown_full_excess) << " x the threshold).\n\n| class | views settled | settled unknown | mean visible % |\n|---|---:|---:|---:|\n";
     for (size_t c = 0; c < r.unknown_categories.size(); ++c) {
       const SettleRow s = unknown_settle_summary(r.streams, static_cast<int>(c));
       if (s.views)

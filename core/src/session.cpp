@@ -348,8 +348,9 @@ void track_decision(DecisionTrack& t, const ChunkEvidence& e, bool keypoints_mat
   const double stability = static_cast<double>(held) / static_cast<double>(window);
   d.confidence = std::clamp(margin, 0.0, 1.0) * stability;
   const bool enough = !keypoints_matter || e.keypoints >= params.min_keypoints;
+  const double settle_at = d.unknown ? params.unknown_settle_confidence : params.settle_confidence;
   if (was_settled) {
-    d.settled = enough && d.confidence >= params.settle_confidence - params.unsettle_margin;
+    d.settled = enough && d.confidence >= settle_at - params.unsettle_margin;
     return;
   }
   // To settle, the decision has won each of the last stability_window decisions, this chunk's own
@@ -359,14 +360,20 @@ void track_decision(DecisionTrack& t, const ChunkEvidence& e, bool keypoints_mat
   // was 95.0 % right, below the 98 % the margin was calibrated for; with the full window, 98.2 %). Without
   // the newest chunk's novelty, SHREC -> PSB streams settled 110 of 900 known views "unknown" on a
   // smoothed novelty the scan had already left behind; with it, 96 (first settled right 82.0 -> 83.6 %;
-  // SHREC CV 16 of 600 -> 7, 96.0 -> 97.5 %; PSB -> SHREC unchanged, 11 and 96.2 %).
+  // SHREC CV 16 of 600 -> 7, 96.0 -> 97.5 %; PSB -> SHREC unchanged, 11 and 96.2 %). "Unknown" needs the
+  // longer unknown_settle_window and unknown_settle_confidence, a category a novelty well inside the
+  // threshold (settle_novelty_share; session.h says why).
   const int raw_winner = e.scores.empty() ? -1 : static_cast<int>(std::max_element(e.scores.begin(), e.scores.end()) - e.scores.begin());
   // (A scan a method cannot judge has confidence 0 and never settles, so it needs no case here.)
   const bool raw_novel = winner >= 0 && static_cast<size_t>(winner) < e.novelty.size() &&
                          e.novelty[static_cast<size_t>(winner)] > threshold;
-  const bool steady = held == static_cast<std::ptrdiff_t>(window) && t.winners.size() >= window &&
-                      (d.unknown ? raw_novel : raw_winner == winner);
-  d.settled = enough && steady && d.confidence >= params.settle_confidence;
+  const size_t need = d.unknown ? std::max(window, static_cast<size_t>(std::max(1, params.unknown_settle_window))) : window;
+  const bool held_all = t.winners.size() >= need &&
+                        std::all_of(t.winners.end() - static_cast<std::ptrdiff_t>(need), t.winners.end(), [&](int w) { return w == decided; });
+  const bool looks_known = d.unknown || !std::isfinite(threshold) || !std::isfinite(d.novelty) ||
+                           d.novelty <= params.settle_novelty_share * threshold;
+  const bool steady = held_all && looks_known && (d.unknown ? raw_novel : raw_winner == winner);
+  d.settled = enough && steady && d.confidence >= settle_at;
 }
 
 void track_decision(DecisionTrack& t, const std::vector<double>& scores, size_t keypoints, bool keypoints_matter,

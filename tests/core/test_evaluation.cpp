@@ -425,8 +425,10 @@ TEST(RunEvaluation, ReducedProtocolOnTheZooIsWellAboveChance) {
   // A view settled as "unknown" counts wrong (issue 20: the default operating point accepts 95 % of
   // held-out known clouds); before unknown could settle, 100 % of 40. Since "unknown" needs the newest
   // chunk's own novelty too: 39 of 39 settled views right (was 39 of 40 settled, 97.5 % right).
-  EXPECT_GE(settled.precision_percent(), 97.0);  // measured 100 (44 of the 60 views settled; 43 before novelty added its evidences, 39 before the logistic decision)
-  EXPECT_GE(settled.settled_percent(), 70.0);    // measured 73.3 (71.7, 65.0)
+  // Since settling is cautious both ways (stop 42: "unknown" after 6 chunks at confidence 1, a category
+  // at novelty <= 0.8 x the threshold): 43 of the 60 views settled, all right.
+  EXPECT_GE(settled.precision_percent(), 97.0);  // measured 100 (43 of the 60 views settled; 44 before the cautious settling, 43 before novelty added its evidences, 39 before the logistic decision)
+  EXPECT_GE(settled.settled_percent(), 70.0);    // measured 71.7 (73.3, 71.7, 65.0)
   std::cout << "zoo reduced: full fusion " << accuracy(r->decisions, "full", MethodId::kFusion).percent() << " %, VFH "
             << accuracy(r->decisions, "full", MethodId::kVFH).percent() << " %, 20 % fusion "
             << accuracy(r->decisions, "20%", MethodId::kFusion).percent() << " %; streams settled "
@@ -705,10 +707,11 @@ TEST(RunEvaluation, AZooCategoryHeldOutComesOutNovel) {
   EXPECT_EQ(streamed.views, 8u * 3);
   std::cout << "zoo, fourleg unknown, streams: " << streamed.settled_views << " of " << streamed.views << " settled, "
             << streamed.correct << " as unknown\n";
-  // Few settle "unknown" here (the zoo's fourlegs are decided as tables and humans, AUROC 0.75 above),
-  // but some must: measured 16 settled, 2 of them unknown.
-  EXPECT_GE(streamed.settled_views, 15u);
-  EXPECT_GE(streamed.correct, 2u);
+  // Few settle "unknown" here (the zoo's fourlegs look like its tables and humans, AUROC 0.75 above): 13
+  // of the 24 settle, none as unknown (16 and 2 before settling was cautious both ways, stop 42). What a
+  // test can hold is that the caution does not settle more of them on a category than before (14).
+  const size_t on_a_category = streamed.settled_views - streamed.correct;
+  EXPECT_LE(on_a_category, 14u);  // measured 13
   EXPECT_NE(report.find("Objects of no learnt category, streamed"), std::string::npos);
   const std::string csv = streams_csv(*r);
   EXPECT_NE(csv.find(",unknown:fourleg,"), std::string::npos);
@@ -876,9 +879,10 @@ TEST(RunEvaluation, ReducedProtocolOnShrec) {
   // model (the cameras' views augmented, stop 36): 95.3 % settled, 94.4 % right, at 11.8 % visible (more
   // known views settle "unknown": the threshold is the ideal views', no longer widened by the cameras').
   // Novelty adding its two evidences (format 9): 95.3 % settled, 95.1 % right, at 11.9 % visible.
-  EXPECT_GE(settled.settled_percent(), 93.0);    // measured 95.3 (143 of 150 views)
-  EXPECT_GE(settled.precision_percent(), 94.5);  // measured 95.1 (136 of 143)
-  EXPECT_LE(settled.mean_visible_percent, 12.5); // measured 11.9
+  // Settling cautious both ways (stop 42): 94.0 % settled, 97.9 % right, at 12.5 % visible.
+  EXPECT_GE(settled.settled_percent(), 93.0);    // measured 94.0 (141 of 150 views; 95.3 before)
+  EXPECT_GE(settled.precision_percent(), 97.5);  // measured 97.9 (138 of 141; 95.1 before)
+  EXPECT_LE(settled.mean_visible_percent, 13.0); // measured 12.5 (11.9 before)
   std::cout << "shrec reduced: full fusion " << accuracy(r->decisions, "full", MethodId::kFusion).percent()
             << " %, 20 % fusion " << accuracy(r->decisions, "20%", MethodId::kFusion).percent() << " %, full BoK "
             << accuracy(r->decisions, "full", MethodId::kBoK).percent() << " %; streams settled "
@@ -928,14 +932,15 @@ TEST(RunEvaluation, ReducedCrossSourceShrecToPsb) {
   EXPECT_GE(p10, 93.5);   // measured 95.6
   EXPECT_GE(p20, 96.0);   // measured 98.2
   EXPECT_GT(full, size + 15);  // shape adds to what a ruler gets right
-  EXPECT_GE(settled.settled_percent(), 95.0);    // measured 97.4 (99.1 with neither, 98.2 before "unknown" needed the newest chunk's novelty)
+  EXPECT_GE(settled.settled_percent(), 94.0);    // measured 94.7 (97.4 before settling was cautious both ways, stop 42; 99.1 with neither, 98.2 before "unknown" needed the newest chunk's novelty)
   // Settled as "unknown" counts wrong: 92.0 since "unknown" needs the newest chunk's own novelty too
   // (86.0 before; 91.1 before novelty was divided by the decision's score, 97.3 before unknown could settle);
   // 92.0 before the recipe's training sensors and logistic decision, 97.3 with them; 92.8 since novelty
   // comes from the novelty model (stop 36: the cameras' views augmented; PSB views look more novel to a
   // model of SHREC's ideal views alone, and more settle "unknown"); 93.7 since novelty adds its two
-  // evidences (format 9).
-  EXPECT_GE(settled.precision_percent(), 93.0);  // measured 93.7 (104 of 111)
+  // evidences (format 9); 97.2 since settling is cautious both ways (stop 42: fewer known views settle
+  // "unknown", and a category settles only on a novelty well inside the threshold).
+  EXPECT_GE(settled.precision_percent(), 96.5);  // measured 97.2 (105 of 108; 93.7, 104 of 111, before)
 }
 
 }  // namespace

@@ -449,7 +449,8 @@ TEST(DecisionTrack, ASettledWinnerStaysSettledThroughASmallDip) {
 }
 
 // A decision track over two categories with a novelty threshold of 2: a window of 2 chunks, a full margin
-// of 0.4, settling at confidence 0.6, "unknown" fully confident at 1.5 x the threshold.
+// of 0.4, settling at confidence 0.6, "unknown" fully confident at 1.5 x the threshold; "unknown" and
+// the categories settle alike (no longer window, no novelty share) unless a test says otherwise.
 struct NoveltyTrack {
   SessionParams p;
   DecisionTrack t;
@@ -460,6 +461,9 @@ struct NoveltyTrack {
     p.full_margin = 0.4;
     p.settle_confidence = 0.6;
     p.unknown_full_excess = 0.5;
+    p.unknown_settle_window = 2;
+    p.unknown_settle_confidence = 0.6;
+    p.settle_novelty_share = 1.0;
   }
   StreamDecision step(std::vector<double> scores, std::vector<double> novelty, std::string cannot = {}) {
     ChunkEvidence e;
@@ -531,6 +535,45 @@ TEST(DecisionTrack, UnknownSettlesOnlyWhenTheNewestChunkIsNovelToo) {
   d = step({6.0, 6.0});  // smoothed 4.75, the newest chunk novel too
   EXPECT_TRUE(d.unknown);
   EXPECT_TRUE(d.settled);
+}
+
+// Cautious both ways: "unknown" settles after its own longer window at its own confidence, and a
+// category only while its novelty is well inside the threshold.
+TEST(DecisionTrack, UnknownNeedsItsLongerWindowAndACategoryANoveltyWellInside) {
+  NoveltyTrack track(1.0);
+  track.p.unknown_settle_window = 3;
+  track.p.unknown_settle_confidence = 1.0;
+  track.p.settle_novelty_share = 0.8;  // a category settles at novelty <= 1.6
+  auto step = [&](double novelty) { return track.step({0.9, 0.1}, {novelty, 3.0}); };
+  StreamDecision d = step(1.8);
+  EXPECT_FALSE(d.unknown);
+  d = step(1.8);
+  EXPECT_NEAR(d.confidence, 1.0, 1e-12);
+  EXPECT_FALSE(d.settled) << "novelty 1.8: known, but not well inside the threshold 2";
+  d = step(1.5);
+  EXPECT_TRUE(d.settled) << "novelty 1.5 <= 0.8 x 2";
+  d = step(1.8);
+  EXPECT_TRUE(d.settled) << "the share gates settling, not staying settled";
+  // Unknown at confidence 0.5 (novelty 2.5) never settles at 1.0, however long it holds.
+  for (int i = 0; i < 5; ++i) {
+    d = step(2.5);
+    EXPECT_TRUE(d.unknown);
+    EXPECT_FALSE(d.settled) << i;
+  }
+  // At novelty 3 (confidence 1), it needs each of the last 3 decisions unknown at that confidence...
+  d = step(1.0);
+  EXPECT_FALSE(d.unknown);
+  d = step(3.0);
+  d = step(3.0);
+  EXPECT_NEAR(d.confidence, 1.0, 1e-12);
+  EXPECT_FALSE(d.settled) << "held 2 of the 3 chunks unknown needs";
+  d = step(3.0);
+  EXPECT_TRUE(d.settled);
+  // ... and stays settled within unsettle_margin of its own confidence.
+  d = step(2.9);  // (2.9 / 2 - 1) / 0.5 = 0.9 >= 1.0 - 0.2
+  EXPECT_TRUE(d.settled);
+  d = step(2.5);  // 0.5 < 0.8
+  EXPECT_FALSE(d.settled);
 }
 
 TEST(DecisionTrack, SettlingNeedsTheWholeWindowAndTheNewestChunkToAgree) {
