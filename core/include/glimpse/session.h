@@ -51,7 +51,7 @@ struct SessionParams {
   double unsettle_margin = 0.2;
   size_t min_keypoints = 10;         // keypoint methods never settle on fewer keypoints
   // "None of these": the operating point, the share of known clouds accepted (held out in training;
-  // in (0, 1], 0: the model's default). "Unknown" settles like a category, its margin being how far
+  // in (0, 1], 0: the model's default). "Unknown" settles as a category does, its margin being how far
   // the smoothed novelty is above the threshold: this fraction of the threshold above it gives full
   // margin confidence.
   double known_acceptance = 0;
