@@ -700,7 +700,7 @@ TEST(RunEvaluation, AZooCategoryHeldOutComesOutNovel) {
   const std::string report = markdown_report(*r);
   EXPECT_NE(report.find("## Open set"), std::string::npos);
   EXPECT_NE(decisions_csv(*r).find(",unknown:fourleg,"), std::string::npos);
-  // Their streams too: known metrics leave them out, and "unknown" settles on them.
+  // Their views are streamed too, and the known streams' metrics leave them out.
   EXPECT_EQ(r->streams.size(), 8u * 4 * 3 + 8u * 3);
   EXPECT_EQ(settle_summary(r->streams, -1).views, 8u * 4 * 3);
   const SettleRow streamed = unknown_settle_summary(r->streams);
