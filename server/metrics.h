@@ -25,6 +25,24 @@ class Metrics {
   void StreamClosed(std::string_view rpc);
   void SetModelsLoaded(size_t n);
 
+  // An open stream of `rpc`, counted in the active streams gauge for as long as it lives (none without
+  // metrics).
+  class ActiveStream {
+   public:
+    ActiveStream(Metrics* metrics, std::string_view rpc) : metrics_(metrics), rpc_(rpc) {
+      if (metrics_) metrics_->StreamOpened(rpc_);
+    }
+    ~ActiveStream() {
+      if (metrics_) metrics_->StreamClosed(rpc_);
+    }
+    ActiveStream(const ActiveStream&) = delete;
+    ActiveStream& operator=(const ActiveStream&) = delete;
+
+   private:
+    Metrics* metrics_;
+    std::string_view rpc_;
+  };
+
   const std::shared_ptr<prometheus::Registry>& registry() const { return registry_; }
   // For tests: the current value of a counter/gauge series (0 when absent).
   double RequestCount(std::string_view rpc, grpc::StatusCode code) const;

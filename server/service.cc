@@ -192,11 +192,7 @@ grpc::Status GlimpseService::StreamClassify(grpc::ServerContext* ctx,
   return Handle(ctx, "StreamClassify", Access::kOpen, log, [&]() -> Status {
     auto ticket = OpenStream(ctx);
     if (!ticket) return ticket.error();
-    if (options_.metrics) options_.metrics->StreamOpened("StreamClassify");
-    struct Closer {
-      Metrics* m;
-      ~Closer() { if (m) m->StreamClosed("StreamClassify"); }
-    } closer{options_.metrics};
+    const Metrics::ActiveStream active(options_.metrics, "StreamClassify");
 
     std::unique_ptr<ScanSession> session;
     LoadedModel model;
@@ -289,11 +285,7 @@ grpc::Status GlimpseService::Train(grpc::ServerContext* ctx,
   return Handle(ctx, "Train", Access::kMutating, log, [&]() -> Status {
     auto ticket = OpenStream(ctx);
     if (!ticket) return ticket.error();
-    if (options_.metrics) options_.metrics->StreamOpened("Train");
-    struct Closer {
-      Metrics* m;
-      ~Closer() { if (m) m->StreamClosed("Train"); }
-    } closer{options_.metrics};
+    const Metrics::ActiveStream active(options_.metrics, "Train");
 
     TrainInput input;
     v1::TrainRequest msg;
