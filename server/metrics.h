@@ -10,6 +10,7 @@
 #include <prometheus/registry.h>
 
 #include <memory>
+#include <string>
 #include <string_view>
 
 namespace glimpse::server {
@@ -40,7 +41,7 @@ class Metrics {
 
    private:
     Metrics* metrics_;
-    std::string_view rpc_;
+    std::string rpc_;
   };
 
   const std::shared_ptr<prometheus::Registry>& registry() const { return registry_; }
