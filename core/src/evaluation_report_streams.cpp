@@ -1,6 +1,5 @@
 // The report's sections on the exploration (sec. 4): how often the decision changes category as
 // keypoints appear, and when a streamed decision settles (evaluation_report.cpp puts them in order).
-#include <algorithm>
 #include <map>
 #include <sstream>
 #include <string>
@@ -85,7 +84,7 @@ std::string streams_section(const EvalResult& r) {
       << unknown.settled_views << " of " << unknown.views << " views settled (" << pct(unknown.settled_percent(), 1) << " %), "
       << unknown.correct << " as unknown (" << pct(unknown.precision_percent(), 1) << " % of those settled), at "
       << pct(unknown.mean_visible_percent, 1) << " % visible on average. \"Unknown\" settles once each of the last "
-      << std::max(sp.stability_window, sp.unknown_settle_window) << " decisions was unknown, the newest chunk's own novelty "
+      << unknown_settle_chunks(sp) << " decisions was unknown, the newest chunk's own novelty "
          "above the threshold, with confidence >= " << fmt("%.2f", sp.unknown_settle_confidence) << " (a smoothed novelty "
       << fmt("%.2f", 1 + sp.unknown_settle_confidence * sp.unknown_full_excess) << " x the threshold).\n\n| class | views settled | settled unknown | mean visible % |\n|---|---:|---:|---:|\n";
     for (size_t c = 0; c < r.unknown_categories.size(); ++c) {

@@ -302,6 +302,10 @@ void smooth(std::vector<double>& running, const std::vector<double>& now, double
 
 }  // namespace
 
+size_t unknown_settle_chunks(const SessionParams& params) {
+  return static_cast<size_t>(std::max({1, params.stability_window, params.unknown_settle_window}));
+}
+
 void track_decision(DecisionTrack& t, const ChunkEvidence& e, bool keypoints_matter, double threshold,
                     const SessionParams& params) {
   StreamDecision& d = t.decision;
@@ -367,7 +371,7 @@ void track_decision(DecisionTrack& t, const ChunkEvidence& e, bool keypoints_mat
   // (A scan a method cannot judge has confidence 0 and never settles, so it needs no case here.)
   const bool raw_novel = winner >= 0 && static_cast<size_t>(winner) < e.novelty.size() &&
                          e.novelty[static_cast<size_t>(winner)] > threshold;
-  const size_t need = d.unknown ? std::max(window, static_cast<size_t>(std::max(1, params.unknown_settle_window))) : window;
+  const size_t need = d.unknown ? unknown_settle_chunks(params) : window;
   const bool held_all = t.winners.size() >= need &&
                         std::all_of(t.winners.end() - static_cast<std::ptrdiff_t>(need), t.winners.end(), [&](int w) { return w == decided; });
   const bool looks_known = d.unknown || !std::isfinite(threshold) || !std::isfinite(d.novelty) ||

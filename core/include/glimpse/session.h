@@ -92,6 +92,10 @@ struct StreamDecision {
   std::string unknown_reason;
 };
 
+// How many decisions in a row must be "unknown" before "unknown" settles: the longer of the stability
+// window and unknown_settle_window (at least 1).
+size_t unknown_settle_chunks(const SessionParams& params);
+
 // The evolving decision on its own (a pure function of the score history, so it can be scripted):
 // each call folds one chunk's scores (and novelties) into the running average and updates winner,
 // unknown, changes, held chunks, confidence and settled. `keypoints_matter`: the method needs
