@@ -1,7 +1,7 @@
 // The global-descriptor baseline (sec. 3.1) other benchmarks compare against: describing a 10k-point
 // single view and finding its nearest neighbour (L1, sec. 4) among 100 stored descriptors, with
 // (a) PCL's own VFH pipeline as a user writes it (NormalEstimation + VFHEstimation),
-// (b) our vfh(), (c) our esf() — and PCL's ESFEstimation for reference.
+// (b) our vfh() and vfh_with_normals() (the local surfaces' normals), (c) our esf() — and PCL's ESFEstimation for reference.
 // Run with --benchmark_repetitions=5 --benchmark_report_aggregates_only=true and compare medians.
 #include <benchmark/benchmark.h>
 
@@ -69,6 +69,20 @@ void BM_GlimpseVfhAutoRadius(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_GlimpseVfhAutoRadius)->Unit(benchmark::kMillisecond);
+
+// What Classify computes (method_features): VFH over normals the local surfaces already have.
+void BM_GlimpseVfhWithNormals(benchmark::State& state) {
+  const Cloud& c = view10k();
+  const auto db = stored(kVfhSize, 500);
+  std::vector<Vec3> normals(c.points.size());
+  for (size_t i = 0; i < normals.size(); ++i) normals[i] = (c.points[i] - Vec3(0, 0, 1)).normalized();
+  for (auto _ : state) {
+    auto h = vfh_with_normals(c, normals, {.threads = 1});
+    if (!h.ok()) state.SkipWithError(h.error().message.c_str());
+    else benchmark::DoNotOptimize(nearest(*h, db));
+  }
+}
+BENCHMARK(BM_GlimpseVfhWithNormals)->Unit(benchmark::kMillisecond);
 
 void BM_GlimpseEsf(benchmark::State& state) {
   const Cloud& c = view10k();

@@ -89,6 +89,20 @@ TEST(Vfh, MatchesPlainPclPipelineOnACleanView) {
   EXPECT_LT(l1(*ours, *theirs), 1e-3);  // same normals and VFH: only our validation is added
 }
 
+// vfh_with_normals hands PCL a stand-in search tree (VFH never searches): the same signature as PCL's
+// own, which builds a tree over the cloud.
+TEST(Vfh, WithNormalsMatchesPlainPclOverTheSameNormals) {
+  for (Shape shape : kShapes) {
+    Cloud cloud = single_view(shape, 4000, 5);
+    std::vector<Vec3> normals;
+    for (const Vec3& p : cloud.points) normals.push_back((*cloud.sensor - p).normalized());  // facing the sensor
+    auto ours = vfh_with_normals(cloud, normals, {});
+    auto theirs = pcl_reference::vfh_with_normals(cloud, normals);
+    ASSERT_TRUE(ours.ok() && theirs.ok());
+    EXPECT_EQ(*ours, *theirs) << "shape " << static_cast<int>(shape);
+  }
+}
+
 TEST(Vfh, DeterministicForAnyThreadCount) {
   const Cloud cloud = single_view(Shape::kSphere, 8000, 3);
   auto a = vfh(cloud, {.threads = 1});

@@ -56,6 +56,8 @@ Expected<Eigen::VectorXf> esf(const Cloud& cloud, uint64_t seed = 1);
 namespace pcl_reference {
 // pcl::NormalEstimation (radius, viewpoint = sensor or origin) + pcl::VFHEstimation, no NaN filtering.
 Expected<Eigen::VectorXf> vfh(const Cloud& cloud, float normal_radius_m);
+// pcl::VFHEstimation over the given normals (each point's, all kept), PCL building its own search tree.
+Expected<Eigen::VectorXf> vfh_with_normals(const Cloud& cloud, const std::vector<Vec3>& normals);
 // pcl::ESFEstimation: seeds rand() from time(); NOT reproducible, NOT thread-safe.
 Expected<Eigen::VectorXf> esf(const Cloud& cloud);
 }  // namespace pcl_reference
