@@ -33,6 +33,9 @@ struct HeldOut {
   std::vector<int> winners;
   std::vector<Eigen::VectorXd> scores;                  // [decision]: the components' mean scores (novelty divides by them)
   std::vector<std::vector<NearestReferences>> nearest;  // [decision][component]
+  // The same of each decision's top-down prefix (TrainParams::novelty_prefix); empty: it has none.
+  std::vector<Eigen::VectorXd> prefix_scores;
+  std::vector<std::vector<NearestReferences>> prefix_nearest;
 };
 
 // Novelty scales: per component, category and kind of nearest reference (a top-down prefix or a whole
@@ -72,7 +75,8 @@ void calibrate_novelty(Calibration& c, const HeldOut& h, size_t components, int 
   }
   std::vector<double> known;
   for (size_t i = 0; i < h.winners.size(); ++i) {
-    const Eigen::VectorXd n = category_novelty(c, h.nearest[i], h.scores[i]);
+    Eigen::VectorXd n = category_novelty(c, h.nearest[i], h.scores[i]);
+    if (!h.prefix_nearest[i].empty()) n = joint_novelty(n, category_novelty(c, h.prefix_nearest[i], h.prefix_scores[i]));
     if (n.size() && std::isfinite(n[h.winners[i]])) known.push_back(n[h.winners[i]]);
   }
   if (known.empty()) return;
@@ -171,6 +175,11 @@ Eigen::VectorXd category_novelty(const Calibration& c, const std::vector<Nearest
   return novelty;
 }
 
+Eigen::VectorXd joint_novelty(const Eigen::VectorXd& whole, const Eigen::VectorXd& prefix) {
+  if (prefix.size() != whole.size()) return whole;
+  return whole.cwiseProduct(prefix).cwiseSqrt();
+}
+
 double novelty_threshold(const Calibration& c, double known_acceptance) {
   const std::vector<double>& q = c.novelty_quantiles;
   if (q.size() < 2 || !(known_acceptance > 0 && known_acceptance <= 1)) return std::numeric_limits<double>::quiet_NaN();
@@ -215,7 +224,8 @@ double settle_margin(std::vector<std::pair<double, bool>> decisions, double prec
 }
 
 Calibration calibrate(const ModelImpl& impl, MethodId method, const std::vector<Eigen::MatrixXd>& histograms,
-                      const std::vector<Eigen::MatrixXd>& queries, const std::vector<int>& labels,
+                      const std::vector<Eigen::MatrixXd>& queries, const std::vector<Eigen::MatrixXd>& prefix_queries,
+                      const std::vector<uint8_t>& has_prefix, const std::vector<int>& labels,
                       const std::vector<int>& objects, const std::vector<uint8_t>& whole,
                       const std::vector<std::string>& object_categories, int categories, int threads,
                       const CancelFn& cancel) {
@@ -253,6 +263,14 @@ Calibration calibrate(const ModelImpl& impl, MethodId method, const std::vector<
     if (std::count(seen.begin(), seen.end(), 0)) continue;  // a category wholly in this fold
     std::vector<Eigen::MatrixXd> scores(parts.size());
     std::vector<std::vector<NearestReferences>> nearest(test_rows.size());
+    // The held-out rows with a prefix (places in test_rows), and per one its components' mean score.
+    std::vector<size_t> with_prefix;
+    for (size_t r = 0; r < test_rows.size(); ++r)
+      if (static_cast<size_t>(test_rows[r]) < has_prefix.size() && has_prefix[static_cast<size_t>(test_rows[r])]) with_prefix.push_back(r);
+    std::vector<Eigen::Index> prefix_rows;
+    for (size_t r : with_prefix) prefix_rows.push_back(test_rows[r]);
+    std::vector<Eigen::VectorXd> prefix_means(test_rows.size());
+    std::vector<std::vector<NearestReferences>> prefix_nearest(test_rows.size());
     bool ok = true;
     for (size_t j = 0; j < parts.size() && ok; ++j) {
       const Eigen::MatrixXd& h = histograms[static_cast<size_t>(parts[j])];
@@ -276,6 +294,14 @@ Calibration calibrate(const ModelImpl& impl, MethodId method, const std::vector<
         component[r] = nearest_references(*stage, std::move(answer), reference_whole, reference_object, novelty_objects);
       });
       for (size_t r = 0; r < test_rows.size(); ++r) nearest[r].push_back(std::move(component[r]));
+      if (prefix_rows.empty()) continue;
+      decide_rows_with_distances(*stage, prefix_queries[static_cast<size_t>(parts[j])], prefix_rows, threads,
+                                 [&](size_t k, StageScores&& answer) {
+                                   Eigen::VectorXd& mean = prefix_means[with_prefix[k]];
+                                   mean = mean.size() ? Eigen::VectorXd(mean + answer.scores) : answer.scores;
+                                   prefix_nearest[with_prefix[k]].push_back(nearest_references(
+                                       *stage, std::move(answer), reference_whole, reference_object, novelty_objects));
+                                 });
     }
     if (!ok) continue;
     // The fusion's logistic decision, learnt on this fold's training rows like the stages.
@@ -301,6 +327,8 @@ Calibration calibrate(const ModelImpl& impl, MethodId method, const std::vector<
                                                         : Eigen::VectorXd());
       truths.push_back(labels[static_cast<size_t>(test_rows[r])]);
       held_out.nearest.push_back(std::move(nearest[r]));
+      held_out.prefix_scores.push_back(prefix_means[r] / double(std::max<size_t>(1, parts.size())));
+      held_out.prefix_nearest.push_back(std::move(prefix_nearest[r]));
     }
   }
   if (means.empty()) return c;

@@ -94,15 +94,12 @@ Eigen::VectorXd fused_scores(const Eigen::VectorXd& mean, const Eigen::VectorXd&
 }
 
 namespace {
-// A method's mean score over its components' decision stages and, with `with_novelty` and a calibrated
-// novelty, how novel the cloud is to each category.
-MethodDecision stage_decision(const ModelImpl& impl, MethodId method, const CloudFeatures& f, bool with_novelty) {
-  const std::vector<MethodId> parts = component_methods(impl, method);
+// The mean of `parts`' decision stages' scores of `f`; with `nearest`, each component's nearest
+// references too.
+Eigen::VectorXd component_scores(const ModelImpl& impl, const std::vector<MethodId>& parts, const CloudFeatures& f,
+                                 std::vector<NearestReferences>* nearest) {
   const Calibration& cal = impl.calibration;
-  const bool calibrated =
-      with_novelty && cal.method == method && !cal.novelty_scale.empty() && cal.reference_whole.size() == parts.size();
-  MethodDecision out;
-  std::vector<NearestReferences> nearest;
+  Eigen::VectorXd scores;
   for (size_t j = 0; j < parts.size(); ++j) {
     const MethodId m = parts[j];
     // sec. 4: early in the exploration (fewer than normalise_up_to_keypoints keypoints) the words'
@@ -111,18 +108,36 @@ MethodDecision stage_decision(const ModelImpl& impl, MethodId method, const Clou
     const bool early = up_to > 0 && (m == MethodId::kBoK || m == MethodId::kKGH) &&
                        f.descriptors.size() < static_cast<size_t>(up_to);
     StageScores s = decide_with_distances(*impl.stages[static_cast<int>(m)], method_histogram(impl, m, f), early);
-    out.scores = out.scores.size() ? Eigen::VectorXd(out.scores + s.scores) : s.scores;
-    if (calibrated) {
+    scores = scores.size() ? Eigen::VectorXd(scores + s.scores) : s.scores;
+    if (nearest) {
       const std::vector<uint32_t> none;
       const std::vector<uint32_t>& objects = j < cal.reference_object.size() ? cal.reference_object[j] : none;
-      nearest.push_back(nearest_references(*impl.stages[static_cast<int>(m)], std::move(s), cal.reference_whole[j],
-                                           objects, cal.novelty_objects));
+      nearest->push_back(nearest_references(*impl.stages[static_cast<int>(m)], std::move(s), cal.reference_whole[j],
+                                            objects, cal.novelty_objects));
     }
   }
-  out.scores /= static_cast<double>(std::max<size_t>(1, parts.size()));
+  return scores / static_cast<double>(std::max<size_t>(1, parts.size()));
+}
+
+// A method's mean score over its components' decision stages and, with `with_novelty` and a calibrated
+// novelty, how novel the cloud is to each category (joined by its top-down prefix's, as calibrated).
+MethodDecision stage_decision(const ModelImpl& impl, MethodId method, const CloudFeatures& f, bool with_novelty) {
+  const std::vector<MethodId> parts = component_methods(impl, method);
+  const Calibration& cal = impl.calibration;
+  const bool calibrated =
+      with_novelty && cal.method == method && !cal.novelty_scale.empty() && cal.reference_whole.size() == parts.size();
+  MethodDecision out;
+  std::vector<NearestReferences> nearest;
+  out.scores = component_scores(impl, parts, f, calibrated ? &nearest : nullptr);
   // Novelty from the nearest references and their scores alone: the logistic decision is as sure of a
   // cloud far from everything learnt as of a known one (a logistic score grows away from the boundary).
-  if (calibrated) out.novelty = category_novelty(cal, nearest, out.scores);
+  if (!calibrated) return out;
+  out.novelty = category_novelty(cal, nearest, out.scores);
+  if (impl.params.novelty_prefix > 0 && f.top_prefix) {
+    std::vector<NearestReferences> prefix_nearest;
+    const Eigen::VectorXd prefix_scores = component_scores(impl, parts, *f.top_prefix, &prefix_nearest);
+    out.novelty = joint_novelty(out.novelty, category_novelty(cal, prefix_nearest, prefix_scores));
+  }
   return out;
 }
 }  // namespace
@@ -142,6 +157,13 @@ MethodDecision method_decision(const ModelImpl& impl, MethodId method, const Clo
 
 Eigen::VectorXd method_scores(const ModelImpl& impl, MethodId method, const CloudFeatures& f) {
   return method_decision(impl, method, f).scores;
+}
+
+TrainParams method_feature_params(const ModelImpl& impl, MethodId method) {
+  TrainParams p = impl.params;
+  const Calibration& c = novelty_calibration(impl);
+  if (c.method != method || c.novelty_scale.empty()) p.novelty_prefix = 0;
+  return p;
 }
 
 std::string cannot_judge(MethodId method, const std::vector<MethodId>& components, const CloudFeatures& f) {
@@ -279,6 +301,7 @@ Expected<Classification> classify_filtered(const Model& model, const Cloud& clou
   const ModelImpl& impl = *model.impl;
   const Cloud& points = filtered ? *filtered : cloud;
   const std::vector<MethodId> methods = component_methods(impl, m);
+  const TrainParams params = method_feature_params(impl, m);
   Expected<CloudFeatures> f = failed_precondition("no features");
   if (point_sensors.empty() || one_sensor(point_sensors)) {
     Cloud one;
@@ -288,7 +311,7 @@ Expected<Classification> classify_filtered(const Model& model, const Cloud& clou
       one.sensor = point_sensors.front();
       in = &one;
     }
-    f = cloud_features(*in, impl.params, methods, impl.params.threads, cancel);
+    f = cloud_features(*in, params, methods, impl.params.threads, cancel);
   } else {
     FeatureParams fp = impl.params.features;
     fp.surface.threads = impl.params.threads;
@@ -296,7 +319,7 @@ Expected<Classification> classify_filtered(const Model& model, const Cloud& clou
     auto state =
         extract_fused(points, filtered ? sensors_after_filters(points, cloud, point_sensors) : point_sensors, fp, cancel);
     if (!state.ok()) return state.error();
-    f = method_features(*state, impl.params, methods, impl.params.threads);
+    f = method_features(*state, params, methods, impl.params.threads);
   }
   if (!f.ok()) return f.error();
   if (cancel && cancel()) return cancelled("classification cancelled");

@@ -200,6 +200,23 @@ Expected<Eigen::VectorXf> vfh_with_normals(const Cloud& cloud, const std::vector
 
 namespace pcl_reference {
 
+namespace {
+// pcl::VFHEstimation as a user writes it; `tree` null: PCL builds its own.
+Expected<Eigen::VectorXf> plain_vfh(const Cloud& cloud, const PclCloud::Ptr& pc, const PclNormals::Ptr& normals,
+                                    const pcl::search::KdTree<pcl::PointXYZ>::Ptr& tree) {
+  pcl::VFHEstimation<pcl::PointXYZ, pcl::Normal, pcl::VFHSignature308> est;
+  est.setInputCloud(pc);
+  est.setInputNormals(normals);
+  if (tree) est.setSearchMethod(tree);
+  if (cloud.sensor) est.setViewPoint(cloud.sensor->x(), cloud.sensor->y(), cloud.sensor->z());
+  est.setFillSizeComponent(true);
+  pcl::PointCloud<pcl::VFHSignature308> out;
+  est.compute(out);
+  if (out.size() != 1) return internal_error("pcl_reference: VFHEstimation gave no signature");
+  return Eigen::VectorXf(Eigen::Map<const Eigen::VectorXf>(out[0].histogram, kVfhSize));
+}
+}  // namespace
+
 Expected<Eigen::VectorXf> vfh(const Cloud& cloud, float normal_radius_m) {
   PclCloud::Ptr pc = to_pcl(cloud.points);
   pcl::search::KdTree<pcl::PointXYZ>::Ptr tree(new pcl::search::KdTree<pcl::PointXYZ>);
@@ -210,16 +227,7 @@ Expected<Eigen::VectorXf> vfh(const Cloud& cloud, float normal_radius_m) {
   if (cloud.sensor) ne.setViewPoint(cloud.sensor->x(), cloud.sensor->y(), cloud.sensor->z());
   PclNormals::Ptr normals(new PclNormals);
   ne.compute(*normals);
-  pcl::VFHEstimation<pcl::PointXYZ, pcl::Normal, pcl::VFHSignature308> est;
-  est.setInputCloud(pc);
-  est.setInputNormals(normals);
-  est.setSearchMethod(tree);
-  if (cloud.sensor) est.setViewPoint(cloud.sensor->x(), cloud.sensor->y(), cloud.sensor->z());
-  est.setFillSizeComponent(true);
-  pcl::PointCloud<pcl::VFHSignature308> out;
-  est.compute(out);
-  if (out.size() != 1) return internal_error("pcl_reference::vfh: no signature");
-  return Eigen::VectorXf(Eigen::Map<const Eigen::VectorXf>(out[0].histogram, kVfhSize));
+  return plain_vfh(cloud, pc, normals, tree);
 }
 
 Expected<Eigen::VectorXf> vfh_with_normals(const Cloud& cloud, const std::vector<Vec3>& normals) {
@@ -229,15 +237,7 @@ Expected<Eigen::VectorXf> vfh_with_normals(const Cloud& cloud, const std::vector
   pn->resize(pc->size());
   for (size_t i = 0; i < normals.size(); ++i)
     (*pn)[i].normal_x = normals[i].x(), (*pn)[i].normal_y = normals[i].y(), (*pn)[i].normal_z = normals[i].z();
-  pcl::VFHEstimation<pcl::PointXYZ, pcl::Normal, pcl::VFHSignature308> est;
-  est.setInputCloud(pc);
-  est.setInputNormals(pn);
-  if (cloud.sensor) est.setViewPoint(cloud.sensor->x(), cloud.sensor->y(), cloud.sensor->z());
-  est.setFillSizeComponent(true);
-  pcl::PointCloud<pcl::VFHSignature308> out;
-  est.compute(out);
-  if (out.size() != 1) return internal_error("pcl_reference::vfh_with_normals: no signature");
-  return Eigen::VectorXf(Eigen::Map<const Eigen::VectorXf>(out[0].histogram, kVfhSize));
+  return plain_vfh(cloud, pc, pn, nullptr);
 }
 
 Expected<Eigen::VectorXf> esf(const Cloud& cloud) {

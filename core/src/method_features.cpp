@@ -3,11 +3,14 @@
 // implementation for training clouds, classified clouds and streams.
 #include <algorithm>
 #include <cctype>
+#include <cmath>
+#include <memory>
 #include <string>
 
 #include "glimpse/model.h"
 #include "glimpse/train_params.h"
 #include "glimpse/upright_histogram.h"
+#include "glimpse/views.h"
 #include "model_impl.h"
 
 namespace glimpse {
@@ -42,6 +45,72 @@ std::vector<MethodId> component_methods(const ModelImpl& impl, MethodId method) 
   return out;
 }
 
+namespace {
+
+// The whole-cloud descriptors `methods` read of these points and their local surfaces (one per point,
+// or none): USH, the visible size, VFH over the surfaces' normals, ESF.
+Status describe_points(const Cloud& cloud, const std::vector<LocalSurface>& surfaces, const TrainParams& params,
+                       const std::vector<MethodId>& methods, int threads, CloudFeatures& out) {
+  if (needs(methods, MethodId::kUSH)) out.ush = upright_histogram(cloud.points, surfaces, params.ush);
+  if (needs(methods, MethodId::kSize)) out.size = visible_size(cloud.points);
+  if (needs(methods, MethodId::kVFH)) {
+    GlobalDescriptorParams gp = params.global;
+    gp.threads = threads;
+    std::vector<Vec3> normals(cloud.points.size(), Vec3::Zero());
+    for (size_t i = 0; i < surfaces.size() && i < normals.size(); ++i)
+      if (surfaces[i].valid) normals[i] = surfaces[i].normal;
+    auto v = vfh_with_normals(cloud, normals, gp);
+    if (!v.ok()) return v.error();
+    out.vfh = std::move(*v);
+  }
+  if (needs(methods, MethodId::kESF)) {
+    auto e = esf(cloud, params.seed);
+    if (!e.ok()) return e.error();
+    out.esf = std::move(*e);
+  }
+  return {};
+}
+
+// The top-down prefix whose novelty joins the cloud's (TrainParams::novelty_prefix): of every k-th point
+// (at most novelty_prefix_points of them), the highest novelty_prefix, with their local surfaces as
+// fitted on the whole cloud; the keypoints from its lowest point up. None when it would keep fewer than
+// novelty_prefix_min_points, or all of them, or cannot be described.
+std::shared_ptr<const CloudFeatures> top_prefix(const FeatureState& f, const TrainParams& params,
+                                                const std::vector<MethodId>& methods, int threads) {
+  const size_t n = f.cloud.points.size();
+  if (!(params.novelty_prefix > 0) || n == 0) return nullptr;
+  const size_t cap = std::max<size_t>(1, params.novelty_prefix_points);
+  const size_t step = (n + cap - 1) / cap;
+  Points sampled;
+  std::vector<size_t> of;
+  for (size_t i = 0; i < n; i += step) sampled.push_back(f.cloud.points[i]), of.push_back(i);
+  const auto count = static_cast<size_t>(std::lround(params.novelty_prefix * static_cast<double>(sampled.size())));
+  if (count < std::max<size_t>(params.novelty_prefix_min_points, 1) || count >= sampled.size()) return nullptr;
+  Cloud cloud{{}, f.cloud.sensor};
+  std::vector<LocalSurface> surfaces;
+  size_t valid = 0;
+  float cut = INFINITY;
+  for (uint32_t j : highest_points(sampled, count)) {
+    const size_t i = of[j];
+    cloud.points.push_back(f.cloud.points[i]);
+    cut = std::min(cut, f.cloud.points[i].z());
+    if (i < f.surfaces.size()) surfaces.push_back(f.surfaces[i]), valid += f.surfaces[i].valid;
+  }
+  if (valid == 0) return nullptr;
+  auto out = std::make_shared<CloudFeatures>();
+  out->points = cloud.points.size();
+  out->extent_m = bounds(cloud.points).extent().maxCoeff();
+  for (size_t k = 0; k < f.keypoints.size(); ++k)
+    if (f.keypoints[k].position.z() >= cut) {
+      out->positions.push_back(f.keypoints[k].position);
+      if (k < f.descriptors.size()) out->descriptors.push_back(f.descriptors[k]);
+    }
+  if (!describe_points(cloud, surfaces, params, methods, threads, *out).ok()) return nullptr;
+  return out;
+}
+
+}  // namespace
+
 Expected<CloudFeatures> method_features(const FeatureState& f, const TrainParams& params,
                                         const std::vector<MethodId>& methods, int threads) {
   // Every method but ESF and size reads the local surfaces (USH, VFH's normals, keypoints): without one
@@ -56,23 +125,8 @@ Expected<CloudFeatures> method_features(const FeatureState& f, const TrainParams
   out.extent_m = bounds(f.cloud.points).extent().maxCoeff();
   for (const Keypoint& k : f.keypoints) out.positions.push_back(k.position);
   out.descriptors = f.descriptors;
-  if (needs(methods, MethodId::kUSH)) out.ush = upright_histogram(f.cloud.points, f.surfaces, params.ush);
-  if (needs(methods, MethodId::kSize)) out.size = visible_size(f.cloud.points);
-  if (needs(methods, MethodId::kVFH)) {
-    GlobalDescriptorParams gp = params.global;
-    gp.threads = threads;
-    std::vector<Vec3> normals(f.cloud.points.size(), Vec3::Zero());
-    for (size_t i = 0; i < f.surfaces.size() && i < normals.size(); ++i)
-      if (f.surfaces[i].valid) normals[i] = f.surfaces[i].normal;
-    auto v = vfh_with_normals(f.cloud, normals, gp);
-    if (!v.ok()) return v.error();
-    out.vfh = std::move(*v);
-  }
-  if (needs(methods, MethodId::kESF)) {
-    auto e = esf(f.cloud, params.seed);
-    if (!e.ok()) return e.error();
-    out.esf = std::move(*e);
-  }
+  if (Status s = describe_points(f.cloud, f.surfaces, params, methods, threads, out); !s.ok()) return s.error();
+  out.top_prefix = top_prefix(f, params, methods, threads);
   return out;
 }
 

@@ -70,6 +70,8 @@ Status validate(const std::vector<Sample>& data, const TrainParams& params) {
   if (params.bog_keypoint_clusters > 40) return invalid_argument("bog_keypoint_clusters above 40 is not supported");
   if (!(params.known_acceptance > 0 && params.known_acceptance <= 1))
     return invalid_argument("known_acceptance must be in (0, 1]");
+  if (!(params.novelty_prefix >= 0 && params.novelty_prefix <= 1))
+    return invalid_argument("novelty_prefix must be in [0, 1] (0: no prefix)");
   return {};
 }
 
@@ -265,15 +267,27 @@ Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainP
 
   // 3. Global histograms and decision stages (sec. 3.3).
   size_t done = 0;
-  std::vector<Eigen::MatrixXd> histograms(kMethodCount), queries(kMethodCount);
+  std::vector<Eigen::MatrixXd> histograms(kMethodCount), queries(kMethodCount), prefix_queries(kMethodCount);
   const bool tilted = std::any_of(as_seen.begin(), as_seen.end(), [](const auto& a) { return a.has_value(); });
+  // The top-down prefix of each row as calibration decides it (of the cloud as given when tilted).
+  std::vector<const CloudFeatures*> prefix_of(f.size(), nullptr);
+  std::vector<uint8_t> has_prefix(f.size(), 0);
+  for (size_t i = 0; i < f.size(); ++i) {
+    const CloudFeatures& seen = tilted && as_seen[i] ? *as_seen[i] : f[i];
+    prefix_of[i] = seen.top_prefix.get();
+    has_prefix[i] = prefix_of[i] != nullptr;
+  }
+  const bool any_prefix = std::count(has_prefix.begin(), has_prefix.end(), 1) > 0;
   for (MethodId m : base) {
     Eigen::MatrixXd& h = histograms[static_cast<size_t>(m)];
     Eigen::MatrixXd& q = queries[static_cast<size_t>(m)];
+    Eigen::MatrixXd& pq = prefix_queries[static_cast<size_t>(m)];
     for (size_t i = 0; i < f.size(); ++i) {
       const Eigen::VectorXd row = method_histogram(*impl, m, f[i]);
       if (i == 0) h.resize(static_cast<Eigen::Index>(f.size()), row.size());
+      if (i == 0 && any_prefix) pq.setZero(static_cast<Eigen::Index>(f.size()), row.size());
       h.row(static_cast<Eigen::Index>(i)) = row.transpose();
+      if (prefix_of[i]) pq.row(static_cast<Eigen::Index>(i)) = method_histogram(*impl, m, *prefix_of[i]).transpose();
       if (!tilted) continue;
       if (i == 0) q.resize(h.rows(), h.cols());
       if (as_seen[i]) q.row(static_cast<Eigen::Index>(i)) = method_histogram(*impl, m, *as_seen[i]).transpose();
@@ -312,7 +326,7 @@ Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainP
   for (size_t i = 0; i < labels.size(); ++i)
     object_categories[static_cast<size_t>(object_of[i])] = model.categories[static_cast<size_t>(labels[i])];
   // Nothing learnt tilted: the held-out clouds are decided as they were learnt.
-  impl->calibration = calibrate(*impl, model.default_method, histograms, tilted ? queries : histograms, labels, object_of, whole, object_categories,
+  impl->calibration = calibrate(*impl, model.default_method, histograms, tilted ? queries : histograms, prefix_queries, has_prefix, labels, object_of, whole, object_categories,
                                 static_cast<int>(model.categories.size()), threads, cancel);
   report("calibration", 1, 1);
   if (cancelled_now()) return cancelled("training cancelled");

@@ -6,6 +6,7 @@
 #include <array>
 #include <chrono>
 #include <limits>
+#include <memory>
 #include <optional>
 
 #include "glimpse/chi2_logistic.h"
@@ -59,6 +60,9 @@ struct CloudFeatures {
   std::optional<Eigen::VectorXf> size;  // visible_size: the size-only baseline
   size_t points = 0;
   float extent_m = 0;  // the largest bounding-box extent of the cleaned cloud
+  // The same methods' features of the cloud's top-down prefix whose novelty joins the cloud's
+  // (TrainParams::novelty_prefix); none when off or the prefix is too small.
+  std::shared_ptr<const CloudFeatures> top_prefix;
 };
 
 // The base methods (every one but fusion) whose features and stages params.methods need: the
@@ -70,9 +74,14 @@ std::vector<MethodId> component_methods(const ModelImpl& impl, MethodId method);
 
 // What the given methods need of a feature state: keypoint positions and descriptors, and the
 // whole-cloud descriptors (USH and size from the points and surfaces, VFH over the surfaces' normals,
-// ESF). Shared by whole clouds (cloud_features) and streams (ScanSession).
+// ESF); with params.novelty_prefix, the same of its top-down prefix (top_prefix). Shared by whole
+// clouds (cloud_features) and streams (ScanSession).
 Expected<CloudFeatures> method_features(const FeatureState& state, const TrainParams& params,
                                         const std::vector<MethodId>& methods, int threads);
+
+// The model's parameters as `method`'s features are computed with: no top-down prefix where no
+// calibrated novelty of `method` reads it.
+TrainParams method_feature_params(const ModelImpl& impl, MethodId method);
 
 // extract() + method_features; keypoints only when one of the methods needs them.
 Expected<CloudFeatures> cloud_features(const Cloud& cloud, const TrainParams& params,
@@ -113,10 +122,13 @@ Expected<Model> train_on_features(std::vector<TrainingSample> samples, const Tra
 // training objects (`objects[i]` the object of row i, `object_categories` per object); histograms[m] the
 // training rows of base method m (what the stages learn), queries[m] the same rows as a sensor gives
 // them (what a held-out row is decided on; the same matrix when nothing is tilted), `whole` per row: a
-// whole cloud (1) or a top-down prefix (0). The codebooks are the model's own (fitted without labels).
+// whole cloud (1) or a top-down prefix (0). prefix_queries[m] row i: row i's own top-down prefix
+// (CloudFeatures::top_prefix) whose novelty joins the row's, where has_prefix[i]; has_prefix empty: none.
+// The codebooks are the model's own (fitted without labels).
 // A cancel stops it between inner folds with what it has (the caller then stores nothing).
 Calibration calibrate(const ModelImpl& impl, MethodId method, const std::vector<Eigen::MatrixXd>& histograms,
-                      const std::vector<Eigen::MatrixXd>& queries, const std::vector<int>& labels,
+                      const std::vector<Eigen::MatrixXd>& queries, const std::vector<Eigen::MatrixXd>& prefix_queries,
+                      const std::vector<uint8_t>& has_prefix, const std::vector<int>& labels,
                       const std::vector<int>& objects, const std::vector<uint8_t>& whole,
                       const std::vector<std::string>& object_categories, int categories, int threads,
                       const CancelFn& cancel = {});
@@ -165,6 +177,9 @@ MethodDecision method_decision(const ModelImpl& impl, MethodId method, const Clo
 // calibrated or the sizes differ.
 Eigen::VectorXd category_novelty(const Calibration& c, const std::vector<NearestReferences>& components,
                                  const Eigen::VectorXd& scores);
+// A cloud's novelty joined with its top-down prefix's (TrainParams::novelty_prefix): per category, their
+// geometric mean. `whole` alone when `prefix` is empty or of another size.
+Eigen::VectorXd joint_novelty(const Eigen::VectorXd& whole, const Eigen::VectorXd& prefix);
 // novelty, unknown and unknown_reason of `c` (its method and winner set) from `decision` on `f`, at the
 // model's default operating point: what classify answers (the lab and sessions' final answer share it).
 void judge_unknown(const Model& model, const MethodDecision& decision, const CloudFeatures& f, Classification& c);

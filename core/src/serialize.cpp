@@ -38,7 +38,9 @@ constexpr char kMagic[8] = {'G', 'L', 'M', 'P', 'S', 'M', 'D', 'L'};
 // 9: after it (the model's, not the novelty model's), a u8: 1 novelty adds its two evidences
 // (Calibration::novelty_adds_evidence, the model's and its novelty model's), 0 the larger; format 8 and
 // older read 0, what their quantiles were taken with.
-constexpr uint32_t kFormatVersion = 9;
+// 10: the same bytes; the novelty joins that of the cloud's top-down prefix (TrainParams::novelty_prefix,
+// a training parameter); format 9 and older read no prefix, what their quantiles were taken with.
+constexpr uint32_t kFormatVersion = 10;
 constexpr uint32_t kOldestReadableVersion = 1;
 
 uint32_t crc32(const uint8_t* data, size_t n) {
@@ -189,6 +191,9 @@ std::shared_ptr<ModelImpl> read_impl(Reader& r, uint32_t ncat, uint32_t version,
   const std::map<std::string, double> values = read_train_params(r, p);
   // A model from before the scan filters classifies as it did: unfiltered.
   if (!values.count("filters.enabled")) p.filter_scans = false;
+  // One from before the prefix's novelty was calibrated without it.
+  if (version < 10 || !values.count("novelty_prefix")) p.novelty_prefix = 0;
+  if (!(p.novelty_prefix >= 0 && p.novelty_prefix <= 1)) r.fail("novelty_prefix out of range");
   if (!(p.filters.relative_density >= 0 && p.filters.relative_density < 1e12)) r.fail("filters.relative_density out of range");
   p.methods = read_methods(r);
   p.default_method = static_cast<MethodId>(r.u8("default method"));

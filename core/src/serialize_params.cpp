@@ -61,6 +61,9 @@ void visit_params(TrainParams& p, F&& f) {
   f("settle_precision", p.settle_precision);
   f("known_acceptance", p.known_acceptance);
   f("novelty_objects", p.novelty_objects);
+  f("novelty_prefix", p.novelty_prefix);
+  f("novelty_prefix_min_points", p.novelty_prefix_min_points);
+  f("novelty_prefix_points", p.novelty_prefix_points);
   f("tilt_deg", p.tilt_deg);
   f("seed", p.seed);
   f("filters.enabled", p.filter_scans);

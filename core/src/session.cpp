@@ -21,7 +21,8 @@ class Session final : public ScanSession {
  public:
   Session(std::shared_ptr<const Model> model, const SessionParams& params, MethodId method)
       : model_(std::move(model)), impl_(*model_->impl), params_(params), method_(method),
-        components_(component_methods(impl_, method)), features_(feature_params()),
+        components_(component_methods(impl_, method)), method_params_(method_feature_params(impl_, method)),
+        features_(feature_params()),
         duplicates_(impl_.params.features.duplicate_tolerance_m) {
     if (const Calibration& c = impl_.calibration;
         params_.use_model_calibration && c.method == method_ && c.settle_margin > 0 && params_.settle_confidence > 0)
@@ -68,6 +69,7 @@ class Session final : public ScanSession {
   SessionParams params_;
   MethodId method_;
   std::vector<MethodId> components_;
+  TrainParams method_params_;  // what the components' features are computed with (method_feature_params)
   ScanFeatures features_;
   DuplicateFilter duplicates_;                      // filtered(): clean()'s rule on the raw points
   Cloud raw_;                                       // filtered(): the points as sent, cleaned
@@ -106,23 +108,34 @@ bool Session::update_method_features(bool whole_cloud_too) {
   const FeatureState& st = features_.state();
   std::vector<MethodId> now, global;
   for (MethodId m : components_) (m == MethodId::kVFH || m == MethodId::kESF ? global : now).push_back(m);
-  auto cheap = method_features(st, impl_.params, now, 1);
+  auto cheap = method_features(st, method_params_, now, 1);
   if (!cheap.ok()) return false;
   CloudFeatures f = std::move(*cheap);
-  f.vfh = method_features_.vfh;
-  f.esf = method_features_.esf;
+  // The top-down prefix (TrainParams::novelty_prefix) alike: its global descriptors are those of the
+  // prefix at their last computation; without them yet it is left out.
+  std::optional<CloudFeatures> prefix;
+  if (f.top_prefix) prefix = *f.top_prefix;
+  auto take_global = [](CloudFeatures& to, const CloudFeatures& from, const std::vector<MethodId>& methods) {
+    for (MethodId m : methods) (m == MethodId::kVFH ? to.vfh : to.esf) = m == MethodId::kVFH ? from.vfh : from.esf;
+  };
+  take_global(f, method_features_, global);
+  if (prefix) take_global(*prefix, method_features_.top_prefix ? *method_features_.top_prefix : CloudFeatures{}, global);
   const size_t n = st.cloud.points.size();
   const bool grown = !global_at_points_ || static_cast<double>(n) >= (1.0 + params_.global_refresh_growth) *
                                                                         static_cast<double>(global_at_points_);
   if (!global.empty() && (whole_cloud_too || grown)) {
     for (MethodId m : global) {  // one may fail on a scan still too small for it: it keeps its last value
-      auto g = method_features(st, impl_.params, {m}, 1);
+      auto g = method_features(st, method_params_, {m}, 1);
       if (!g.ok()) continue;
-      if (m == MethodId::kVFH) f.vfh = std::move(g->vfh);
-      if (m == MethodId::kESF) f.esf = std::move(g->esf);
+      take_global(f, *g, {m});
+      if (prefix && g->top_prefix) take_global(*prefix, *g->top_prefix, {m});
     }
     global_at_points_ = n;
   }
+  const bool prefix_complete = prefix && std::all_of(global.begin(), global.end(), [&](MethodId m) {
+    return m == MethodId::kVFH ? prefix->vfh.has_value() : prefix->esf.has_value();
+  });
+  f.top_prefix = prefix_complete ? std::make_shared<const CloudFeatures>(std::move(*prefix)) : nullptr;
   method_features_ = std::move(f);
   have_features_ = true;
   return true;

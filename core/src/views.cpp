@@ -326,14 +326,32 @@ Cloud object_view(const Points& full, size_t view, size_t views, bool any_pose, 
   return hidden_point_removal(cloud, cameras[viewpoint], hpr_radius_factor);
 }
 
+namespace {
+// Before in the top-down order: higher, non-NaN before NaN (stable: ties keep their order).
+bool above(const Points& points, uint32_t a, uint32_t b) {
+  const float za = points[a].z(), zb = points[b].z();
+  if (std::isnan(za) || std::isnan(zb)) return !std::isnan(za) && std::isnan(zb);
+  return za > zb;
+}
+}  // namespace
+
 std::vector<uint32_t> top_down_order(const Points& points) {
   std::vector<uint32_t> order(points.size());
   std::iota(order.begin(), order.end(), 0u);
-  std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
-    const float za = points[a].z(), zb = points[b].z();
-    if (std::isnan(za) || std::isnan(zb)) return !std::isnan(za) && std::isnan(zb);
-    return za > zb;
+  std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return above(points, a, b); });
+  return order;
+}
+
+std::vector<uint32_t> highest_points(const Points& points, size_t count) {
+  std::vector<uint32_t> order(points.size());
+  std::iota(order.begin(), order.end(), 0u);
+  count = std::min(count, order.size());
+  // Ties broken by index, as the stable sort does: the same set.
+  std::nth_element(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(count), order.end(), [&](uint32_t a, uint32_t b) {
+    return above(points, a, b) || (!above(points, b, a) && a < b);
   });
+  order.resize(count);
+  std::sort(order.begin(), order.end());
   return order;
 }
 

@@ -1,11 +1,14 @@
-// Model bytes of formats 3 to 8 made from a format-9 model (of no augmented cloud for 7 and older), for tests and benchmarks of models
+// Model bytes of formats 3 to 9 made from a format-10 model (of no augmented cloud for 7 and older), for tests and benchmarks of models
 // written before novelty existed ("none of these"; format 3 has no novelty block), before novelty was
-// divided by the decision's score (format 4 lacks that byte) or before it was measured over several
-// training objects (format 5 lacks the reference objects that end the payload).
+// divided by the decision's score (format 4 lacks that byte), before it was measured over several
+// training objects (format 5 lacks the reference objects that end the payload) or before it joined the
+// top-down prefix's (format 9).
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <cstring>
+#include <string>
 #include <vector>
 
 #include "glimpse/global_descriptors.h"
@@ -29,6 +32,26 @@ inline std::vector<uint8_t> with_version(std::vector<uint8_t> bytes, uint32_t ve
   const uint32_t crc = crc32(bytes.data() + 20, length);
   std::memcpy(bytes.data() + 20 + length, &crc, 4);
   return bytes;
+}
+
+// The model's bytes with one training parameter's name spoilt (its last letter made '~'; unknown names
+// are ignored), as written before that parameter existed: it reads with its old behaviour. Empty when
+// the name is not there.
+inline std::vector<uint8_t> without_parameter(std::vector<uint8_t> bytes, const std::string& name) {
+  auto at = std::search(bytes.begin(), bytes.end(), name.begin(), name.end());
+  if (at == bytes.end() || bytes.size() < 24) return {};
+  at[static_cast<std::ptrdiff_t>(name.size()) - 1] = '~';
+  uint32_t version = 0;
+  std::memcpy(&version, bytes.data() + 8, 4);
+  return with_version(std::move(bytes), version, bytes.size() - 24);
+}
+
+// Format 9 is format 10's bytes: it reads without the top-down prefix's novelty
+// (TrainParams::novelty_prefix 0).
+inline std::vector<uint8_t> as_format_9(std::vector<uint8_t> bytes) {
+  if (bytes.size() < 25) return {};
+  const size_t payload = bytes.size() - 24;
+  return with_version(std::move(bytes), 9, payload);
 }
 
 // Format 8 is format 9 without the byte that ends the payload (serialize.cpp: 1, novelty adds its two

@@ -668,7 +668,8 @@ TEST(OpenSet, SummaryOnAHandMadeList) {
 // category's nearest training objects (0.697 / 0.863 from its nearest reference alone, 0.569 / 0.670
 // before novelty was divided by the decision's score, 0.620 at 20 % when the held-out views were decided
 // tilted; the zoo's four-legged animals share legs and backs with its chairs and tables); 95.8 % of known
-// and 79.2 % of unknown full views accepted at the default operating point.
+// and 79.2 % of unknown full views accepted at the default operating point. With the top-down prefix's
+// novelty (below): AUROC 0.876 and 0.909, 99.0 % and 83.3 % accepted.
 TEST(RunEvaluation, AZooCategoryHeldOutComesOutNovel) {
   std::vector<EvalObject> objects = zoo_objects(8, 3);
   for (EvalObject& o : objects)
@@ -695,8 +696,11 @@ TEST(RunEvaluation, AZooCategoryHeldOutComesOutNovel) {
   std::cout << "zoo, fourleg unknown: AUROC full " << rows[0].auroc << ", 20 % " << rows[1].auroc
             << "; known accepted " << rows[0].known_acceptance << " %, unknown accepted " << rows[0].false_acceptance
             << " % (full)\n";
-  EXPECT_GE(rows[0].auroc, 0.73);  // measured 0.746 (0.744 with the larger of novelty's evidences; 0.751 before the fusion's logistic decision)
-  EXPECT_GE(rows[1].auroc, 0.88);  // measured 0.896 (0.898, 0.902)
+  // Measured 0.876 and 0.909 since the top-down prefix's novelty joins the cloud's (TrainParams::
+  // novelty_prefix, chosen on SHREC: this test's zoo was not looked at); 0.746 and 0.896 before (0.744 and
+  // 0.898 with the larger of novelty's evidences; 0.751 and 0.902 before the fusion's logistic decision).
+  EXPECT_GE(rows[0].auroc, 0.86);
+  EXPECT_GE(rows[1].auroc, 0.90);
   const std::string report = markdown_report(*r);
   EXPECT_NE(report.find("## Open set"), std::string::npos);
   EXPECT_NE(decisions_csv(*r).find(",unknown:fourleg,"), std::string::npos);
@@ -707,11 +711,12 @@ TEST(RunEvaluation, AZooCategoryHeldOutComesOutNovel) {
   EXPECT_EQ(streamed.views, 8u * 3);
   std::cout << "zoo, fourleg unknown, streams: " << streamed.settled_views << " of " << streamed.views << " settled, "
             << streamed.correct << " as unknown\n";
-  // Few settle "unknown" here (the zoo's fourlegs look like its tables and humans, AUROC 0.75 above): 13
-  // of the 24 settle, none as unknown (16 and 2 before settling was cautious both ways, stop 42). What a
-  // test can hold is that the caution does not settle more of them on a category than before (14).
+  // Few settle "unknown" here (the zoo's fourlegs look like its tables and humans, AUROC 0.88 above): 11
+  // of the 24 settle, none as unknown (13 before the top-down prefix's novelty; 16 and 2 before settling
+  // was cautious both ways, stop 42). What a test can hold is that the caution does not settle more of
+  // them on a category than before (14).
   const size_t on_a_category = streamed.settled_views - streamed.correct;
-  EXPECT_LE(on_a_category, 14u);  // measured 13
+  EXPECT_LE(on_a_category, 12u);  // measured 11
   EXPECT_NE(report.find("Objects of no learnt category, streamed"), std::string::npos);
   const std::string csv = streams_csv(*r);
   EXPECT_NE(csv.find(",unknown:fourleg,"), std::string::npos);
@@ -932,15 +937,16 @@ TEST(RunEvaluation, ReducedCrossSourceShrecToPsb) {
   EXPECT_GE(p10, 93.5);   // measured 95.6
   EXPECT_GE(p20, 96.0);   // measured 98.2
   EXPECT_GT(full, size + 15);  // shape adds to what a ruler gets right
-  EXPECT_GE(settled.settled_percent(), 94.0);    // measured 94.7 (97.4 before settling was cautious both ways, stop 42; 99.1 with neither, 98.2 before "unknown" needed the newest chunk's novelty)
+  EXPECT_GE(settled.settled_percent(), 91.5);    // measured 92.1 (94.7 before the top-down prefix's novelty joined the cloud's; 97.4 before settling was cautious both ways, stop 42; 99.1 with neither, 98.2 before "unknown" needed the newest chunk's novelty)
   // Settled as "unknown" counts wrong: 92.0 since "unknown" needs the newest chunk's own novelty too
   // (86.0 before; 91.1 before novelty was divided by the decision's score, 97.3 before unknown could settle);
   // 92.0 before the recipe's training sensors and logistic decision, 97.3 with them; 92.8 since novelty
   // comes from the novelty model (stop 36: the cameras' views augmented; PSB views look more novel to a
   // model of SHREC's ideal views alone, and more settle "unknown"); 93.7 since novelty adds its two
   // evidences (format 9); 97.2 since settling is cautious both ways (stop 42: fewer known views settle
-  // "unknown", and a category settles only on a novelty well inside the threshold).
-  EXPECT_GE(settled.precision_percent(), 96.5);  // measured 97.2 (105 of 108; 93.7, 104 of 111, before)
+  // "unknown", and a category settles only on a novelty well inside the threshold); 97.1 since the
+  // top-down prefix's novelty joins the cloud's.
+  EXPECT_GE(settled.precision_percent(), 96.5);  // measured 97.1 (97.2, 105 of 108; 93.7, 104 of 111, before)
 }
 
 }  // namespace

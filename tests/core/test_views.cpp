@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <random>
 #include <thread>
 
 #include <Eigen/Geometry>
@@ -305,6 +306,22 @@ TEST(TopDown, OrderIsByDescendingZThenIndex) {
   EXPECT_EQ(reveal_top_down(c, 100).points.size(), 5u);
   EXPECT_TRUE(reveal_top_down(c, 0).points.empty());
   EXPECT_TRUE(top_down_order({}).empty());
+}
+
+// highest_points (linear time) keeps exactly the set the sorted order's first `count` hold, ties and
+// NaN included.
+TEST(TopDown, HighestPointsAreTheSortedOrdersPrefix) {
+  std::mt19937 rng(3);
+  Points pts;
+  for (int i = 0; i < 500; ++i) pts.push_back(Vec3(0, 0, static_cast<float>(rng() % 40)));  // many ties
+  pts[17].z() = pts[230].z() = std::nanf("");
+  const std::vector<uint32_t> order = top_down_order(pts);
+  for (size_t count : {size_t(0), size_t(1), size_t(37), size_t(250), size_t(499), size_t(500), size_t(900)}) {
+    std::vector<uint32_t> expected(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(std::min(count, order.size())));
+    std::sort(expected.begin(), expected.end());
+    EXPECT_EQ(highest_points(pts, count), expected) << count;
+  }
+  EXPECT_TRUE(highest_points({}, 5).empty());
 }
 
 }  // namespace

@@ -107,5 +107,7 @@ Cloud object_view(const Points& full, size_t view, size_t views, bool any_pose, 
 std::vector<uint32_t> top_down_order(const Points& points);
 // The `count` highest points (all if count >= size), in top-down order; the sensor is kept.
 Cloud reveal_top_down(const Cloud& cloud, size_t count);
+// The indices of the `count` highest points (top_down_order's first `count`), ascending; linear time.
+std::vector<uint32_t> highest_points(const Points& points, size_t count);
 
 }  // namespace glimpse
