@@ -114,7 +114,14 @@ std::string open_set_section(const EvalResult& r) {
     << " nearest training objects of the distance to each one's nearest reference, over the typical held-out "
     << "distance for that category and kind of reference, a whole view or a top-down prefix, plus what the "
     << "stage's PCA leaves out over its typical value; averaged over the components and divided by the decision's score "
-    << "for the category) was calibrated on held-out folds of its own training set"
+    << "for the category"
+    << (r.params.train.novelty_prefix > 0
+            ? "; per category, the geometric mean of the cloud's and its top-down prefix's, the highest " +
+                  fixed("%.0f", 100 * r.params.train.novelty_prefix) + " % of its points (of at most " +
+                  std::to_string(r.params.train.novelty_prefix_points) + "), when that keeps " +
+                  std::to_string(r.params.train.novelty_prefix_min_points) + " or more"
+            : std::string())
+    << ") was calibrated on held-out folds of its own training set"
     << (r.novelty_models ? " (of " + std::to_string(r.novelty_models) + " of the " + std::to_string(r.novelty_thresholds.size()) +
                                " models, by a model of its training views not augmented: the simulated sensors' views and "
                                "the zoo beside other sources are learnt by the decision, not measured against)"
