@@ -124,18 +124,21 @@ Expected<Model> train(const std::vector<TrainingCloud>& data, const TrainParams&
   // Tilted training views: the clouds as given are what calibration decides (what a sensor sends).
   const bool tilted = params.tilt_deg > 0 && params.calibration_folds >= 2;
   std::vector<Expected<CloudFeatures>> as_seen(tilted ? jobs.size() : 0, internal_error("not computed"));
+  TrainParams learnt_only = params;
+  learnt_only.novelty_prefix = 0;
   const size_t batch = static_cast<size_t>(threads) * 4;
   for (size_t begin = 0; begin < jobs.size(); begin += batch) {
     if (cancelled_now()) return cancelled("training cancelled");
     const int64_t end = static_cast<int64_t>(std::min(jobs.size(), begin + batch));
 #pragma omp parallel for num_threads(threads) schedule(dynamic, 1)
     for (int64_t j = static_cast<int64_t>(begin); j < end; ++j) {
-      auto features_of = [&](const Cloud& cloud) {
-        return jobs[j].prefix ? cloud_features(reveal_top_down(cloud, jobs[j].prefix), params, base, 1, cancel)
-                              : cloud_features(cloud, params, base, 1, cancel);
+      auto features_of = [&](const Cloud& cloud, const TrainParams& p) {
+        return jobs[j].prefix ? cloud_features(reveal_top_down(cloud, jobs[j].prefix), p, base, 1, cancel)
+                              : cloud_features(cloud, p, base, 1, cancel);
       };
-      feats[j] = features_of(learnt[jobs[j].cloud]);
-      if (tilted) as_seen[j] = features_of(data[jobs[j].cloud].cloud);
+      // Tilted, calibration decides the clouds as given: only they need the novelty's top-down prefix.
+      feats[j] = features_of(learnt[jobs[j].cloud], tilted ? learnt_only : params);
+      if (tilted) as_seen[j] = features_of(data[jobs[j].cloud].cloud, params);
     }
     if (progress) progress({"features", static_cast<size_t>(end), jobs.size()});
   }
