@@ -43,7 +43,8 @@ inline std::vector<uint8_t> without_parameter(std::vector<uint8_t> bytes, const 
   at[static_cast<std::ptrdiff_t>(name.size()) - 1] = '~';
   uint32_t version = 0;
   std::memcpy(&version, bytes.data() + 8, 4);
-  return with_version(std::move(bytes), version, bytes.size() - 24);
+  const size_t payload = bytes.size() - 24;  // read before the move below
+  return with_version(std::move(bytes), version, payload);
 }
 
 // Format 9 is format 10's bytes: it reads without the top-down prefix's novelty
