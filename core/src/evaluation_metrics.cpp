@@ -5,6 +5,7 @@
 #include <tuple>
 
 #include "glimpse/evaluation.h"
+#include "random.h"
 
 namespace glimpse {
 
@@ -31,6 +32,35 @@ double balanced_accuracy(std::span<const StageDecision> decisions, std::string_v
   for (const Tally& t : per)
     if (t.total) sum += t.percent(), ++n;
   return n ? sum / double(n) : 0.0;
+}
+
+AccuracyInterval accuracy_interval(std::span<const StageDecision> decisions, std::string_view stage, MethodId method,
+                                   double level, size_t draws, uint64_t seed) {
+  std::map<int, Tally> per_object;
+  for (const StageDecision& d : decisions) {
+    if (d.method != method || d.stage != stage || d.truth < 0) continue;
+    Tally& t = per_object[d.object];
+    ++t.total;
+    t.correct += d.winner == d.truth;
+  }
+  if (per_object.empty() || draws == 0) return {};
+  std::vector<Tally> objects;
+  for (const auto& [object, t] : per_object) objects.push_back(t);
+  std::mt19937_64 rng(seed);
+  std::vector<double> resampled(draws);
+  for (double& a : resampled) {
+    Tally sum;
+    for (size_t i = 0; i < objects.size(); ++i) {
+      const Tally& t = objects[std::min(objects.size() - 1, static_cast<size_t>(uniform01(rng) * double(objects.size())))];
+      sum.correct += t.correct;
+      sum.total += t.total;
+    }
+    a = sum.percent();
+  }
+  std::sort(resampled.begin(), resampled.end());
+  const double tail = std::clamp((1.0 - level) / 2.0, 0.0, 0.5);
+  auto at = [&](double q) { return resampled[std::min(draws - 1, static_cast<size_t>(q * double(draws)))]; };
+  return {at(tail), at(1.0 - tail)};
 }
 
 void add_ablation(EvalResult& result, const EvalResult& other, const std::string& label, const std::string& group) {

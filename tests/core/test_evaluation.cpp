@@ -842,6 +842,47 @@ TEST(Metrics, BalancedAccuracyWeighsEveryCategoryTheSame) {
   EXPECT_EQ(balanced_accuracy(d, "20%", MethodId::kUSH, 3), 0.0);
 }
 
+TEST(Metrics, AccuracyIntervalResamplesObjectsNotViews) {
+  // 20 objects of 6 views, 12 views wrong: on two objects (all their views) or one view on each of 12.
+  auto views = [](bool clustered) {
+    std::vector<StageDecision> d;
+    for (int o = 0; o < 20; ++o)
+      for (int v = 0; v < 6; ++v) {
+        const bool wrong = clustered ? o < 2 : (o < 12 && v == 0);
+        d.push_back(decision("10%", MethodId::kFusion, o % 5, wrong ? (o + 1) % 5 : o % 5, o));
+      }
+    d.push_back(decision("10%", MethodId::kFusion, -1, 0, 99));  // no learnt category: left out
+    d.push_back(decision("10%", MethodId::kVFH, 0, 1, 0));     // another method
+    return d;
+  };
+  const auto clustered = views(true), spread = views(false);
+  ASSERT_NEAR(accuracy(clustered, "10%", MethodId::kFusion).percent(), 90.0, 1e-9);
+  ASSERT_NEAR(accuracy(spread, "10%", MethodId::kFusion).percent(), 90.0, 1e-9);
+  const AccuracyInterval c = accuracy_interval(clustered, "10%", MethodId::kFusion);
+  const AccuracyInterval s = accuracy_interval(spread, "10%", MethodId::kFusion);
+  for (const AccuracyInterval& i : {c, s}) {
+    EXPECT_LE(i.low, 90.0);
+    EXPECT_GE(i.high, 90.0);
+  }
+  // Errors that come in whole objects leave accuracy far less certain than the same errors spread out.
+  EXPECT_GT(c.high - c.low, 2 * (s.high - s.low)) << c.low << "-" << c.high << " against " << s.low << "-" << s.high;
+  EXPECT_GE(c.low, 70.0);  // 6 of 20 draws on the two wrong objects would read 70 %: far in the tail
+  const AccuracyInterval again = accuracy_interval(clustered, "10%", MethodId::kFusion);
+  EXPECT_EQ(again.low, c.low);
+  EXPECT_EQ(again.high, c.high);
+  const AccuracyInterval wider = accuracy_interval(clustered, "10%", MethodId::kFusion, 0.99);
+  EXPECT_LE(wider.low, c.low);
+  EXPECT_GE(wider.high, c.high);
+
+  std::vector<StageDecision> right = {decision("full", MethodId::kUSH, 0, 0, 0), decision("full", MethodId::kUSH, 1, 1, 1)};
+  const AccuracyInterval all = accuracy_interval(right, "full", MethodId::kUSH);
+  EXPECT_EQ(all.low, 100.0);
+  EXPECT_EQ(all.high, 100.0);
+  const AccuracyInterval none = accuracy_interval(right, "20%", MethodId::kUSH);
+  EXPECT_EQ(none.low, 0.0);
+  EXPECT_EQ(none.high, 0.0);
+}
+
 TEST(Objects, CommonHeightMakesEveryObjectOneHeightOnTheGround) {
   for (const EvalObject& o : common_height(zoo_objects(1, 5), 1.0f)) {
     const Bounds b = bounds(o.mesh.vertices);

@@ -73,6 +73,8 @@ if [[ $MODE == zoo ]]; then
     has "$R" "^\| full \| [01]\.[0-9]+ \|"
     has "$R" "^\| fourleg \| [0-9]+ \|"
     has "$R" "\| 32 / 8 \|$"  # 4 learnt categories x 4 objects x 2 views known, 4 fourlegs x 2 views unknown
+    has "$R" "2000 resamples of the 16 tested objects"  # the held-out fourlegs are not among them
+    has "$R" "^\| Fusion \| [0-9]+\.[0-9]-[0-9]+\.[0-9] \|$"
   fi
   # The preset: the paper's protocol and decision, written in the report; the ablation beside it.
   if run 0 eval --zoo 3 --views 2 --preset paper --quick --keypoint-ablation --out "$TMP/zoo"; then

@@ -50,6 +50,15 @@ Tally accuracy(std::span<const StageDecision> decisions, std::string_view stage,
 // number of views); categories without a decision of this stage and method are left out.
 double balanced_accuracy(std::span<const StageDecision> decisions, std::string_view stage, MethodId method,
                          size_t categories);
+// How far accuracy() could move with another draw of test objects: the percentile interval holding
+// `level` of the accuracies of `draws` resamples of the tested objects, with replacement. An object is
+// the unit, not a view: one object's views are right or wrong together far more often than apart. The
+// same seed, the same interval. {0, 0} without decisions.
+struct AccuracyInterval {
+  double low = 0, high = 0;  // %
+};
+AccuracyInterval accuracy_interval(std::span<const StageDecision> decisions, std::string_view stage, MethodId method,
+                                   double level = 0.95, size_t draws = 2000, uint64_t seed = 1);
 // Rows: truth (query), columns: winner (result), percent of the row's decisions (missing ones are in
 // the row's total but in no column, so such a row sums to less than 100).
 std::vector<std::vector<double>> confusion_percent(std::span<const StageDecision> decisions, std::string_view stage,
