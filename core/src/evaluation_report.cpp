@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <map>
 #include <set>
@@ -224,11 +225,9 @@ void write_protocol(std::ostringstream& o, const EvalResult& r) {
   o << "| threads | " << r.threads << " | |\n\n";
 }
 
-void write_accuracy(std::ostringstream& o, const EvalResult& r) {
-  const std::vector<std::string> stages = main_stage_names(r);
-  o << "## Accuracy per method and stage (%)\n\n";
-  o << "Ours, pooled over folds, with the paper's figure (sec. 5) in brackets. The paper equates its 10 kp stage "
-       "with ~10 % visible and 25 kp with ~20 %, so its 10 % / 20 % figures are shown under both.\n\n";
+// A table with a cell per method (rows, the run's order) and stage (columns).
+void method_stage_table(std::ostringstream& o, const EvalResult& r, const std::vector<std::string>& stages,
+                        const std::function<std::string(MethodId, const std::string&)>& cell) {
   o << "| method |";
   for (const std::string& s : stages) o << " " << s << " |";
   o << "\n|---|";
@@ -236,15 +235,20 @@ void write_accuracy(std::ostringstream& o, const EvalResult& r) {
   o << "\n";
   for (MethodId m : r.params.methods) {
     o << "| " << method_label(m) << " |";
-    for (const std::string& s : stages) {
-      const Tally t = accuracy(r.decisions, s, m);
-      o << " **" << pct(t.percent(), 1) << "**";
-      const double paper = paper_accuracy(m, s);
-      if (!std::isnan(paper)) o << " (" << pct(paper) << ")";
-      o << " |";
-    }
+    for (const std::string& s : stages) o << " " << cell(m, s) << " |";
     o << "\n";
   }
+}
+
+void write_accuracy(std::ostringstream& o, const EvalResult& r) {
+  const std::vector<std::string> stages = main_stage_names(r);
+  o << "## Accuracy per method and stage (%)\n\n";
+  o << "Ours, pooled over folds, with the paper's figure (sec. 5) in brackets. The paper equates its 10 kp stage "
+       "with ~10 % visible and 25 kp with ~20 %, so its 10 % / 20 % figures are shown under both.\n\n";
+  method_stage_table(o, r, stages, [&](MethodId m, const std::string& s) {
+    const double paper = paper_accuracy(m, s);
+    return "**" + pct(accuracy(r.decisions, s, m).percent(), 1) + "**" + (std::isnan(paper) ? "" : " (" + pct(paper) + ")");
+  });
   o << "| *best* |";
   for (const std::string& s : stages) {
     double best = -1;
@@ -270,34 +274,20 @@ void write_accuracy(std::ostringstream& o, const EvalResult& r) {
     const StageStats* st = stats_of(r, s);
     o << " " << (st ? pct(st->mean_keypoints, 1) : "–") << " |";
   }
-  o << "\n\nBalanced accuracy (mean of the per-category recalls, each category weighing the same):\n\n| method |";
-  for (const std::string& s : stages) o << " " << s << " |";
-  o << "\n|---|";
-  for (size_t i = 0; i < stages.size(); ++i) o << "---:|";
-  o << "\n";
-  for (MethodId m : r.params.methods) {
-    o << "| " << method_label(m) << " |";
-    for (const std::string& s : stages) o << " " << pct(balanced_accuracy(r.decisions, s, m, r.categories.size()), 1) << " |";
-    o << "\n";
-  }
+  o << "\n\nBalanced accuracy (mean of the per-category recalls, each category weighing the same):\n\n";
+  method_stage_table(o, r, stages, [&](MethodId m, const std::string& s) {
+    return pct(balanced_accuracy(r.decisions, s, m, r.categories.size()), 1);
+  });
   std::set<int> tested;
   for (const StageDecision& d : r.decisions)
     if (d.truth >= 0) tested.insert(d.object);
   o << "\nHow far each accuracy could move with another draw of test objects: the interval holding 95 % of the "
        "accuracies of 2000 resamples of the " << tested.size() << " tested objects, with replacement (an object, not a "
-       "view, is the unit: one object's views are mostly right or wrong together):\n\n| method |";
-  for (const std::string& s : stages) o << " " << s << " |";
-  o << "\n|---|";
-  for (size_t i = 0; i < stages.size(); ++i) o << "---:|";
-  o << "\n";
-  for (MethodId m : r.params.methods) {
-    o << "| " << method_label(m) << " |";
-    for (const std::string& s : stages) {
-      const AccuracyInterval ci = accuracy_interval(r.decisions, s, m);
-      o << " " << pct(ci.low, 1) << "-" << pct(ci.high, 1) << " |";
-    }
-    o << "\n";
-  }
+       "view, is the unit: one object's views are mostly right or wrong together):\n\n";
+  method_stage_table(o, r, stages, [&](MethodId m, const std::string& s) {
+    const AccuracyInterval ci = accuracy_interval(r.decisions, s, m);
+    return pct(ci.low, 1) + "-" + pct(ci.high, 1);
+  });
   o << "\nChance is " << pct(100.0 / double(std::max<size_t>(1, r.categories.size())), 0) << " %.\n\n";
 }
 
