@@ -281,11 +281,14 @@ void write_accuracy(std::ostringstream& o, const EvalResult& r) {
   std::set<int> tested;
   for (const StageDecision& d : r.decisions)
     if (d.truth >= 0) tested.insert(d.object);
-  o << "\nHow far each accuracy could move with another draw of test objects: the interval holding 95 % of the "
-       "accuracies of 2000 resamples of the " << tested.size() << " tested objects, with replacement (an object, not a "
-       "view, is the unit: one object's views are mostly right or wrong together):\n\n";
+  constexpr double kLevel = 0.95;
+  constexpr size_t kDraws = 2000;
+  o << "\nHow far each accuracy could move with another draw of test objects: the interval holding "
+    << pct(100 * kLevel) << " % of the accuracies of " << kDraws << " resamples of the " << tested.size()
+    << " tested objects, with replacement (an object, not a view, is the unit: one object's views are mostly right or "
+       "wrong together):\n\n";
   method_stage_table(o, r, stages, [&](MethodId m, const std::string& s) {
-    const AccuracyInterval ci = accuracy_interval(r.decisions, s, m);
+    const AccuracyInterval ci = accuracy_interval(r.decisions, s, m, kLevel, kDraws);
     return pct(ci.low, 1) + "-" + pct(ci.high, 1);
   });
   o << "\nChance is " << pct(100.0 / double(std::max<size_t>(1, r.categories.size())), 0) << " %.\n\n";
