@@ -1,6 +1,7 @@
 // Accuracy, confusion and the category changes of the exploration (sec. 4).
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <map>
 #include <tuple>
 
@@ -34,6 +35,26 @@ double balanced_accuracy(std::span<const StageDecision> decisions, std::string_v
   return n ? sum / double(n) : 0.0;
 }
 
+namespace {
+// The percentile interval holding `level` of `draws` values of statistic(picks), each picks `units`
+// indices into [0, units) drawn with replacement (a bootstrap over units). The same seed, the same interval.
+AccuracyInterval percentile_bootstrap(size_t units, double level, size_t draws, uint64_t seed,
+                                      const std::function<double(const std::vector<size_t>&)>& statistic) {
+  if (units == 0 || draws == 0) return {};
+  std::mt19937_64 rng(seed);
+  std::vector<double> resampled(draws);
+  std::vector<size_t> picks(units);
+  for (double& value : resampled) {
+    for (size_t& i : picks) i = std::min(units - 1, static_cast<size_t>(uniform01(rng) * double(units)));
+    value = statistic(picks);
+  }
+  std::sort(resampled.begin(), resampled.end());
+  const double tail = std::clamp((1.0 - level) / 2.0, 0.0, 0.5);
+  auto at = [&](double q) { return resampled[std::min(draws - 1, static_cast<size_t>(q * double(draws)))]; };
+  return {at(tail), at(1.0 - tail)};
+}
+}  // namespace
+
 AccuracyInterval accuracy_interval(std::span<const StageDecision> decisions, std::string_view stage, MethodId method,
                                    double level, size_t draws, uint64_t seed) {
   std::map<int, Tally> per_object;
@@ -43,24 +64,48 @@ AccuracyInterval accuracy_interval(std::span<const StageDecision> decisions, std
     ++t.total;
     t.correct += d.winner == d.truth;
   }
-  if (per_object.empty() || draws == 0) return {};
   std::vector<Tally> objects;
   for (const auto& [object, t] : per_object) objects.push_back(t);
-  std::mt19937_64 rng(seed);
-  std::vector<double> resampled(draws);
-  for (double& a : resampled) {
+  return percentile_bootstrap(objects.size(), level, draws, seed, [&](const std::vector<size_t>& picks) {
     Tally sum;
-    for (size_t i = 0; i < objects.size(); ++i) {
-      const Tally& t = objects[std::min(objects.size() - 1, static_cast<size_t>(uniform01(rng) * double(objects.size())))];
-      sum.correct += t.correct;
-      sum.total += t.total;
-    }
-    a = sum.percent();
+    for (size_t i : picks) sum.correct += objects[i].correct, sum.total += objects[i].total;
+    return sum.percent();
+  });
+}
+
+PairedDifference paired_difference(std::span<const PairedView> views, double level, size_t draws, uint64_t seed) {
+  struct Unit {
+    size_t views = 0, before = 0, after = 0;
+  };
+  std::map<int, Unit> per_unit;
+  PairedDifference out;
+  for (const PairedView& v : views) {
+    Unit& u = per_unit[v.unit];
+    ++u.views;
+    u.before += v.right_before;
+    u.after += v.right_after;
+    out.turned_right += !v.right_before && v.right_after;
+    out.turned_wrong += v.right_before && !v.right_after;
   }
-  std::sort(resampled.begin(), resampled.end());
-  const double tail = std::clamp((1.0 - level) / 2.0, 0.0, 0.5);
-  auto at = [&](double q) { return resampled[std::min(draws - 1, static_cast<size_t>(q * double(draws)))]; };
-  return {at(tail), at(1.0 - tail)};
+  if (per_unit.empty()) return out;
+  std::vector<Unit> units;
+  Unit all;
+  for (const auto& [id, u] : per_unit) {
+    units.push_back(u);
+    all.views += u.views, all.before += u.before, all.after += u.after;
+  }
+  auto points = [](size_t right, size_t of) { return 100.0 * double(right) / double(of); };
+  out.views = all.views;
+  out.units = units.size();
+  out.before = points(all.before, all.views);
+  out.after = points(all.after, all.views);
+  out.difference = out.after - out.before;
+  out.interval = percentile_bootstrap(units.size(), level, draws, seed, [&](const std::vector<size_t>& picks) {
+    Unit sum;
+    for (size_t i : picks) sum.views += units[i].views, sum.before += units[i].before, sum.after += units[i].after;
+    return points(sum.after, sum.views) - points(sum.before, sum.views);
+  });
+  return out;
 }
 
 void add_ablation(EvalResult& result, const EvalResult& other, const std::string& label, const std::string& group) {

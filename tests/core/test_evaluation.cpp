@@ -883,6 +883,56 @@ TEST(Metrics, AccuracyIntervalResamplesObjectsNotViews) {
   EXPECT_EQ(none.high, 0.0);
 }
 
+TEST(Metrics, PairedDifferenceResamplesObjectsWithBothRunsViews) {
+  // 20 objects of 6 views, all right before; after, 12 views turn wrong: all of two objects, or one view on
+  // each of 12. Either way -10 points.
+  auto views = [](bool clustered) {
+    std::vector<PairedView> v;
+    for (int o = 0; o < 20; ++o)
+      for (int k = 0; k < 6; ++k) v.push_back({o, true, !(clustered ? o < 2 : (o < 12 && k == 0))});
+    return v;
+  };
+  const PairedDifference c = paired_difference(views(true)), s = paired_difference(views(false));
+  for (const PairedDifference& d : {c, s}) {
+    EXPECT_EQ(d.views, 120u);
+    EXPECT_EQ(d.units, 20u);
+    EXPECT_NEAR(d.before, 100.0, 1e-9);
+    EXPECT_NEAR(d.after, 90.0, 1e-9);
+    EXPECT_NEAR(d.difference, -10.0, 1e-9);
+    EXPECT_EQ(d.turned_wrong, 12u);
+    EXPECT_EQ(d.turned_right, 0u);
+    // No object got better: no resample can read a gain; the difference lies inside.
+    EXPECT_LE(d.interval.high, 0.0);
+    EXPECT_LE(d.interval.low, -10.0);
+    EXPECT_GE(d.interval.high, -10.0);
+  }
+  // A loss on two whole objects is far less certain than the same views lost over twelve.
+  EXPECT_GT(c.interval.high - c.interval.low, 2 * (s.interval.high - s.interval.low));
+  // Paired: views that swap between two objects of the same runs move nothing, whatever is drawn.
+  std::vector<PairedView> swapped;
+  for (int o = 0; o < 10; ++o)
+    for (int k = 0; k < 6; ++k) swapped.push_back({o, k < 3, k < 3});
+  swapped.push_back({10, true, false});
+  swapped.push_back({10, false, true});
+  const PairedDifference none = paired_difference(swapped);
+  EXPECT_EQ(none.difference, 0.0);
+  EXPECT_EQ(none.turned_right, 1u);
+  EXPECT_EQ(none.turned_wrong, 1u);
+  EXPECT_EQ(none.interval.low, 0.0);
+  EXPECT_EQ(none.interval.high, 0.0);
+  // The same seed, the same interval; a wider level, a wider one.
+  const PairedDifference again = paired_difference(views(true));
+  EXPECT_EQ(again.interval.low, c.interval.low);
+  EXPECT_EQ(again.interval.high, c.interval.high);
+  const PairedDifference wider = paired_difference(views(true), 0.99);
+  EXPECT_LE(wider.interval.low, c.interval.low);
+  EXPECT_GE(wider.interval.high, c.interval.high);
+  const PairedDifference empty = paired_difference({});
+  EXPECT_EQ(empty.views, 0u);
+  EXPECT_EQ(empty.interval.low, 0.0);
+  EXPECT_EQ(empty.interval.high, 0.0);
+}
+
 TEST(Objects, CommonHeightMakesEveryObjectOneHeightOnTheGround) {
   for (const EvalObject& o : common_height(zoo_objects(1, 5), 1.0f)) {
     const Bounds b = bounds(o.mesh.vertices);

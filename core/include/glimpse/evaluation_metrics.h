@@ -59,6 +59,24 @@ struct AccuracyInterval {
 };
 AccuracyInterval accuracy_interval(std::span<const StageDecision> decisions, std::string_view stage, MethodId method,
                                    double level = 0.95, size_t draws = 2000, uint64_t seed = 1);
+// One view decided by two runs (the same object, view, stage and method, e.g. before and after a change
+// or under two seeds' code): right in each. `unit`: what is resampled as one (an object, with its views).
+struct PairedView {
+  int unit = 0;
+  bool right_before = false, right_after = false;
+};
+// Whether a change moved accuracy more than another draw of test objects could: each run's accuracy, the
+// difference (after - before, points), and the percentile interval holding `level` of the differences of
+// `draws` resamples of the units with replacement, both runs' views of a unit drawn together (paired).
+// An interval that spans 0 is a change the tested objects cannot tell from none. Zeros without views.
+struct PairedDifference {
+  size_t views = 0, units = 0;
+  double before = 0, after = 0, difference = 0;  // %, points
+  AccuracyInterval interval;                     // of the difference, points
+  size_t turned_right = 0, turned_wrong = 0;     // views wrong before and right after, and the reverse
+};
+PairedDifference paired_difference(std::span<const PairedView> views, double level = 0.95, size_t draws = 2000,
+                                   uint64_t seed = 1);
 // Rows: truth (query), columns: winner (result), percent of the row's decisions (missing ones are in
 // the row's total but in no column, so such a row sums to less than 100).
 std::vector<std::vector<double>> confusion_percent(std::span<const StageDecision> decisions, std::string_view stage,
