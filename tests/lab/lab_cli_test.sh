@@ -33,6 +33,24 @@ if [[ $MODE == zoo ]]; then
   run 2 eval --zoo 3 --hold-out dragon --out "$TMP/x" && has "$TMP/err" "--hold-out: no object of category 'dragon' \(categories: chair, fourleg"
   run 2 eval --zoo 3 --hold-out human,chair,table,mechanic --out "$TMP/x" && has "$TMP/err" "at least two learnt categories must remain"
   run 105 eval --zoo 3 --poses upright --out "$TMP/x" && has "$TMP/err" "--poses: upright not in \{dataset,given\}"
+  # compare: paired runs' decisions.csv. Before: 10 objects x 2 views right at full; after: object 0 wrong
+  # in both views, object 1 right in the one view it had wrong (95 -> 90 %). An unknown view is left out.
+  mkdir -p "$TMP/cmp"
+  {
+    echo "fold,object,view,stage,method,truth,winner,novelty"
+    for o in 0 1 2 3 4 5 6 7 8 9; do for v in 0 1; do echo "0,zoo:chair/$o,$v,full,fusion,chair,chair,1.5"; done; done
+    echo "0,psb-other:bed/b,0,full,fusion,unknown:bed,chair,9"
+  } | sed 's|zoo:chair/1,1,full,fusion,chair,chair|zoo:chair/1,1,full,fusion,chair,table|' >"$TMP/cmp/before.csv"
+  sed -e 's|zoo:chair/0,\([01]\),full,fusion,chair,chair|zoo:chair/0,\1,full,fusion,chair,human|' \
+      -e 's|zoo:chair/1,1,full,fusion,chair,table|zoo:chair/1,1,full,fusion,chair,chair|' "$TMP/cmp/before.csv" >"$TMP/cmp/after.csv"
+  if run 0 compare "$TMP/cmp/before.csv" "$TMP/cmp/after.csv"; then
+    has "$TMP/out" "^1 pair of runs"
+    has "$TMP/out" "^\| fusion \| full \| 20 \| 10 \| 95\.0 \| 90\.0 \| -5\.0 \| -[0-9.]+ to [-+][0-9.]+ \| 1 \| 2 \|$"
+  fi
+  run 2 compare "$TMP/cmp/before.csv" && has "$TMP/err" "compare takes runs in pairs"
+  run 1 compare "$TMP/cmp/before.csv" "$TMP/cmp/nothing.csv" && has "$TMP/err" "nothing.csv: cannot read"
+  cut -d, -f1-6 "$TMP/cmp/before.csv" >"$TMP/cmp/nowinner.csv"
+  run 1 compare "$TMP/cmp/before.csv" "$TMP/cmp/nowinner.csv" && has "$TMP/err" "nowinner.csv: no column 'winner'"
   # --pick-objects: N objects per category drawn by the seed; --poses given: no object turned.
   # (and --export-histograms: what every fold's model decides on, as CSV)
   # (its size-blind re-run, of USH alone, must not overwrite them: VFH rows stay)
