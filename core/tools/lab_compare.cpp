@@ -47,6 +47,7 @@ Expected<RunDecisions> read_run(const std::string& run) {
     if (!text.empty() && text.back() == ',') fields.emplace_back();
     return fields;
   };
+  if (!line.empty() && line.back() == '\r') line.pop_back();
   const std::vector<std::string> header = split(line);
   std::vector<size_t> at;
   for (const char* name : {"object", "view", "stage", "method", "truth", "winner"}) {
@@ -56,6 +57,7 @@ Expected<RunDecisions> read_run(const std::string& run) {
   }
   RunDecisions out;
   for (size_t number = 2; std::getline(in, line); ++number) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();  // a file saved with CRLF line ends
     if (line.empty()) continue;
     const std::vector<std::string> f = split(line);
     if (f.size() != header.size())

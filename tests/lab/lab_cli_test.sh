@@ -47,6 +47,10 @@ if [[ $MODE == zoo ]]; then
     has "$TMP/out" "^1 pair of runs"
     has "$TMP/out" "^\| fusion \| full \| 20 \| 10 \| 95\.0 \| 90\.0 \| -5\.0 \| -[0-9.]+ to [-+][0-9.]+ \| 1 \| 2 \|$"
   fi
+  cut -d, -f1-7 "$TMP/cmp/before.csv" | sed 's/$/\r/' >"$TMP/cmp/crlf.csv"  # saved on Windows, winner last
+  if run 0 compare "$TMP/cmp/crlf.csv" "$TMP/cmp/after.csv"; then
+    has "$TMP/out" "^\| fusion \| full \| 20 \| 10 \| 95\.0 \| 90\.0 \| -5\.0 \|"
+  fi
   run 2 compare "$TMP/cmp/before.csv" && has "$TMP/err" "compare takes runs in pairs"
   run 1 compare "$TMP/cmp/before.csv" "$TMP/cmp/nothing.csv" && has "$TMP/err" "nothing.csv: cannot read"
   cut -d, -f1-6 "$TMP/cmp/before.csv" >"$TMP/cmp/nowinner.csv"
