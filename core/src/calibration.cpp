@@ -227,8 +227,8 @@ Calibration calibrate(const ModelImpl& impl, MethodId method, const std::vector<
                       const std::vector<Eigen::MatrixXd>& queries, const std::vector<Eigen::MatrixXd>& prefix_queries,
                       const std::vector<uint8_t>& has_prefix, const std::vector<int>& labels,
                       const std::vector<int>& objects, const std::vector<uint8_t>& whole,
-                      const std::vector<std::string>& object_categories, int categories, int threads,
-                      const CancelFn& cancel) {
+                      const std::vector<std::string>& object_categories, int categories, bool measure_novelty,
+                      int threads, const CancelFn& cancel) {
   const TrainParams& p = impl.params;
   Calibration c;
   c.method = method;
@@ -265,7 +265,7 @@ Calibration calibrate(const ModelImpl& impl, MethodId method, const std::vector<
     std::vector<std::vector<NearestReferences>> nearest(test_rows.size());
     // The held-out rows with a prefix (places in test_rows), and per one its components' mean score.
     std::vector<size_t> with_prefix;
-    for (size_t r = 0; r < test_rows.size(); ++r)
+    for (size_t r = 0; r < test_rows.size() && measure_novelty; ++r)
       if (static_cast<size_t>(test_rows[r]) < has_prefix.size() && has_prefix[static_cast<size_t>(test_rows[r])]) with_prefix.push_back(r);
     std::vector<Eigen::Index> prefix_rows;
     for (size_t r : with_prefix) prefix_rows.push_back(test_rows[r]);
@@ -291,7 +291,8 @@ Calibration calibrate(const ModelImpl& impl, MethodId method, const std::vector<
       std::vector<NearestReferences> component(test_rows.size());
       decide_rows_with_distances(*stage, q, test_rows, threads, [&](size_t r, StageScores&& answer) {
         scores[j].row(static_cast<Eigen::Index>(r)) = answer.scores.transpose();
-        component[r] = nearest_references(*stage, std::move(answer), reference_whole, reference_object, novelty_objects);
+        if (measure_novelty)
+          component[r] = nearest_references(*stage, std::move(answer), reference_whole, reference_object, novelty_objects);
       });
       for (size_t r = 0; r < test_rows.size(); ++r) nearest[r].push_back(std::move(component[r]));
       if (prefix_rows.empty()) continue;
@@ -359,7 +360,7 @@ Calibration calibrate(const ModelImpl& impl, MethodId method, const std::vector<
   c.held_out = decisions.size();
   c.held_out_accuracy = double(correct) / double(decisions.size());
   c.settle_margin = settle_margin(std::move(decisions), p.settle_precision, 20);
-  calibrate_novelty(c, held_out, parts.size(), categories, p.known_acceptance);
+  if (measure_novelty) calibrate_novelty(c, held_out, parts.size(), categories, p.known_acceptance);
   if (!c.novelty_scale.empty()) {
     c.novelty_objects = novelty_objects;
     for (MethodId m : parts) {  // the model's own stages learnt every row

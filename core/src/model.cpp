@@ -328,9 +328,14 @@ Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainP
   std::vector<std::string> object_categories(object_index.size());
   for (size_t i = 0; i < labels.size(); ++i)
     object_categories[static_cast<size_t>(object_of[i])] = model.categories[static_cast<size_t>(labels[i])];
-  // Nothing learnt tilted: the held-out clouds are decided as they were learnt.
-  impl->calibration = calibrate(*impl, model.default_method, histograms, tilted ? queries : histograms, prefix_queries, has_prefix, labels, object_of, whole, object_categories,
-                                static_cast<int>(model.categories.size()), threads, cancel);
+  // Nothing learnt tilted: the held-out clouds are decided as they were learnt. With augmented clouds
+  // the novelty model's calibration measures novelty (step 5); this one does only if that fails.
+  auto calibrate_model = [&](bool measure_novelty) {
+    return calibrate(*impl, model.default_method, histograms, tilted ? queries : histograms, prefix_queries, has_prefix,
+                     labels, object_of, whole, object_categories, static_cast<int>(model.categories.size()),
+                     measure_novelty, threads, cancel);
+  };
+  impl->calibration = calibrate_model(params.measure_novelty && !novelty_apart);
   report("calibration", 1, 1);
   if (cancelled_now()) return cancelled("training cancelled");
   model.stats.clouds = data.size();
@@ -363,6 +368,9 @@ Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainP
     if (novelty.ok() && novelty->categories == model.categories && novelty->impl &&
         !novelty->impl->calibration.novelty_scale.empty() && novelty->impl->calibration.method == impl->calibration.method)
       impl->novelty = novelty->impl;
+    else if (params.measure_novelty)
+      impl->calibration = calibrate_model(true);  // the same margin and share, with the model's own novelty
+    if (cancelled_now()) return cancelled("training cancelled");
     report("novelty", 1, 1);
   }
   model.stats.seconds = ms_since(t0) / 1000.0;

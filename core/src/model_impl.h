@@ -124,14 +124,16 @@ Expected<Model> train_on_features(std::vector<TrainingSample> samples, const Tra
 // them (what a held-out row is decided on; the same matrix when nothing is tilted), `whole` per row: a
 // whole cloud (1) or a top-down prefix (0). prefix_queries[m] row i: row i's own top-down prefix
 // (CloudFeatures::top_prefix) whose novelty joins the row's, where has_prefix[i]; has_prefix empty: none.
-// The codebooks are the model's own (fitted without labels).
+// The codebooks are the model's own (fitted without labels). Without `measure_novelty` no novelty is
+// calibrated (nor any prefix decided): the settle margin, the head's share and the held-out accuracy are
+// the same.
 // A cancel stops it between inner folds with what it has (the caller then stores nothing).
 Calibration calibrate(const ModelImpl& impl, MethodId method, const std::vector<Eigen::MatrixXd>& histograms,
                       const std::vector<Eigen::MatrixXd>& queries, const std::vector<Eigen::MatrixXd>& prefix_queries,
                       const std::vector<uint8_t>& has_prefix, const std::vector<int>& labels,
                       const std::vector<int>& objects, const std::vector<uint8_t>& whole,
-                      const std::vector<std::string>& object_categories, int categories, int threads,
-                      const CancelFn& cancel = {});
+                      const std::vector<std::string>& object_categories, int categories, bool measure_novelty,
+                      int threads, const CancelFn& cancel = {});
 
 // A failed precondition naming both versions when the model's features were computed differently.
 Status check_feature_version(const Model& model);

@@ -324,6 +324,45 @@ TEST(Novelty, AugmentedCloudsAreLearntButNotMeasuredAgainst) {
   EXPECT_NE(seven.error().message.find("unexpected trailing bytes"), std::string::npos) << seven.error().message;
 }
 
+// With a novelty model, the model's own calibration measures no novelty (the novelty model's is what is
+// read); where the novelty model cannot calibrate (a category only augmented clouds have), the model
+// measures its own. Either way the margin and the head's share are those of the same model measuring
+// novelty, and so are its scores. measure_novelty false: no novelty at all, nothing unknown.
+TEST(Novelty, TheModelMeasuresItsOwnNoveltyOnlyWhereNoNoveltyModelDoes) {
+  const std::vector<TrainingCloud> data = test::synthetic_views(6, 3, 1);
+  std::vector<TrainingCloud> half = data, cans = data;
+  for (size_t i = 0; i < data.size(); ++i) {
+    half[i].augmented = i % 2 == 1;              // every category keeps clouds not augmented
+    cans[i].augmented = data[i].category == "can";  // no can the novelty model could learn
+  }
+  TrainParams blind = small_params();
+  blind.measure_novelty = false;
+  auto own = train(data, small_params()), apart = train(half, small_params()), fallback = train(cans, small_params()),
+       none = train(data, blind);
+  ASSERT_TRUE(own.ok() && apart.ok() && fallback.ok() && none.ok());
+  ASSERT_FALSE(calibration(*own).novelty_scale.empty());
+  EXPECT_NE(&novelty_calibration(*apart), &calibration(*apart));
+  EXPECT_TRUE(calibration(*apart).novelty_scale.empty());
+  EXPECT_FALSE(novelty_calibration(*apart).novelty_scale.empty());
+  EXPECT_EQ(&novelty_calibration(*fallback), &calibration(*fallback));
+  EXPECT_EQ(calibration(*fallback).novelty_quantiles, calibration(*own).novelty_quantiles);  // the same clouds learnt
+  EXPECT_TRUE(calibration(*none).novelty_scale.empty());
+  for (const Model* m : {&*apart, &*fallback, &*none}) {
+    EXPECT_EQ(calibration(*m).settle_margin, calibration(*own).settle_margin);
+    EXPECT_EQ(calibration(*m).held_out_accuracy, calibration(*own).held_out_accuracy);
+    EXPECT_EQ(calibration(*m).fusion_head_share, calibration(*own).fusion_head_share);
+  }
+  for (const TrainingCloud& t : test::synthetic_views(3, 2, 2)) {
+    auto a = classify(*own, t.cloud), b = classify(*fallback, t.cloud), c = classify(*none, t.cloud);
+    ASSERT_TRUE(a.ok() && b.ok() && c.ok());
+    EXPECT_EQ(b->scores, a->scores);
+    EXPECT_EQ(b->novelty, a->novelty);
+    EXPECT_EQ(c->scores, a->scores);
+    EXPECT_TRUE(std::isnan(c->novelty));
+    EXPECT_FALSE(c->unknown);
+  }
+}
+
 // ---- models of formats 5 and 4: novelty from the nearest reference alone, not yet over the score ----
 
 // The open set's model as format 6 read it: no logistic decision in the fusion (the mean of its
