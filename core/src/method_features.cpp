@@ -74,11 +74,12 @@ Status describe_points(const Cloud& cloud, const std::vector<LocalSurface>& surf
 // The top-down prefix whose novelty joins the cloud's (TrainParams::novelty_prefix): of every k-th point
 // (at most novelty_prefix_points of them), the highest novelty_prefix, with their local surfaces as
 // fitted on the whole cloud; the keypoints from its lowest point up. None when it would keep fewer than
-// novelty_prefix_min_points, or all of them, or cannot be described.
+// novelty_prefix_min_points, or all of them, or cannot be described; none when no novelty is measured
+// (TrainParams::measure_novelty).
 std::shared_ptr<const CloudFeatures> top_prefix(const FeatureState& f, const TrainParams& params,
                                                 const std::vector<MethodId>& methods, int threads) {
   const size_t n = f.cloud.points.size();
-  if (!(params.novelty_prefix > 0) || n == 0) return nullptr;
+  if (!(params.novelty_prefix > 0) || !params.measure_novelty || n == 0) return nullptr;
   const size_t cap = std::max<size_t>(1, params.novelty_prefix_points);
   const size_t step = (n + cap - 1) / cap;
   Points sampled;

@@ -34,8 +34,7 @@ Status size_blind_ablation(EvalResult& result, const std::vector<EvalObject>& ob
   p.matrix.clear();
   p.export_histograms_dir.clear();  // --export-histograms holds the main run's histograms only
   p.novelty_models = false;         // the ablation's rows are its winners' accuracies: novelty is not read,
-  p.train.measure_novelty = false;  // so none is calibrated, and no cloud's top-down prefix is described
-  p.train.novelty_prefix = 0;       // for it
+  p.train.measure_novelty = false;  // so none is calibrated (nor any cloud's top-down prefix described)
   const bool keypoints = std::any_of(p.methods.begin(), p.methods.end(), [](MethodId m) {
     return m == MethodId::kBoK || m == MethodId::kBoG || m == MethodId::kKGH;
   });

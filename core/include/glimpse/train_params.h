@@ -113,8 +113,9 @@ struct TrainParams {
   // density (bench_classify). 0: the cloud's novelty alone (older models). Chosen on SHREC CV with chairs
   // or quadrupeds held out as the unknown (README, "Open set").
   double novelty_prefix = 0.55;
-  // False: no novelty is calibrated (nothing is ever "unknown" but what a method cannot judge), for runs
-  // that read only the winners (the lab's ablations); training and Classify then cost less.
+  // False: no novelty is calibrated and no top-down prefix described (nothing is ever "unknown" but what a
+  // method cannot judge), for runs that read only the winners (the lab's ablations); training and
+  // Classify then cost less.
   bool measure_novelty = true;
   size_t novelty_prefix_min_points = 300;
   size_t novelty_prefix_points = 2000;
