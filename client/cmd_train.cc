@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <functional>
 #include <set>
+#include <tuple>
+#include <utility>
 #include <thread>
 
 #include "client/cloud_convert.h"
@@ -12,6 +14,7 @@
 #include "client/parse.h"
 #include "client/render.h"
 #include "glimpse/evaluation.h"
+#include "glimpse/scan_filters.h"
 #include "glimpse/zoo.h"
 
 namespace glimpse::client {
@@ -34,13 +37,18 @@ bool EmitViews(const std::string& category, const std::string& object_id, const 
   return true;
 }
 
-// Every mesh of the folder as glimpse-lab loads and views it, then the cloud files as they are.
-Status EmitDir(const TrainOptions& o, const Folder& folder, const Emit& emit) {
+// Every mesh of the folder as glimpse-lab loads and views it.
+Status EmitMeshes(const ProtocolOptions& protocol, const Folder& folder, const Emit& emit) {
   for (const DatasetObject& object : folder.dataset.objects) {
-    auto views = ProtocolViews(object, folder.sizing, o.protocol);
+    auto views = ProtocolViews(object, folder.sizing, protocol);
     if (!views) return views.error();
     if (!EmitViews(object.category, ObjectKey(object), *views, emit)) return {};
   }
+  return {};
+}
+
+// The folder's cloud files, as they are.
+Status EmitCloudFiles(const Folder& folder, const Emit& emit) {
   for (const TrainFile& f : folder.clouds) {
     auto clouds = TrainingClouds(f.path, ViewOptions{});
     if (!clouds) return clouds.error();
@@ -53,15 +61,36 @@ Status EmitDir(const TrainOptions& o, const Folder& folder, const Emit& emit) {
 // The procedural zoo's objects (upright, real-life size), viewed as glimpse-lab views them; only
 // those of `categories` when given (a folder's, which the zoo adds to: then they are augmented, learnt
 // but not what "unknown" measures against, as glimpse-lab's --also-train zoo:N).
-Status EmitZoo(const TrainOptions& o, const std::set<std::string>& categories, const Emit& emit) {
-  for (const EvalObject& object : zoo_objects(o.per_category, o.protocol.seed)) {
+Status EmitZoo(const TrainOptions& o, const ProtocolOptions& protocol, const std::set<std::string>& categories,
+               const Emit& emit) {
+  for (const EvalObject& object : zoo_objects(o.per_category, protocol.seed)) {
     if (!categories.empty() && !categories.count(object.category)) continue;
     const std::string key = object.category + "/" + object.id;
-    if (!EmitViews(object.category, key, ViewsOfMesh(object.mesh, key, object.any_pose, o.protocol), emit,
+    if (!EmitViews(object.category, key, ViewsOfMesh(object.mesh, key, object.any_pose, protocol), emit,
                    !categories.empty()))
       return {};
   }
   return {};
+}
+
+// The first pass when simulated sensors are asked: every mesh's ideal views (the folder's and the
+// zoo's, as they will be sent) give the density the model will classify at, which the sensors' views
+// are thinned to (glimpse-lab: EvalResult::trained_density). Returns it and how many views it is of.
+Expected<std::pair<double, size_t>> SensorDensity(const TrainOptions& o, const Folder& folder,
+                                                  const std::set<std::string>& zoo_categories) {
+  ProtocolOptions ideal = o.protocol;
+  ideal.train_sensors.clear();
+  std::vector<double> density;
+  const Emit measure = [&](const std::string&, const std::string&, const Cloud& cloud, bool) {
+    density.push_back(relative_density(cloud.points));
+    return true;
+  };
+  if (!o.dir.empty())
+    if (Status s = EmitMeshes(ideal, folder, measure); !s.ok()) return s.error();
+  if (o.zoo)
+    if (Status s = EmitZoo(o, ideal, zoo_categories, measure); !s.ok()) return s.error();
+  const size_t views = density.size();
+  return std::pair{median_density(std::move(density)), views};
 }
 
 // Shows v1::TrainProgress on stderr: a bar redrawn in place on a terminal, else a line per stage and
@@ -131,6 +160,16 @@ int RunTrain(const ConnectionOptions& conn, const TrainOptions& o) {
   } else {
     folder.applied = {"the procedural zoo: " + std::to_string(o.per_category) + " objects per category, upright, real-life size"};
   }
+  ProtocolOptions protocol = o.protocol;
+  size_t density_views = 0;
+  if (protocol.views && !protocol.train_sensors.empty()) {
+    auto density = SensorDensity(o, folder, zoo_extra);
+    if (!density) {
+      PrintError(what, density.error().message);
+      return kExitError;
+    }
+    std::tie(protocol.sensor_density, density_views) = *density;
+  }
   if (!o.quiet) {
     folder.applied.push_back(o.protocol.views ? std::to_string(o.protocol.views) +
                                                     " views per mesh (hidden point removal from the paper's viewpoints), " +
@@ -140,8 +179,11 @@ int RunTrain(const ConnectionOptions& conn, const TrainOptions& o) {
     if (o.protocol.views && !o.protocol.train_sensors.empty()) {
       std::string sensors;
       for (const ScanCondition& c : o.protocol.train_sensors) sensors += (sensors.empty() ? "" : "; ") + describe(c);
+      char density[160];
+      std::snprintf(density, sizeof density, "%.1f points per extent^2, the median over %zu views", protocol.sensor_density,
+                    density_views);
       folder.applied.push_back("and the same azimuths seen by a simulated " + sensors +
-                               ", filtered to the views' density (--sensor-views none: not)");
+                               ", filtered to the ideal views' density (" + density + "; --sensor-views none: not)");
     }
     for (const std::string& line : folder.applied) std::fprintf(stderr, "train: %s\n", line.c_str());
   }
@@ -184,8 +226,9 @@ int RunTrain(const ConnectionOptions& conn, const TrainOptions& o) {
     return open;
   };
   Status loaded;
-  if (open && !o.dir.empty()) loaded = EmitDir(o, folder, emit);
-  if (open && loaded.ok() && o.zoo) loaded = EmitZoo(o, zoo_extra, emit);
+  if (open && !o.dir.empty()) loaded = EmitMeshes(protocol, folder, emit);
+  if (open && loaded.ok() && !o.dir.empty()) loaded = EmitCloudFiles(folder, emit);
+  if (open && loaded.ok() && o.zoo) loaded = EmitZoo(o, protocol, zoo_extra, emit);
   if (!loaded.ok()) context.TryCancel();  // a failed call stores nothing
   if (open && loaded.ok()) stream->WritesDone();
   reader.join();

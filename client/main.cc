@@ -165,7 +165,8 @@ int Main(int argc, char** argv) {
            "--sensor-views",
            [&t](const std::string& text) { t.protocol.train_sensors = *glimpse::parse_training_sensors(text); },
            "more training views of each mesh taken by simulated sensors, SENSOR:METRES:DEGREES[,...] (depth or "
-           "lidar, from that distance and elevation, filtered to the views' density; sent marked augmented: "
+           "lidar, from that distance and elevation, filtered to the median density of every mesh's ideal views, "
+           "measured in a first pass; sent marked augmented: "
            "learnt, but never what 'unknown' measures a cloud against), as glimpse-lab's --train-sensors; 'none': the paper's views alone (default: " + kSensorViews + ", the recipe the README "
            "measures; training takes about 3 times longer)")
       ->check(Checked([](const std::string& s) { return glimpse::parse_training_sensors(s); }, "LIST"))

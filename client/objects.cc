@@ -114,15 +114,13 @@ ObjectViews ViewsOfMesh(const Mesh& mesh, const std::string& key, bool any_pose,
       for (size_t v = 0; v < options.views; ++v)
         out.views.push_back(object_view(full, v, options.views, any_pose, seed, options.hpr_radius_factor, elevation));
   if (!options.train_sensors.empty()) {
-    const double density =
-        median_relative_density(std::vector<Cloud>(out.views.begin(), out.views.begin() + std::ptrdiff_t(options.views)));
     out.first_augmented = out.views.size();
     EvalObject object;
     object.mesh = mesh, object.any_pose = any_pose;
     for (const ScanCondition& sensor : options.train_sensors)
       for (size_t v = 0; v < options.views; ++v)
         out.views.push_back(sensor_training_view(object, full, v, options.views, seed, sensor, options.points,
-                                                 options.hpr_radius_factor, density));
+                                                 options.hpr_radius_factor, options.sensor_density));
   }
   return out;
 }

@@ -36,9 +36,13 @@ struct ProtocolOptions {
   // Training only: more views of the same azimuths from these elevations (deg above the horizon), as
   // glimpse-lab's --train-elevations, so the model learns cameras mounted low or high.
   std::vector<float> train_elevations_deg;
-  // Training only: more views of the same azimuths taken by these simulated sensors, filtered down to the
-  // ideal views' density, as glimpse-lab's --train-sensors (evaluation.h: sensor_training_view).
+  // Training only: more views of the same azimuths taken by these simulated sensors, filtered down to
+  // sensor_density, as glimpse-lab's --train-sensors (evaluation.h: sensor_training_view).
   std::vector<ScanCondition> train_sensors;
+  // The relative density (scan_filters.h) the sensors' views are thinned to: the density the model will
+  // classify at, the median over every training object's ideal views, which glimpse train measures in a
+  // first pass over the objects, as glimpse-lab does (EvalResult::trained_density). 0: not thinned.
+  double sensor_density = 0;
 };
 
 // A folder DIR/<category>/<files>: its meshes (.off .obj .ply .stl; a .ply without faces gives its

@@ -158,18 +158,23 @@ Cloud condition_view(const EvalObject& object, const Points& full, size_t view, 
   return cloud;
 }
 
+double median_density(std::vector<double> densities) {
+  std::erase_if(densities, [](double x) { return !(x > 0); });
+  if (densities.empty()) return 0.0;
+  std::nth_element(densities.begin(), densities.begin() + std::ptrdiff_t(densities.size() / 2), densities.end());
+  return densities[densities.size() / 2];
+}
+
 double median_relative_density(const std::vector<Cloud>& views) {
   std::vector<double> d;
-  for (const Cloud& c : views)
-    if (const double x = relative_density(c.points); x > 0) d.push_back(x);
-  std::sort(d.begin(), d.end());
-  return d.empty() ? 0.0 : d[d.size() / 2];
+  for (const Cloud& c : views) d.push_back(relative_density(c.points));
+  return median_density(std::move(d));
 }
 
 Cloud sensor_training_view(const EvalObject& object, const Points& full, size_t view, size_t views, uint64_t seed,
                            const ScanCondition& condition, size_t points_per_object, double hpr_radius_factor,
-                           double ideal_density, ScanFilterParams filters) {
-  filters.relative_density = ideal_density;
+                           double trained_density, ScanFilterParams filters) {
+  filters.relative_density = trained_density;
   Cloud cloud = filter_scan(condition_view(object, full, view, views, seed, condition, points_per_object, hpr_radius_factor),
                             filters);
   // A camera that sees a sliver of the object (too close, or past its far end) teaches nothing, and

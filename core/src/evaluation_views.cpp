@@ -173,8 +173,9 @@ void eval_internal::make_views(Protocol& P) {
                              (posed ? ", " + std::to_string(posed) + " objects without an up in random poses" : "")});
 }
 
-// ---- 2b. the density each model learns (median relative density of its training views), and the
-// test views of a non-ideal condition: the sensor's view, through the filters at that density ----
+// ---- 2b. the density each model learns (median relative density of its ideal training views as learnt), the
+// simulated sensors' training views and the test views of a non-ideal condition, each through the
+// filters at that density ----
 void eval_internal::trained_densities(Protocol& P) {
   std::vector<double> density(P.views.size(), 0.0);
   parallel_for(P.views.size(), P.threads, "training density", P.progress, [&](size_t v) {
@@ -183,21 +184,25 @@ void eval_internal::trained_densities(Protocol& P) {
   for (int fold = 0; fold < P.folds; ++fold) {
     std::vector<double> d;
     for (size_t v = 0; v < P.views.size(); ++v)
-      if (P.learnt(v) && P.r.object_fold[size_t(P.views[v].object)] != fold && density[v] > 0) d.push_back(density[v]);
-    std::sort(d.begin(), d.end());
-    P.r.trained_density.push_back(d.empty() ? 0.0 : d[d.size() / 2]);
+      if (P.learnt(v) && P.r.object_fold[size_t(P.views[v].object)] != fold) d.push_back(density[v]);
+    P.r.trained_density.push_back(median_density(std::move(d)));
   }
 }
 
+// A learnt object's sensor views are thinned to the density its models classify at: the model's, or in
+// cross-validation the mean of those of the folds that learn it (the views are made once for all folds).
 void eval_internal::sensor_training_views(Protocol& P) {
   if (P.params.train_conditions.empty()) return;
   const auto t0 = Clock::now();
   const size_t n = std::clamp<size_t>(P.params.views_per_object, 1, 6);
-  std::vector<std::vector<Cloud>> ideal(P.objects.size());  // each object's ideal views at the paper's elevation
-  for (size_t v = 0; v < P.objects.size() * n; ++v) ideal[size_t(P.views[v].object)].push_back(P.views[v].cloud);
   std::vector<double> density(P.objects.size(), 0.0);
-  parallel_for(P.objects.size(), P.threads, "ideal densities", P.progress,
-               [&](size_t o) { density[o] = median_relative_density(ideal[o]); });
+  for (size_t o = 0; o < P.objects.size(); ++o) {
+    int models = 0;
+    for (int fold = 0; fold < P.folds; ++fold)
+      if (P.r.object_fold[o] != fold && P.r.trained_density[size_t(fold)] > 0)
+        density[o] += P.r.trained_density[size_t(fold)], ++models;
+    if (models) density[o] /= models;
+  }
   parallel_for(P.views.size(), P.threads, "sensor training views", P.progress, [&](size_t v) {
     View& view = P.views[v];
     if (view.train_condition < 0) return;
@@ -212,7 +217,7 @@ void eval_internal::sensor_training_views(Protocol& P) {
   for (const View& view : P.views) taken += view.train_condition >= 0;
   std::string detail;
   for (const ScanCondition& c : P.params.train_conditions) detail += (detail.empty() ? "" : "; ") + describe(c);
-  P.r.timings.push_back({"sensor training views", seconds_since(t0), std::to_string(taken) + " views: " + detail + ", filtered"});
+  P.r.timings.push_back({"sensor training views", seconds_since(t0), std::to_string(taken) + " views: " + detail + ", filtered to the trained density"});
 }
 
 void eval_internal::sensor_test_views(Protocol& P) {

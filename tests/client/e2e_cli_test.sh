@@ -108,6 +108,9 @@ run 0 models list && out_has "^no models$"
 run 0 train --zoo --per-category 2 --name tiny && out_has "^trained tiny:1 \(default\): 5 categories, 180 clouds"
 err_has "^train: 100% done"  # stderr is not a terminal: plain progress lines
 err_has "^train: and the same azimuths seen by a simulated depth camera 1.5 m, 15 deg; depth camera 3 m, 45 deg"
+# The cameras' views are thinned to the median density of every mesh's ideal views, which a first pass
+# measures (10 meshes x 6 views), as glimpse-lab thins them to the model's.
+err_has "filtered to the ideal views' density \([0-9]+\.[0-9] points per extent\^2, the median over 60 views;"
 run 0 train --zoo --per-category 2 --views 2 --methods bok,esf --name tiny --description "second one" -q --json
 out_has '"name":"tiny"' && out_has '"version":2' && out_has '"description":"second one"'
 [[ -s "$ERR" ]] && fail "train -q wrote to stderr"
@@ -143,6 +146,7 @@ run 0 train "$MIX" --zoo --per-category 1 --name mix --methods ush --views 2 --m
   out_has "^trained mix:1 \(default\): 2 categories, 24 clouds"
 run 0 train "$MIX" --zoo --per-category 1 --name mix --methods ush --views 2 --mesh-points 1500 &&
   err_has "^train: also the procedural zoo: 1 objects per category of chair, table, upright, real-life size$"
+err_has "the median over 8 views;"  # the folder's 2 meshes and the zoo's 2, 2 views each
 run 2 train "$PLAIN" --zoo --name bad && err_has "the zoo has none of them"
 run 2 train "$PLAIN" --name bad --up sideways
 run 2 train "$PLAIN" --name bad --unit furlong

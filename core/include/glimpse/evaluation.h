@@ -100,16 +100,19 @@ std::vector<ScanCondition> robustness_conditions(std::string_view matrix);  // "
 // elevation. `full` is the object's full 3D cloud at the protocol's density (ideal views only).
 Cloud condition_view(const EvalObject& object, const Points& full, size_t view, size_t views, uint64_t object_seed,
                      const ScanCondition& condition, size_t points_per_object, double hpr_radius_factor);
-// The median relative density (scan_filters.h) of `views`, those with one; 0 when none has.
+// The median of the positive relative densities (scan_filters.h); 0 when none is.
+double median_density(std::vector<double> densities);
+// The median relative density of `views`, those with one; 0 when none has.
 double median_relative_density(const std::vector<Cloud>& views);
-// A training-only view of a simulated sensor: condition_view through `filters` down to `ideal_density`
-// (the median_relative_density of the object's ideal views), as a test view of that sensor is filtered
-// down to the density the model learnt; then learnt like any view. Lab and client make them alike.
+// A training-only view of a simulated sensor: condition_view through `filters` down to `trained_density`,
+// the density the model classifies at: the median relative density of every training object's ideal
+// views (EvalResult::trained_density; glimpse train's first pass), to which a test view of that sensor
+// is filtered too. Then learnt like any view. Lab and client make them alike.
 // Empty when the camera saw fewer than 2 x FeatureParams::min_points of the object (a view of a sliver
 // teaches nothing, and training refuses a whole cloud without features).
 Cloud sensor_training_view(const EvalObject& object, const Points& full, size_t view, size_t views,
                            uint64_t object_seed, const ScanCondition& condition, size_t points_per_object,
-                           double hpr_radius_factor, double ideal_density, ScanFilterParams filters = {});
+                           double hpr_radius_factor, double trained_density, ScanFilterParams filters = {});
 // The recipe's training sensors (glimpse-lab --train-sensors, glimpse train --sensors): a depth camera at
 // 1.5 m, 15 deg and at 3 m, 45 deg, both off the 2 m, 30 deg the robustness matrix tests.
 std::vector<ScanCondition> default_training_sensors();
