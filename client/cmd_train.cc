@@ -4,7 +4,6 @@
 #include <cstdio>
 #include <functional>
 #include <set>
-#include <tuple>
 #include <utility>
 #include <thread>
 
@@ -160,32 +159,31 @@ int RunTrain(const ConnectionOptions& conn, const TrainOptions& o) {
   } else {
     folder.applied = {"the procedural zoo: " + std::to_string(o.per_category) + " objects per category, upright, real-life size"};
   }
-  ProtocolOptions protocol = o.protocol;
-  size_t density_views = 0;
-  if (protocol.views && !protocol.train_sensors.empty()) {
-    auto density = SensorDensity(o, folder, zoo_extra);
-    if (!density) {
-      PrintError(what, density.error().message);
-      return kExitError;
-    }
-    std::tie(protocol.sensor_density, density_views) = *density;
-  }
   if (!o.quiet) {
     folder.applied.push_back(o.protocol.views ? std::to_string(o.protocol.views) +
                                                     " views per mesh (hidden point removal from the paper's viewpoints), " +
                                                     std::to_string(o.protocol.points) + " surface samples, seed " +
                                                     std::to_string(o.protocol.seed)
                                               : "whole sampled clouds, no views");
-    if (o.protocol.views && !o.protocol.train_sensors.empty()) {
-      std::string sensors;
-      for (const ScanCondition& c : o.protocol.train_sensors) sensors += (sensors.empty() ? "" : "; ") + describe(c);
-      char density[160];
-      std::snprintf(density, sizeof density, "%.1f points per extent^2, the median over %zu views", protocol.sensor_density,
-                    density_views);
-      folder.applied.push_back("and the same azimuths seen by a simulated " + sensors +
-                               ", filtered to the ideal views' density (" + density + "; --sensor-views none: not)");
-    }
     for (const std::string& line : folder.applied) std::fprintf(stderr, "train: %s\n", line.c_str());
+  }
+  ProtocolOptions protocol = o.protocol;
+  if (protocol.views && !protocol.train_sensors.empty()) {
+    if (!o.quiet) std::fprintf(stderr, "train: measuring every mesh's ideal views' density (a first pass) ...\n");
+    auto density = SensorDensity(o, folder, zoo_extra);
+    if (!density) {
+      PrintError(what, density.error().message);
+      return kExitError;
+    }
+    protocol.sensor_density = density->first;
+    if (!o.quiet) {
+      std::string sensors;
+      for (const ScanCondition& c : protocol.train_sensors) sensors += (sensors.empty() ? "" : "; ") + describe(c);
+      std::fprintf(stderr,
+                   "train: and the same azimuths seen by a simulated %s, filtered to the ideal views' density (%.1f "
+                   "points per extent^2, the median over %zu views; --sensor-views none: not)\n",
+                   sensors.c_str(), protocol.sensor_density, density->second);
+    }
   }
   auto stub = ConnectGlimpse(conn, what);
   if (!stub) return kExitError;
