@@ -148,7 +148,8 @@ void write_protocol(std::ostringstream& o, const EvalResult& r) {
     trained_on += "; plus the same azimuths from " + pct(e) + " deg elevation (training only)";
   for (const ScanCondition& c : p.train_conditions)
     trained_on += "; plus the same azimuths seen by a " + describe(c) +
-                  " (`--train-sensors`, training only), through the scan filters down to the ideal views' density";
+                  " (`--train-sensors`, training only), through the scan filters down to the model's density (the "
+                  "median of its ideal training views)";
   {
     std::map<std::string, size_t> extra;
     if (!r.cross_source)
