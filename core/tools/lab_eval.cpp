@@ -268,7 +268,7 @@ void add_eval_command(CLI::App& app) {
   cmd->add_option("--train-sensors", o->train_sensors,
                   "training-only views of simulated sensors besides the ideal ones: SENSOR:METRES:DEGREES[,...] "
                   "(depth or lidar, from that distance and elevation, the same azimuths, through the scan filters "
-                  "down to the model's density, the median of its ideal training views'; augmented: the decision learns them, novelty measures against a model of the other views), or 'none' (the recipe's: off the 2 m, 30 deg camera the "
+                  "down to the model's density, the median of its ideal training views; augmented: the decision learns them, novelty measures against a model of the other views), or 'none' (the recipe's: off the 2 m, 30 deg camera the "
                   "robustness matrix tests)")
       ->capture_default_str();
   cmd->add_option("--folds", o->folds, "cross-validation folds (by object, stratified)")->capture_default_str();
