@@ -50,7 +50,9 @@ int Run(const ServerConfig& config, const sigset_t& signals) {
       exposer = std::make_unique<prometheus::Exposer>("0.0.0.0:" + std::to_string(config.metrics_port));
       exposer->RegisterCollectable(metrics.registry());
     } catch (const std::exception& e) {
-      std::fprintf(stderr, "glimpse-server: cannot serve metrics on port %d: %s\n", config.metrics_port, e.what());
+      std::fprintf(stderr,
+                   "glimpse-server: cannot serve metrics on port %d (in use? --metrics-port 0 turns metrics off): %s\n",
+                   config.metrics_port, e.what());
       return 1;
     }
   }

@@ -142,6 +142,27 @@ TEST(Binary, CorruptDatabaseIsAClearStartupError) {
   EXPECT_THAT(p.Output(), HasSubstr("bad.db"));
 }
 
+TEST(Binary, AnAddressInUseIsAClearStartupError) {
+  TempDir dir;
+  const std::string address = "127.0.0.1:" + std::to_string(FreePort());
+  Process first({"--address=" + address, "--metrics-port=0", "--db=" + (dir / "first.db").string()}, dir / "first.txt",
+                dir / "");
+  auto channel = grpc::CreateChannel(address, grpc::InsecureChannelCredentials());
+  ASSERT_TRUE(channel->WaitForConnected(std::chrono::system_clock::now() + std::chrono::seconds(20))) << first.Output();
+  // gRPC's default SO_REUSEPORT would let a second server share the port and take half of the calls.
+  Process second({"--address=" + address, "--metrics-port=0", "--db=" + (dir / "second.db").string()},
+                 dir / "second.txt", dir / "");
+  EXPECT_EQ(second.Wait(), 1) << second.Output();
+  EXPECT_THAT(second.Output(), HasSubstr("cannot listen on " + address));
+  auto stub = v1::Glimpse::NewStub(channel);
+  for (int i = 0; i < 4; ++i) {  // the first server answers every call, its store intact
+    grpc::ClientContext ctx;
+    v1::ListModelsResponse resp;
+    EXPECT_TRUE(stub->ListModels(&ctx, v1::ListModelsRequest(), &resp).ok());
+  }
+  EXPECT_EQ(first.Wait(std::chrono::milliseconds(0)), -1) << "the first server is still running";
+}
+
 TEST(Binary, ServesUntilSigtermThenClosesTheStore) {
   TempDir dir;
   const int port = FreePort(), metrics_port = FreePort();
@@ -178,7 +199,11 @@ TEST(Binary, ServesUntilSigtermThenClosesTheStore) {
   ASSERT_NE(Metrics(metrics_port).find("glimpse_active_streams{method=\"StreamClassify\"} 1"), std::string::npos)
       << Metrics(metrics_port);
   p.Signal(SIGTERM);
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  // Once the server has taken the signal (it says so), the stream's chunk arrives during the drain.
+  const auto signalled_by = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (p.Output().find("received SIGTERM") == std::string::npos && std::chrono::steady_clock::now() < signalled_by)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  ASSERT_NE(p.Output().find("received SIGTERM"), std::string::npos) << p.Output();
   v1::ScanChunk chunk;
   chunk.mutable_model()->set_name("missing");
   stream->Write(chunk);
