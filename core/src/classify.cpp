@@ -333,7 +333,7 @@ Expected<Classification> classify_filtered(const Model& model, const Cloud& clou
   c.categories = model.categories;
   c.scores.assign(scores.data(), scores.data() + scores.size());
   c.winner = argmax(scores);
-  c.warning = size_warning(model.stats, cloud);
+  c.warning = size_warning(model.stats, points);  // after the filters: a stray point is not the object's size
   c.outside_learnt_sizes = !c.warning.empty();
   judge_unknown(model, decision, *f, c);
   c.points = f->points;

@@ -80,9 +80,9 @@ Expected<FeatureState> extract(const Cloud& input, const FeatureParams& params, 
     return invalid_argument("the cloud has no finite point (" + std::to_string(diag.clean.non_finite) +
                             " NaN/Inf points)");
   if (f.cloud.points.size() < params.min_points)
-    return invalid_argument("the cloud has " + std::to_string(f.cloud.points.size()) +
-                            " usable points after cleaning; at least " + std::to_string(params.min_points) +
-                            " are needed");
+    return invalid_argument("the cloud has " + std::to_string(f.cloud.points.size()) + " usable point" +
+                            (f.cloud.points.size() == 1 ? "" : "s") + " after cleaning; at least " +
+                            std::to_string(params.min_points) + " are needed");
 
   t0 = std::chrono::steady_clock::now();
   // Cells of a first guess answer the density's queries; cells of r then answer every later one (about

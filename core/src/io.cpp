@@ -187,6 +187,13 @@ std::string extension(const std::string& path) {
   return lower(std::filesystem::path(path).extension().string());
 }
 
+// A folder given where a file is wanted, named as such (its extension would say nothing useful).
+Status not_a_folder(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) return invalid_argument(path + ": is a folder, not a file");
+  return {};
+}
+
 }  // namespace
 }  // namespace io_detail
 
@@ -194,6 +201,7 @@ using namespace io_detail;
 
 Expected<Mesh> read_mesh(const std::string& path) {
   try {
+    if (Status s = not_a_folder(path); !s.ok()) return s.error();
     const std::string ext = extension(path);
     if (ext != ".off" && ext != ".obj" && ext != ".ply" && ext != ".stl")
       return invalid_argument(path + ": unknown mesh extension '" + ext + "' (want .off, .obj, .ply, .stl)");
@@ -213,6 +221,7 @@ Expected<Mesh> read_mesh(const std::string& path) {
 
 Expected<Cloud> read_cloud(const std::string& path) {
   try {
+    if (Status s = not_a_folder(path); !s.ok()) return s.error();
     const std::string ext = extension(path);
     const bool known = ext == ".pcd" || ext == ".ply" || ext == ".xyz" || ext == ".txt" ||
                        ext == ".csv" || ext == ".off" || ext == ".obj" || ext == ".stl";

@@ -135,6 +135,18 @@ TEST_F(IoTest, MissingFileIsNotFound) {
   EXPECT_NE(m.error().message.find("nope.off"), std::string::npos);
 }
 
+TEST_F(IoTest, AFolderIsNamedAsOne) {
+  std::filesystem::create_directories(path("scans.ply"));  // even with a file's extension
+  for (const std::string& folder : {path("scans.ply"), dir_.string()}) {
+    Expected<Cloud> c = read_cloud(folder);
+    ASSERT_FALSE(c.ok());
+    EXPECT_EQ(c.error().message, folder + ": is a folder, not a file");
+    Expected<Mesh> m = read_mesh(folder);
+    ASSERT_FALSE(m.ok());
+    EXPECT_EQ(m.error().message, folder + ": is a folder, not a file");
+  }
+}
+
 // ---- mesh formats ----
 
 void expect_square_pyramid(const Mesh& m) {

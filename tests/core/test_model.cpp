@@ -266,6 +266,16 @@ TEST(Classify, WarnsWhenTheCloudIsFarOutsideTheSizesLearnt) {
     EXPECT_EQ(accepting.unknown_reason.find("size far outside what the model learnt: the cloud spans"), 0u)
         << accepting.unknown_reason;
   }
+  // One stray point far away is dropped by the scan filters: the size judged is the object's, so the
+  // answer is the clean view's, not "unknown" by a size the object does not have.
+  Cloud stray = view;
+  stray.points.push_back(Vec3(1e5f, 1e5f, 1e5f));
+  auto strayed = classify(t.model, stray);
+  ASSERT_TRUE(strayed.ok()) << strayed.error().message;
+  EXPECT_TRUE(strayed->warning.empty()) << strayed->warning;
+  EXPECT_FALSE(strayed->outside_learnt_sizes);
+  EXPECT_EQ(strayed->winner, c->winner);
+  EXPECT_EQ(strayed->unknown, c->unknown);
   TrainingSummary stats;
   stats.min_extent_m = 0.1f, stats.max_extent_m = 2.f;
   Cloud tiny;
