@@ -263,7 +263,12 @@ grpc::Status GlimpseService::StreamClassify(grpc::ServerContext* ctx,
     if (ticket->expired()) return StreamTooLong(options_.limits);
     if (ctx->IsCancelled()) return cancelled("the caller cancelled the stream");
     // The scanner is done (WritesDone): the final answer, every feature on the whole scan, is Classify's.
-    if (session && !caller_left && !session->last().raw_scores.empty()) {
+    if (session && !caller_left) {
+      // A scan that never gave a decision ends in an error, as Classify's of too few points does, not
+      // in an OK with nothing decided.
+      if (session->last().raw_scores.empty())
+        return invalid_argument("the scan ended without a decision: its " + std::to_string(session->last().points) +
+                                " points gave no surface to judge (too few, or all on a line)");
       const auto start = options_.clock();
       auto finished = session->finish();
       if (!finished) return finished.error();

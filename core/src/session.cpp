@@ -95,9 +95,11 @@ Status Session::check(const Cloud& chunk) const {
   if (chunk.points.size() > params_.max_chunk_points)
     return resource_exhausted("a chunk of " + std::to_string(chunk.points.size()) + " points exceeds the limit of " +
                               std::to_string(params_.max_chunk_points));
-  if (points() >= params_.max_points)
-    return resource_exhausted("the session holds " + std::to_string(points()) + " points, its limit is " +
-                              std::to_string(params_.max_points));
+  // A chunk that could take the scan past its limit is refused whole: no point is dropped unsaid.
+  if (points() + chunk.points.size() > params_.max_points)
+    return resource_exhausted("chunk " + std::to_string(chunks_) + " of " + std::to_string(chunk.points.size()) +
+                              " points could take the session past its limit of " + std::to_string(params_.max_points) +
+                              " points (it holds " + std::to_string(points()) + ")");
   return check_cloud(chunk, "chunk " + std::to_string(chunks_));
 }
 
@@ -183,18 +185,9 @@ Expected<StreamDecision> Session::add(const Cloud& chunk) {
   if (Status s = check(chunk); !s.ok()) return s.error();
   last_.chunk_index = chunks_++;
   last_.final = false;
-  // Points beyond the session's limit are not kept (the next chunk is refused).
-  const size_t room = params_.max_points - points();
-  Cloud part;
-  const Cloud* take = &chunk;
-  if (chunk.points.size() > room) {
-    part.sensor = chunk.sensor;
-    part.points.assign(chunk.points.begin(), chunk.points.begin() + static_cast<std::ptrdiff_t>(room));
-    take = &part;
-  }
   Expected<size_t> kept = size_t{0};
   if (filtered()) {
-    add_raw(*take);
+    add_raw(chunk);
     last_.points = raw_.points.size();
     // The filters cost what the scan holds: they run again once it grew by global_refresh_growth (as
     // VFH does); in between, a filtered scan's chunks repeat its last decision, an unfiltered one's grow
@@ -222,7 +215,7 @@ Expected<StreamDecision> Session::add(const Cloud& chunk) {
     }
     kept = feed_features();
   } else {
-    kept = features_.add(*take);
+    kept = features_.add(chunk);
   }
   if (!kept.ok()) return kept.error();
   last_.points = features_.points();

@@ -364,13 +364,19 @@ TEST(ScanSession, LimitsAndBadInput) {
   Cloud ok{{view.cloud.points.begin(), view.cloud.points.begin() + 100}, view.cloud.sensor};
   ASSERT_TRUE(session->add(ok).ok());
   Cloud more{{view.cloud.points.begin() + 100, view.cloud.points.begin() + 200}, view.cloud.sensor};
-  auto capped = session->add(more);
-  ASSERT_TRUE(capped.ok());
-  EXPECT_LE(capped->points, 150u) << "points beyond the limit are not kept";
-  auto full = session->add(Cloud{});
-  ASSERT_FALSE(full.ok());
-  EXPECT_EQ(full.error().code, ErrorCode::kResourceExhausted);
-  EXPECT_NE(full.error().message.find("limit"), std::string::npos);
+  auto over = session->add(more);  // 101 held + 100 > 150: refused whole, never cut unsaid
+  ASSERT_FALSE(over.ok());
+  EXPECT_EQ(over.error().code, ErrorCode::kResourceExhausted);
+  EXPECT_NE(over.error().message.find("chunk 2 of 100 points could take the session past its limit of 150"),
+            std::string::npos) << over.error().message;
+  EXPECT_NE(over.error().message.find("it holds 101"), std::string::npos) << over.error().message;
+  // The session is as it was: a chunk that fits is taken, all of it.
+  Cloud fits{{view.cloud.points.begin() + 100, view.cloud.points.begin() + 149}, view.cloud.sensor};
+  auto taken = session->add(fits);
+  ASSERT_TRUE(taken.ok()) << taken.error().message;
+  EXPECT_EQ(taken->chunk_index, 2u);
+  EXPECT_LE(taken->points, 150u);
+  EXPECT_GT(taken->points, 101u);
 
   SessionParams few;
   few.max_chunks = 2;

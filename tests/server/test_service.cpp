@@ -557,6 +557,11 @@ TEST(StreamClassify, Errors) {
   EXPECT_EQ(run({Chunk(10)}).error_code(), grpc::StatusCode::INVALID_ARGUMENT);  // no model named
   EXPECT_EQ(run({Chunk(10, "m"), Chunk(10, "other")}).error_code(), grpc::StatusCode::INVALID_ARGUMENT);
   EXPECT_TRUE(run({Chunk(10, "m"), Chunk(10, "m", 1)}).ok());  // repeating it is fine
+  // A scan that ends with nothing decided is an error, as Classify's of too few points is.
+  const grpc::Status undecided = run({Chunk(0, "m")});
+  EXPECT_EQ(undecided.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(undecided.error_message().find("the scan ended without a decision: its 0 points"), std::string::npos)
+      << undecided.error_message();
   v1::ScanChunk nan = Chunk(10, "m");
   nan.mutable_cloud()->mutable_xyz()->resize(13);
   EXPECT_EQ(run({nan}).error_code(), grpc::StatusCode::INVALID_ARGUMENT);
