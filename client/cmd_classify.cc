@@ -38,6 +38,7 @@ Expected<Cloud> ReadInput(const std::string& file, const ClassifyOptions& o) {
   if (loaded->is_mesh)
     return MeshFileView(file, o.placement, o.protocol, o.whole ? std::nullopt : std::optional<int>(o.view));
   RemoveNonFinite(loaded->cloud);
+  if (Status s = PlaceCloud(loaded->cloud, o.placement, file); !s.ok()) return s.error();
   return std::move(loaded->cloud);
 }
 

@@ -63,8 +63,9 @@ Expected<Cloud> StreamView(const StreamOptions& o) {
     return MeshFileView(o.file, o.placement, protocol, o.viewpoint.value_or(0));
   }
   RemoveNonFinite(file->cloud);
-  // A cloud file is the scan: it streams as it is, with its sensor if it has one (wherever that is),
-  // and is cut into a new view only when asked.
+  if (Status s = PlaceCloud(file->cloud, o.placement, o.file); !s.ok()) return s.error();
+  // A cloud file is the scan: it streams as it is (or as --unit / --up place it), with its sensor if it
+  // has one (wherever that is), and is cut into a new view only when asked.
   if (!o.viewpoint) return std::move(file->cloud);
   return SingleView(file->cloud, *o.viewpoint, o.protocol.hpr_radius_factor);
 }
@@ -73,7 +74,10 @@ Expected<std::vector<Cloud>> StreamChunks(const StreamOptions& o) {
   if (!o.frames_dir.empty()) {
     auto frames = LoadFrames(o.frames_dir);
     if (!frames.ok()) return frames.error();
-    return FrameChunks(*frames, o.chunk_points);
+    std::vector<Cloud> chunks = FrameChunks(*frames, o.chunk_points);
+    for (Cloud& chunk : chunks)  // the common frame's unit and up, sensors with their points
+      if (Status s = PlaceCloud(chunk, o.placement, o.frames_dir); !s.ok()) return s.error();
+    return chunks;
   }
   auto order = ParseRevealOrder(o.order);
   if (!order) return order.error();

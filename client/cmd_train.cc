@@ -46,13 +46,15 @@ Status EmitMeshes(const ProtocolOptions& protocol, const Folder& folder, const E
   return {};
 }
 
-// The folder's cloud files, as they are.
+// The folder's cloud files, as they are or as --unit / --up place them.
 Status EmitCloudFiles(const Folder& folder, const Emit& emit) {
   for (const TrainFile& f : folder.clouds) {
     auto clouds = TrainingClouds(f.path, ViewOptions{});
     if (!clouds) return clouds.error();
-    for (const Cloud& c : *clouds)
+    for (Cloud& c : *clouds) {
+      if (Status s = PlaceCloud(c, folder.cloud_placement, f.path); !s.ok()) return s;
       if (!emit(f.category, f.object_id, c, false)) return {};
+    }
   }
   return {};
 }

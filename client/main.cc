@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
 #include <functional>
 
@@ -33,6 +34,14 @@ const CLI::Validator kMethod = Checked(ParseMethod, "METHOD");
 const CLI::Validator kMethodList = Checked(ParseMethodList, "M1,M2,..");
 const CLI::Validator kOrder = Checked(ParseRevealOrder, "top-down|random|sweep");
 const CLI::Validator kSensor = Checked(ParseSensor, "X,Y,Z");
+// The share of known clouds to accept: (0, 1] (the wire's 0 is "the model's default", never asked).
+const CLI::Validator kAcceptance(
+    [](std::string& text) -> std::string {
+      char* end = nullptr;
+      const double v = std::strtod(text.c_str(), &end);
+      return !text.empty() && *end == '\0' && v > 0 && v <= 1 ? std::string() : "must be in (0, 1], not " + text;
+    },
+    "(0, 1]");
 // The training sensors of the recipe (core's default_training_sensors).
 const std::string kSensorViews = glimpse::training_sensors_spec(glimpse::default_training_sensors());
 
@@ -57,7 +66,7 @@ void AddConnectionOptions(CLI::App& app, ConnectionOptions& conn) {
       ->envname("GLIMPSE_TOKEN")->group("Connection");
 }
 
-// How a mesh without a manifest (or against it) is stood up and sized.
+// Where a cloud file's sensor was.
 CLI::Option* AddSensorOption(CLI::App& cmd, std::optional<glimpse::Vec3>& sensor) {
   return cmd.add_option_function<std::string>("--sensor", [&sensor](const std::string& t) { sensor = *ParseSensor(t); },
                                               "cloud files: where the sensor was, X,Y,Z in the cloud's frame (replaces "
@@ -65,25 +74,31 @@ CLI::Option* AddSensorOption(CLI::App& cmd, std::optional<glimpse::Vec3>& sensor
       ->check(kSensor);
 }
 
-void AddPlacementOptions(CLI::App& cmd, Placement& placement) {
+// How the files are stood up and sized: meshes (`folder`: a folder's, whose manifest these override)
+// and, where `clouds`, cloud files alike, except --height, which sizes meshes only.
+void AddPlacementOptions(CLI::App& cmd, Placement& placement, bool folder, bool clouds) {
+  const std::string which = clouds ? "meshes and clouds" : "meshes";
   cmd.add_option_function<std::string>("--up", [&placement](const std::string& t) { placement.up = *glimpse::parse_up(t); },
-                                       "the mesh axis that points up: +z, -y, x, ... or \"x y z\" (overrides up_axis.csv)")
-      ->check(Checked(glimpse::parse_up, "AXIS"))->group("Meshes");
+                                       "the files' axis that points up, turned to +z: +z, -y, x, ... or \"x y z\"; " +
+                                           which + (folder ? " (overrides up_axis.csv)" : ""))
+      ->check(Checked(glimpse::parse_up, "AXIS"))->group("Placement");
   auto* unit = cmd.add_option_function<std::string>(
                       "--unit", [&placement](const std::string& t) { placement.sizing = *ParseUnit(t); },
-                      "the meshes' unit: m, cm, mm, in (overrides sizes.csv)")
-                   ->check(Checked(ParseUnit, "m|cm|mm|in"))->group("Meshes");
+                      "the files' unit: m, cm, mm, in; " + which + (folder ? " (overrides sizes.csv)" : ""))
+                   ->check(Checked(ParseUnit, "m|cm|mm|in"))->group("Placement");
   cmd.add_option_function<float>("--height",
                                  [&placement](const float& m) { placement.sizing = glimpse::Sizing{glimpse::Sizing::kHeight, m}; },
-                                 "scale every mesh to this height in metres (overrides sizes.csv)")
-      ->check(CLI::PositiveNumber)->excludes(unit)->group("Meshes");
+                                 std::string("scale every mesh to this height in metres") +
+                                     (folder ? " (overrides sizes.csv)" : "") + (clouds ? "; not for cloud files" : ""))
+      ->check(CLI::PositiveNumber)->excludes(unit)->group("Placement");
 }
 
 // Surface samples and their seed; train and evaluate also choose the number of views.
 void AddProtocolOptions(CLI::App& cmd, ProtocolOptions& p, bool views) {
   cmd.add_option("--mesh-points", p.points, "points sampled on a mesh's surface (0: its vertices), as glimpse-lab's --points")
       ->capture_default_str()->check(CLI::Range(size_t{0}, size_t{5'000'000}))->group("Meshes");
-  cmd.add_option("--seed", p.seed, "seed of sizes, samples and poses (glimpse-lab's --seed), and of zoo shapes")
+  cmd.add_option("--seed", p.seed, std::string("seed of sizes, samples and poses (glimpse-lab's --seed)") +
+                                       (cmd.get_name() == "train" ? ", and of zoo shapes" : ""))
       ->capture_default_str()->group("Meshes");
   if (views)
     cmd.add_option("--views", p.views, "single views (hidden point removal) per mesh or zoo shape, 0 = the whole cloud")
@@ -153,7 +168,7 @@ int Main(int argc, char** argv) {
       ->check(kMethodList);
   train->add_option("--description", t.description, "free text stored with the model");
   AddProtocolOptions(*train, t.protocol, true);
-  AddPlacementOptions(*train, t.placement);
+  AddPlacementOptions(*train, t.placement, true, true);
   train->add_option_function<uint64_t>("--train-seed", [&t](const uint64_t& s) { t.train_seed = s; },
                                        "k-means and sampling seed of training (default: the server's)");
   train->add_option("--elevations", t.protocol.train_elevations_deg,
@@ -183,18 +198,18 @@ int Main(int argc, char** argv) {
   ClassifyOptions c;
   classify->add_option("FILE", c.files, "clouds (.pcd .ply .xyz, as they are) or meshes (.off .obj .ply .stl, one view each)")->required();
   classify->add_option("--model", c.model, "NAME[:VERSION]")->envname("GLIMPSE_MODEL")->required()->check(kModelRef);
-  classify->add_option("--method", c.method, "bok|bog|kgh|vfh|esf|ush|fusion (default: the model's)")->check(kMethod);
+  classify->add_option("--method", c.method, "bok|bog|kgh|vfh|esf|ush|size|fusion (default: the model's)")->check(kMethod);
   classify->add_flag("--json", c.json, "one JSON object per file instead of a table, errors included");
   classify->add_option("--known-acceptance", c.known_acceptance,
                        "operating point of \"unknown\": the share of known clouds to accept, in (0, 1] (default: "
                        "the model's, 0.95 of its held-out training clouds)")
-      ->check(CLI::Range(0.0, 1.0));
+      ->check(kAcceptance);
   auto* view = classify->add_option("--view", c.view, "meshes: which of the paper's 6 viewpoints (azimuth 60*N deg) sees the object")
                    ->capture_default_str()->check(CLI::Range(0, 5))->group("Meshes");
   classify->add_flag("--whole", c.whole, "meshes: the whole sampled cloud instead of a single view")->excludes(view)->group("Meshes");
   AddSensorOption(*classify, c.sensor);
   AddProtocolOptions(*classify, c.protocol, false);
-  AddPlacementOptions(*classify, c.placement);
+  AddPlacementOptions(*classify, c.placement, false, true);
   classify->callback([&] { run = [&] { return RunClassify(conn, c); }; });
 
   // stream
@@ -207,7 +222,7 @@ int Main(int argc, char** argv) {
   file->excludes(zoo_shape);
   stream->add_option("--seed", s.seed, "zoo shape, random order and mesh sampling seed")->capture_default_str();
   stream->add_option("--model", s.model, "NAME[:VERSION]")->envname("GLIMPSE_MODEL")->required()->check(kModelRef);
-  stream->add_option("--method", s.method, "bok|bog|kgh|vfh|esf|ush|fusion (default: the model's)")->check(kMethod);
+  stream->add_option("--method", s.method, "bok|bog|kgh|vfh|esf|ush|size|fusion (default: the model's)")->check(kMethod);
   auto* chunks = stream->add_option("--chunks", s.chunks, "number of chunks")->capture_default_str()
                      ->check(CLI::Range(size_t{1}, size_t{100000}));
   stream->add_option("--chunk-points", s.chunk_points, "points per chunk instead of --chunks")
@@ -233,10 +248,10 @@ int Main(int argc, char** argv) {
   stream->add_option("--known-acceptance", s.known_acceptance,
                      "operating point of \"unknown\": the share of known clouds to accept, in (0, 1] (default: "
                      "the model's)")
-      ->check(CLI::Range(0.0, 1.0));
+      ->check(kAcceptance);
   stream->add_option("--mesh-points", s.protocol.points, "points sampled on a mesh's surface")
       ->capture_default_str()->check(CLI::Range(size_t{0}, size_t{5'000'000}))->group("Meshes");
-  AddPlacementOptions(*stream, s.placement);
+  AddPlacementOptions(*stream, s.placement, false, true);
   stream->callback([&] { run = [&] { return RunStream(conn, s); }; });
 
   // evaluate
@@ -257,7 +272,7 @@ int Main(int argc, char** argv) {
   evaluate->add_flag("--json", e.json, "the report as one JSON object");
   evaluate->add_flag("-q,--quiet", e.quiet, "no progress on stderr");
   AddProtocolOptions(*evaluate, e.protocol, true);
-  AddPlacementOptions(*evaluate, e.placement);
+  AddPlacementOptions(*evaluate, e.placement, true, false);
   evaluate->callback([&] { run = [&] { return RunEvaluate(conn, e); }; });
 
   try {

@@ -36,7 +36,13 @@ std::vector<std::string> Applied(const Folder& f, const Placement& p, bool manif
   if (!d.objects.empty())
     out.push_back(std::to_string(d.objects.size()) + " meshes in " + std::to_string(d.categories.size()) +
                   " categories");
-  if (!f.clouds.empty()) out.push_back(std::to_string(f.clouds.size()) + " cloud files, sent as they are (metres, +z up)");
+  if (!f.clouds.empty()) {
+    const Placement& c = f.cloud_placement;
+    out.push_back(std::to_string(f.clouds.size()) + " cloud files: " +
+                  (c.up ? "up " + up_to_string(*c.up) + " turned to +z (--up)" : std::string("+z up")) + ", " +
+                  (c.sizing ? "units x " + Metres(c.sizing->value) + " m (--unit)" : std::string("in metres")) +
+                  (c.up || c.sizing ? "" : ", sent as they are"));
+  }
   if (d.objects.empty()) return out;
   if (p.up) out.push_back("up: " + up_to_string(*p.up) + " for every mesh (--up)");
   else if (d.has_up_axes)
@@ -85,6 +91,11 @@ Expected<Folder> ScanFolder(const std::string& dir, const Placement& placement) 
   for (TrainFile& t : *listed)
     if (!meshes.count(t.path)) f.clouds.push_back(std::move(t));
 
+  if (!f.clouds.empty() && placement.sizing && placement.sizing->kind == Sizing::kHeight)
+    return invalid_argument(dir + ": --height scales meshes, and the folder holds " + std::to_string(f.clouds.size()) +
+                            " cloud files (e.g. " + f.clouds.front().path +
+                            "), which show part of their object, not its height: use --unit for them");
+  f.cloud_placement = placement;
   const bool manifest = f.dataset.has_up_axes || f.dataset.has_sizes;
   for (DatasetObject& o : f.dataset.objects) {
     if (placement.up) o.up = *placement.up;
@@ -129,6 +140,18 @@ Expected<ObjectViews> ProtocolViews(const DatasetObject& object, const Sizing& s
   auto mesh = load_object(object, options.seed, sizing);
   if (!mesh) return mesh.error();
   return ViewsOfMesh(*mesh, ObjectKey(object), object.size.any_pose, options);
+}
+
+Status PlaceCloud(Cloud& cloud, const Placement& placement, const std::string& path) {
+  if (placement.sizing && placement.sizing->kind == Sizing::kHeight)
+    return invalid_argument(path + ": --height scales meshes; a cloud shows part of its object, not its height "
+                                   "(--unit gives a cloud's unit)");
+  if (!placement.up && !placement.sizing) return {};
+  const float scale = placement.sizing ? placement.sizing->value : 1.f;
+  const Eigen::Matrix3f r = placement.up ? upright_rotation(*placement.up) : Eigen::Matrix3f::Identity();
+  for (Vec3& p : cloud.points) p = scale * (r * p);
+  if (cloud.sensor) *cloud.sensor = scale * (r * *cloud.sensor);
+  return {};
 }
 
 Expected<Cloud> MeshFileView(const std::string& path, const Placement& placement, const ProtocolOptions& options,

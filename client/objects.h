@@ -47,11 +47,12 @@ struct ProtocolOptions {
 
 // A folder DIR/<category>/<files>: its meshes (.off .obj .ply .stl; a .ply without faces gives its
 // vertices as the object's cloud, as in glimpse-lab) through core's loader, and the cloud files
-// (.pcd .xyz .txt .csv) that are sent as they are.
+// (.pcd .xyz .txt .csv), sent as they are or as the user's --unit / --up place them.
 struct Folder {
   Dataset dataset;                 // meshes; each object's up and size as they will be applied
   Sizing sizing;                   // how every mesh is sized
   std::vector<TrainFile> clouds;   // cloud files, not in `dataset`
+  Placement cloud_placement;       // the user's --up / --unit, applied to the cloud files (PlaceCloud)
   std::vector<std::string> applied;  // what was applied, one line each, for a person
 };
 
@@ -71,6 +72,11 @@ struct ObjectViews {
 Expected<ObjectViews> ProtocolViews(const DatasetObject& object, const Sizing& sizing, const ProtocolOptions& options);
 // The same from a mesh already upright, sized and on the ground (the zoo's), named by `key`.
 ObjectViews ViewsOfMesh(const Mesh& mesh, const std::string& key, bool any_pose, const ProtocolOptions& options);
+
+// A cloud file placed as the user says: --unit scales its points (and sensor) to metres, --up turns
+// that axis to +z. --height is refused: a cloud shows part of its object, not the object's height.
+// Errors name `path`.
+Status PlaceCloud(Cloud& cloud, const Placement& placement, const std::string& path);
 
 // A single mesh file (classify, stream): placed by `placement` (default +z up, metres) and seen from
 // paper viewpoint `view` (0-5), or whole (the full sampled cloud) when view is nullopt.

@@ -205,6 +205,14 @@ run 0 classify "$PLAIN/tall/t1.off" --model boxes --up y --unit mm --view 2 &&
 [[ -s "$ERR" ]] && fail "classify in the right unit warned"
 run 0 classify "$PLAIN/tall/t1.off" --model boxes --unit mm --whole --json && out_has '"warning":""'
 run 2 classify "$BOX" --model boxes --view 2 --whole
+run 2 classify "$BOX" --model boxes --known-acceptance 0 && err_has "\(0, 1\]"  # 0 would mean "the model's"
+# A cloud file in millimetres: warned, and --unit mm (or --up) places a cloud as it places a mesh.
+awk '{ print $1 * 1000, $2 * 1000, $3 * 1000 }' "$BLOB" >"$GLIMPSE_TEST_TMP/blob_mm.xyz"
+run 0 classify "$GLIMPSE_TEST_TMP/blob_mm.xyz" --model folder && err_has "warning: the cloud spans .*millimetres"
+run 0 classify "$GLIMPSE_TEST_TMP/blob_mm.xyz" --model folder --unit mm && out_has "blob_mm\.xyz +blob "
+[[ -s "$ERR" ]] && fail "a cloud given its unit warned"
+run 1 classify "$BLOB" --model folder --height 2 && err_has "s2\.xyz: INVALID_ARGUMENT: --height scales meshes"
+run 1 classify "$DATA" --model folder && err_has "$DATA: INVALID_ARGUMENT: is a folder, not a file"
 GLIMPSE_MODEL=folder run 0 classify "$BLOB" && out_has "folder:1"
 
 # ---- stream ----
@@ -232,6 +240,10 @@ run 2 stream --frames "$FRAMES" "$DATA/blob/s1.xyz" --model folder
 run 2 stream --frames "$FRAMES" --order random --model folder
 run 1 stream --zoo human --model nope --rate 0 && err_has "^glimpse: stream --zoo human: NOT_FOUND"
 run 1 stream "$GLIMPSE_TEST_TMP/nothing.off" --model tiny && err_has "nothing\.off"
+# A scan too small to decide ends in an error, as Classify's does, not in an OK with no answer.
+printf '0 0 0\n0.1 0 0\n' >"$GLIMPSE_TEST_TMP/two.xyz"
+run 1 stream "$GLIMPSE_TEST_TMP/two.xyz" --model folder --rate 0 && err_has "INVALID_ARGUMENT: the scan ended without a decision"
+run 0 stream "$GLIMPSE_TEST_TMP/blob_mm.xyz" --model folder --chunks 2 --rate 0 --unit mm && out_has "^final points .*(winner blob|closest: blob)"
 
 # ---- models ----
 run 0 models list && out_lines 9 && out_has "^tiny +2 +\* " && out_has "^folder +1 +\* "

@@ -81,10 +81,43 @@ TEST_F(ObjectsTest, WithoutAManifestMeshesAreZUpInMetresAndCloudsGoAsTheyAre) {
   for (const DatasetObject& o : f->dataset.objects) EXPECT_EQ(o.up, Vec3::UnitZ());
   EXPECT_TRUE(Has(f->applied, "up: +z (no manifest")) << f->applied[2];
   EXPECT_TRUE(Has(f->applied, "mesh units are metres (no manifest"));
-  EXPECT_TRUE(Has(f->applied, "1 cloud files, sent as they are"));
+  EXPECT_TRUE(Has(f->applied, "1 cloud files: +z up, in metres, sent as they are"));
   const DatasetObject& tall = f->dataset.objects[1];
   ASSERT_EQ(tall.category, "tall");
   EXPECT_NEAR(MeshBounds(tall, f->sizing).extent().z(), 1.5f, 1e-5f);  // as the file has it
+}
+
+TEST_F(ObjectsTest, CloudFilesTakeTheUsersUnitAndUpButNoHeight) {
+  // A scan in millimetres with +y up: --unit mm --up y gives metres, +z up, its sensor moved with it.
+  Cloud c{{Vec3(0, 0, 0), Vec3(100, 1700, 50)}, Vec3(0, 1000, 3000)};
+  Placement p;
+  p.up = Vec3::UnitY();
+  p.sizing = *ParseUnit("mm");
+  ASSERT_TRUE(PlaceCloud(c, p, "scan.xyz").ok());
+  EXPECT_NEAR(c.points[1].z(), 1.7f, 1e-5f);
+  EXPECT_NEAR(c.points[1].norm(), Vec3(0.1f, 1.7f, 0.05f).norm(), 1e-5f);
+  ASSERT_TRUE(c.sensor.has_value());
+  EXPECT_NEAR(c.sensor->z(), 1.0f, 1e-5f);
+  EXPECT_NEAR(c.sensor->norm(), Vec3(0, 1, 3).norm(), 1e-5f);
+  Cloud same = c;
+  ASSERT_TRUE(PlaceCloud(same, Placement{}, "scan.xyz").ok());  // nothing said: as it is
+  EXPECT_EQ(same.points, c.points);
+  Placement tall;
+  tall.sizing = Sizing{Sizing::kHeight, 1.8f};
+  auto refused = PlaceCloud(c, tall, "scan.xyz");
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.error().message.find("scan.xyz: --height scales meshes"), std::string::npos) << refused.error().message;
+
+  // In a folder: the placement is kept for the cloud files and said; --height with cloud files is refused.
+  WriteBox(dir_ / "tall" / "a.off", 200, 1500, 300);
+  ASSERT_TRUE(write_cloud((dir_ / "tall" / "scan.xyz").string(), Cloud{{Vec3(0, 0, 0), Vec3(0, 1500, 0)}, std::nullopt}).ok());
+  auto f = ScanFolder(dir_.string(), p);
+  ASSERT_TRUE(f.ok()) << f.error().message;
+  EXPECT_TRUE(Has(f->applied, "1 cloud files: up +y turned to +z (--up), units x 0.001 m (--unit)"));
+  ASSERT_TRUE(f->cloud_placement.up.has_value());
+  auto g = ScanFolder(dir_.string(), tall);
+  ASSERT_FALSE(g.ok());
+  EXPECT_NE(g.error().message.find("use --unit for them"), std::string::npos) << g.error().message;
 }
 
 TEST_F(ObjectsTest, TheManifestAppliesAsInTheLabAndFlagsOverrideIt) {
