@@ -147,9 +147,11 @@ int RunStream(const ConnectionOptions& conn, const StreamOptions& o) {
   DecisionView shown(scan.size(), o.json);
   v1::Decision decision;
   size_t answered = 0;
+  std::string final_unknown;  // why the final decision is "unknown", said on stderr as classify says it
   while (stream->Read(&decision)) {
     shown.Show(decision);
     if (!decision.final()) ++answered;
+    else if (decision.unknown()) final_unknown = decision.unknown_reason();
   }
   scanner.request_stop();  // wakes it from the rate wait; a pending Write fails now the call is over
   scanner.join();
@@ -158,6 +160,7 @@ int RunStream(const ConnectionOptions& conn, const StreamOptions& o) {
     PrintError(what, FormatStatus(status));
     return kExitError;
   }
+  if (!o.json && !final_unknown.empty()) PrintError(what, "unknown: " + final_unknown);
   if (answered < scan.size()) {
     PrintError(what, "the server answered " + std::to_string(answered) + " of " + std::to_string(scan.size()) +
                          " chunks");

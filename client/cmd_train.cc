@@ -161,16 +161,20 @@ int RunTrain(const ConnectionOptions& conn, const TrainOptions& o) {
   } else {
     folder.applied = {"the procedural zoo: " + std::to_string(o.per_category) + " objects per category, upright, real-life size"};
   }
+  // Views, samples and the cameras' views are made of meshes (the folder's or the zoo's): a folder of
+  // cloud files alone says nothing of them.
+  const bool meshes = o.zoo || !folder.dataset.objects.empty();
   if (!o.quiet) {
-    folder.applied.push_back(o.protocol.views ? std::to_string(o.protocol.views) +
-                                                    " views per mesh (hidden point removal from the paper's viewpoints), " +
-                                                    std::to_string(o.protocol.points) + " surface samples, seed " +
-                                                    std::to_string(o.protocol.seed)
-                                              : "whole sampled clouds, no views");
+    if (meshes)
+      folder.applied.push_back(o.protocol.views ? std::to_string(o.protocol.views) +
+                                                      " views per mesh (hidden point removal from the paper's viewpoints), " +
+                                                      std::to_string(o.protocol.points) + " surface samples, seed " +
+                                                      std::to_string(o.protocol.seed)
+                                                : "whole sampled clouds, no views");
     for (const std::string& line : folder.applied) std::fprintf(stderr, "train: %s\n", line.c_str());
   }
   ProtocolOptions protocol = o.protocol;
-  if (protocol.views && !protocol.train_sensors.empty()) {
+  if (meshes && protocol.views && !protocol.train_sensors.empty()) {
     if (!o.quiet) std::fprintf(stderr, "train: measuring every mesh's ideal views' density (a first pass) ...\n");
     auto density = SensorDensity(o, folder, zoo_extra);
     if (!density) {

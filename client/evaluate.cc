@@ -103,8 +103,8 @@ std::string EvaluationText(const EvaluationReport& r) {
   const auto wrong = Misclassified(r, first);
   size_t wrong_views = 0;
   for (const auto& [object, list] : wrong) wrong_views += list.size();
-  out += "\nmisclassified at " + first + ": " + std::to_string(wrong_views) + " views of " +
-         std::to_string(wrong.size()) + " objects\n";
+  auto count = [](size_t n, const char* noun) { return std::to_string(n) + " " + noun + (n == 1 ? "" : "s"); };
+  out += "\nmisclassified at " + first + ": " + count(wrong_views, "view") + " of " + count(wrong.size(), "object") + "\n";
   std::vector<std::vector<std::string>> listing;
   for (const auto& [object, list] : wrong) {
     std::vector<std::string> parts;

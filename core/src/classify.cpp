@@ -184,7 +184,7 @@ namespace {
 void judge_novelty(Classification& c, double threshold, double known_acceptance) {
   c.unknown = std::isfinite(threshold) && std::isfinite(c.novelty) && c.novelty > threshold;
   c.unknown_reason.clear();
-  if (!c.unknown && c.outside_learnt_sizes) {
+  if (c.outside_learnt_sizes) {  // the reason a person can act on (a unit), whatever the novelty
     c.unknown = true;
     c.unknown_reason = "size far outside what the model learnt: " + c.warning;
   }
