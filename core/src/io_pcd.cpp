@@ -1,4 +1,5 @@
 // PCD (Point Cloud Library file format v0.7): ascii and binary bodies; binary_compressed is refused.
+#include <algorithm>
 #include <bit>
 #include <cstdint>
 #include <cstring>
@@ -143,6 +144,16 @@ Expected<Cloud> read_pcd(const std::string& path, std::string_view text) {
   cloud.points.reserve(points);
   if (binary) {
     const size_t start = lines.offset();
+    // A header that says binary over a text body would read its digits as floats, silently: the first
+    // records all digits, signs, points and blanks are text (no float32 triple is made of those alone).
+    const uint64_t probe = std::min<uint64_t>(points, 4) * offset;
+    const bool text_body = probe > 0 && std::all_of(text.begin() + std::ptrdiff_t(start),
+                                                    text.begin() + std::ptrdiff_t(start + probe), [](char ch) {
+                                                      return (ch >= '0' && ch <= '9') || ch == ' ' || ch == '.' || ch == '-' ||
+                                                             ch == '+' || ch == 'e' || ch == 'E' || ch == '\n' ||
+                                                             ch == '\r' || ch == '\t';
+                                                    });
+    if (text_body) return byte_error(path, start, "DATA binary, but the body is text: is it DATA ascii?");
     for (uint64_t i = 0; i < points; ++i) {
       const char* rec = text.data() + start + i * offset;
       double v[3];

@@ -461,6 +461,16 @@ TEST_F(IoTest, OffFaceCountThatWrapsIsAnError) {
 
 // A binary body one byte short of POINTS records passed the size check (it allowed for a missing
 // newline, as ascii may) and the last record was read one byte past the end of the data.
+TEST_F(IoTest, PcdBinaryHeaderOverATextBodyIsAnError) {
+  const std::string header = "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 3\nHEIGHT 1\nPOINTS 3\nDATA ";
+  const std::string body = "0.125 1.5 -2\n0.25 1.75 -2.5\n0.5 2 -3e-1\n";
+  ASSERT_TRUE(read_cloud(write("ascii.pcd", header + "ascii\n" + body)).ok());
+  Expected<Cloud> c = read_cloud(write("mislabelled.pcd", header + "binary\n" + body));
+  ASSERT_FALSE(c.ok());
+  EXPECT_NE(c.error().message.find("mislabelled.pcd"), std::string::npos) << c.error().message;
+  EXPECT_NE(c.error().message.find("DATA binary, but the body is text"), std::string::npos) << c.error().message;
+}
+
 TEST_F(IoTest, PcdBinaryBodyOneByteShortIsAnError) {
   std::string s = "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA binary\n";
   for (float v : {1.f, 2.f, 3.f, 4.f, 5.f}) put(s, v, false);
