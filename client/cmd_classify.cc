@@ -67,8 +67,15 @@ int RunClassify(const ConnectionOptions& conn, const ClassifyOptions& o) {
     classifier.set_known_acceptance(o.known_acceptance);
     BatchAnswers answers = classifier.Classify(clouds);
     for (size_t i = 0; i < sent.size(); ++i) {
-      if (answers.answers[i].response) sent[i]->response = std::move(answers.answers[i].response);
-      else sent[i]->Fail(answers.answers[i].code, answers.answers[i].message);
+      if (answers.answers[i].response) {
+        sent[i]->response = std::move(answers.answers[i].response);
+        continue;
+      }
+      // The server numbers the batch's clouds; the file is named instead.
+      std::string message = std::move(answers.answers[i].message);
+      if (const std::string place = "cloud " + std::to_string(i) + ": "; message.rfind(place, 0) == 0)
+        message = message.substr(place.size());
+      sent[i]->Fail(answers.answers[i].code, std::move(message));
     }
   }
 

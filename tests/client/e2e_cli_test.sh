@@ -222,6 +222,11 @@ run 0 classify "$GLIMPSE_TEST_TMP/blob_mm.xyz" --model folder --unit mm && out_h
 [[ -s "$ERR" ]] && fail "a cloud given its unit warned"
 run 1 classify "$BLOB" --model folder --height 2 && err_has "s2\.xyz: INVALID_ARGUMENT: --height scales meshes"
 run 1 classify "$DATA" --model folder && err_has "$DATA: INVALID_ARGUMENT: is a folder, not a file"
+# A cloud the server refuses in a batch is named by its file, not by its place among the clouds sent.
+{ cat "$BLOB"; echo "1e30 0 0"; } >"$GLIMPSE_TEST_TMP/far.xyz"
+run 1 classify "$BLOB" "$GLIMPSE_TEST_TMP/far.xyz" --model folder && out_has "^$BLOB +blob " &&
+  err_has "far\.xyz: INVALID_ARGUMENT: xyz: point 2500 has a coordinate beyond"
+grep -q "cloud 1:" "$ERR" && fail "a batch's error named the cloud's place, not only its file"
 GLIMPSE_MODEL=folder run 0 classify "$BLOB" && out_has "folder:1"
 
 # ---- stream ----
