@@ -268,7 +268,8 @@ grpc::Status GlimpseService::StreamClassify(grpc::ServerContext* ctx,
       // in an OK with nothing decided.
       if (session->last().raw_scores.empty())
         return invalid_argument("the scan ended without a decision: its " + std::to_string(session->last().points) +
-                                " points gave no surface to judge (too few, or all on a line)");
+                                (session->last().points == 1 ? " point" : " points") +
+                                " gave no surface to judge (too few, or all on a line)");
       const auto start = options_.clock();
       auto finished = session->finish();
       if (!finished) return finished.error();
