@@ -286,6 +286,20 @@ Expected<Classification> classify_fused(const Model& model, const Cloud& cloud,
     return failed_precondition(std::string("the model was not trained for method '") + method_name(m) + "'");
   if (!point_sensors.empty() && point_sensors.size() != cloud.points.size())
     return invalid_argument("point_sensors must name one sensor per point");
+  // Several views of a filtering model's scan are decided one by one (classify_views.cpp); when none can
+  // be decided alone, the fused scan is.
+  if (model.impl->params.filter_scans && !point_sensors.empty()) {
+    if (const auto views = scan_views(cloud, point_sensors); views.size() > 1) {
+      auto joined = classify_views(model, cloud, point_sensors, views, m, cancel);
+      if (joined.ok() || joined.error().code == ErrorCode::kCancelled) return joined;
+    }
+  }
+  return classify_scan(model, cloud, point_sensors, m, cancel);
+}
+
+Expected<Classification> classify_scan(const Model& model, const Cloud& cloud,
+                                       const std::vector<std::optional<Vec3>>& point_sensors, MethodId m,
+                                       const CancelFn& cancel) {
   const ModelImpl& impl = *model.impl;
   const auto t0 = std::chrono::steady_clock::now();
   if (!impl.params.filter_scans) return classify_filtered(model, cloud, point_sensors, nullptr, {}, m, t0, cancel);

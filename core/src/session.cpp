@@ -194,10 +194,21 @@ Expected<StreamDecision> Session::add(const Cloud& chunk) {
     // ScanFeatures.
     const size_t n = raw_.points.size();
     if (!filters_at_ || double(n) >= (1.0 + params_.global_refresh_growth) * double(filters_at_)) {
+      filters_at_ = n;
+      if (scan_views(raw_, raw_sensors_).size() > 1) {
+        // Several views: Classify's of the scan view by view (classify_fused), repeated by the chunks
+        // until the scan has grown enough to decide it again.
+        filters_change_ = true;
+        classified_ = classify_fused(*model_, raw_, raw_sensors_, method_);
+        classified_points_ = n;
+        if (!classified_.ok()) return last_;
+        last_.keypoints = classified_->keypoints;
+        track(evidence_of(*classified_));
+        return last_;
+      }
       const auto t0 = std::chrono::steady_clock::now();
       ScanFilterReport report;
       const Cloud scan = filter_scan(raw_, impl_.params.filters, &report);
-      filters_at_ = n;
       // A floor or a thinned density changes what every method sees; a few stray points (1 % at most:
       // a sparse top-down prefix's edge) do not, and the chunk-by-chunk features keep them until
       // finish(), which is Classify's of the filtered scan.

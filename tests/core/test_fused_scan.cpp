@@ -1,8 +1,10 @@
 // A scan fused from several sensor positions: each point's normal faces the sensor that saw it
-// (extract_fused), and a stream's final decision over chunks from several sensors is Classify's of the
-// fused scan with each point's own sensor (classify_fused), filtered or not.
+// (extract_fused), a filtering model decides a scan of several views view by view, and a stream's final
+// decision over chunks from several sensors is Classify's of the scan with each point's own sensor
+// (classify_fused), filtered or not.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 
@@ -135,6 +137,48 @@ TEST(ScanSession, TheFinalDecisionOfChunksFromSeveralSensorsFacesEachChunksSenso
   }
 }
 
+// Every model learns single views: a filtering model decides a scan of several views (sensors looking
+// from more than 30 degrees apart) view by view and joins the answers (the mean of their scores), and a
+// second sensor beside the first (20 degrees) is the same view: the scan is decided as one.
+TEST(ClassifyFused, AScanOfSeveralViewsIsDecidedViewByView) {
+  TrainParams p;
+  p.methods = {MethodId::kUSH};
+  p.default_method = MethodId::kUSH;
+  auto model = train(test::synthetic_views(3, 2, 5), p);
+  ASSERT_TRUE(model.ok()) << model.error().message;
+  const TwoSidedScan s = sphere_from_both_sides();
+  std::vector<std::optional<Vec3>> sensors;
+  const Cloud all = fused(s, sensors);
+  auto joined = classify_fused(*model, all, sensors);
+  auto front = classify(*model, s.front), back = classify(*model, s.back);
+  ASSERT_TRUE(joined.ok() && front.ok() && back.ok()) << joined.error().message;
+  ASSERT_EQ(joined->scores.size(), front->scores.size());
+  for (size_t k = 0; k < joined->scores.size(); ++k)
+    EXPECT_EQ(joined->scores[k], front->scores[k] / 2 + back->scores[k] / 2) << k;
+  EXPECT_EQ(joined->points, front->points + back->points);
+  EXPECT_EQ(joined->winner, int(std::max_element(joined->scores.begin(), joined->scores.end()) - joined->scores.begin()));
+
+  // The back's points seen from 20 degrees beside the front's sensor: one view, the fused scan's answer.
+  const Vec3 beside = s.centre + 2.f * Vec3(std::cos(0.35f), std::sin(0.35f), 0.f);
+  std::vector<std::optional<Vec3>> near = sensors;
+  for (size_t i = s.front.points.size(); i < near.size(); ++i) near[i] = beside;
+  Cloud one_view = all;
+  one_view.sensor = beside;
+  auto single = classify_fused(*model, one_view, near);
+  ASSERT_TRUE(single.ok()) << single.error().message;
+  EXPECT_NE(single->scores, joined->scores);
+  EXPECT_EQ(single->points, joined->points);  // ... of the same points, filtered as one cloud
+
+  // A model without filters fuses the points of every view.
+  p.filter_scans = false;
+  auto plain = train(test::synthetic_views(3, 2, 5), p);
+  ASSERT_TRUE(plain.ok());
+  auto fused_scan = classify_fused(*plain, all, sensors);
+  auto plain_front = classify(*plain, s.front), plain_back = classify(*plain, s.back);
+  ASSERT_TRUE(fused_scan.ok() && plain_front.ok() && plain_back.ok());
+  EXPECT_NE(fused_scan->scores[0], plain_front->scores[0] / 2 + plain_back->scores[0] / 2);
+}
+
 // A model that filters its scans decides every chunk on the scan so far, filtered as a whole: each
 // chunk's raw scores are classify_fused's of the points sent so far with their chunks' sensors, whether
 // the filters take nothing (ScanFeatures grown chunk by chunk) or a floor that came last (Classify's of
@@ -158,11 +202,13 @@ TEST(ScanSession, AFilteringModelDecidesEveryChunkOnTheWholeScanSoFar) {
   std::vector<std::optional<Vec3>> sensors;
   size_t decided = 0;
   size_t ground = 0, unfiltered = 0, filtered = 0;  // chunks the filters left alone / changed
+  // The front in chunks; the back (a second view: from then on the scan is decided view by view, again
+  // when it has grown by global_refresh_growth) and its floor one chunk each, so each is decided anew.
   for (const Cloud* half : std::initializer_list<const Cloud*>{&s.front, &s.back, &floor})
-    for (size_t begin = 0; begin < half->points.size(); begin += (half == &floor ? 30000 : 700)) {
+    for (size_t begin = 0, step = half == &s.front ? 350 : 30000; begin < half->points.size(); begin += step) {
       Cloud chunk;
       chunk.sensor = half->sensor;
-      for (size_t i = begin; i < std::min(begin + (half == &floor ? 30000 : 700), half->points.size()); ++i) {
+      for (size_t i = begin; i < std::min(begin + step, half->points.size()); ++i) {
         chunk.points.push_back(half->points[i]);
         so_far.points.push_back(half->points[i]);
         sensors.push_back(half->sensor);

@@ -190,9 +190,14 @@ Expected<Classification> classify(const Model& model, const Cloud& cloud,
                                   const CancelFn& cancel = {});
 
 // A scan fused from several sensor positions (a stream's chunks): point_sensors names, per point, the
-// sensor that saw it (empty: cloud.sensor for all). The model's filters see the whole scan; each point
-// kept then faces its own sensor (a voxel centroid the sensor of the nearest point it came from), as a
-// stream's chunks do. With one sensor for every point this is classify() of the cloud with that sensor.
+// sensor that saw it (empty: cloud.sensor for all). A model that filters its scans (the default)
+// decides a scan of several views view by view: the points whose sensors look from within 30 degrees
+// of one another (seen from the scan's centroid) are one view, each view is classified as a single
+// view (every model learns single views; a cloud of every side of an object is unlike any of them),
+// and the answers are joined (the mean of their scores and novelties). Within a view, and for a model
+// without filters on the whole scan, the filters see all the points and each point kept faces its own
+// sensor (a voxel centroid the sensor of the nearest point it came from). With one sensor for every
+// point this is classify() of the cloud with that sensor.
 Expected<Classification> classify_fused(const Model& model, const Cloud& cloud,
                                         const std::vector<std::optional<Vec3>>& point_sensors,
                                         std::optional<MethodId> method = std::nullopt, const CancelFn& cancel = {});

@@ -24,8 +24,9 @@ struct SessionParams {
   // A model that filters its scans (TrainParams::filter_scans, the default) runs its filters on the
   // accumulated points when the scan grew by global_refresh_growth since they last ran (and on the
   // first chunk with enough points). When they change the scan (a floor, more than 1 % stray returns,
-  // a density above the trained one), that chunk is decided by Classify's of the filtered scan (classify_fused:
-  // each point facing its chunk's sensor; about 0.4 s for 670k points of six 640x480 depth frames with
+  // a density above the trained one), or when the scan holds several views (sensors looking from more
+  // than 30 degrees apart), that chunk is decided by Classify's of the scan (classify_fused: view by
+  // view, each point facing its chunk's sensor; about 0.4 s for 670k points of six 640x480 depth frames with
   // their floor), and the chunks until the next run repeat that decision. Otherwise, and for
   // a model without filters, the features are ScanFeatures' (features.h): the state extract() gives
   // the accumulated points, grown incrementally, duplicates by the rule of clean(). VFH and ESF
