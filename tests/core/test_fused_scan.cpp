@@ -46,6 +46,15 @@ Cloud fused(const TwoSidedScan& s, std::vector<std::optional<Vec3>>& sensors) {
   return all;
 }
 
+// A USH model of the synthetic shapes, with the scan filters or without.
+Expected<Model> ush_model(bool filter_scans = true) {
+  TrainParams p;
+  p.methods = {MethodId::kUSH};
+  p.default_method = MethodId::kUSH;
+  p.filter_scans = filter_scans;
+  return train(test::synthetic_views(3, 2, 5), p);
+}
+
 // Outward share of the valid normals among the points of one half.
 double outward_share(const FeatureState& st, const Vec3& centre, bool front) {
   size_t out = 0, n = 0;
@@ -110,11 +119,7 @@ TEST(ExtractFused, OneSensorIsExtractAndEveryPointNeedsOne) {
 TEST(ScanSession, TheFinalDecisionOfChunksFromSeveralSensorsFacesEachChunksSensor) {
   for (bool filter : {true, false}) {
     SCOPED_TRACE(filter ? "filtered" : "unfiltered");
-    TrainParams p;
-    p.methods = {MethodId::kUSH};
-    p.default_method = MethodId::kUSH;
-    p.filter_scans = filter;
-    auto model = train(test::synthetic_views(3, 2, 5), p);
+    auto model = ush_model(filter);
     ASSERT_TRUE(model.ok()) << model.error().message;
     const auto shared = std::make_shared<const Model>(std::move(*model));
     const TwoSidedScan s = sphere_from_both_sides();
@@ -141,10 +146,7 @@ TEST(ScanSession, TheFinalDecisionOfChunksFromSeveralSensorsFacesEachChunksSenso
 // from more than 30 degrees apart) view by view and joins the answers (the mean of their scores), and a
 // second sensor beside the first (20 degrees) is the same view: the scan is decided as one.
 TEST(ClassifyFused, AScanOfSeveralViewsIsDecidedViewByView) {
-  TrainParams p;
-  p.methods = {MethodId::kUSH};
-  p.default_method = MethodId::kUSH;
-  auto model = train(test::synthetic_views(3, 2, 5), p);
+  auto model = ush_model();
   ASSERT_TRUE(model.ok()) << model.error().message;
   const TwoSidedScan s = sphere_from_both_sides();
   std::vector<std::optional<Vec3>> sensors;
@@ -170,8 +172,7 @@ TEST(ClassifyFused, AScanOfSeveralViewsIsDecidedViewByView) {
   EXPECT_EQ(single->points, joined->points);  // ... of the same points, filtered as one cloud
 
   // A model without filters fuses the points of every view.
-  p.filter_scans = false;
-  auto plain = train(test::synthetic_views(3, 2, 5), p);
+  auto plain = ush_model(false);
   ASSERT_TRUE(plain.ok());
   auto fused_scan = classify_fused(*plain, all, sensors);
   auto plain_front = classify(*plain, s.front), plain_back = classify(*plain, s.back);
@@ -184,10 +185,7 @@ TEST(ClassifyFused, AScanOfSeveralViewsIsDecidedViewByView) {
 // the filters take nothing (ScanFeatures grown chunk by chunk) or a floor that came last (Classify's of
 // the filtered scan). USH is recomputed every chunk, so the two agree bit for bit.
 TEST(ScanSession, AFilteringModelDecidesEveryChunkOnTheWholeScanSoFar) {
-  TrainParams p;
-  p.methods = {MethodId::kUSH};
-  p.default_method = MethodId::kUSH;
-  auto model = train(test::synthetic_views(3, 2, 5), p);
+  auto model = ush_model();
   ASSERT_TRUE(model.ok()) << model.error().message;
   ASSERT_TRUE(model->impl);
   const auto shared = std::make_shared<const Model>(std::move(*model));
