@@ -6,7 +6,7 @@
 // the answers are joined.
 #include <algorithm>
 #include <cmath>
-#include <numeric>
+#include <limits>
 
 #include "model_impl.h"
 
@@ -50,14 +50,16 @@ Expected<Classification> classify_views(const Model& model, const Cloud& cloud,
     if (cancel && cancel()) return cancelled("classification cancelled");
     if (got.ok()) judged.push_back(std::move(*got));  // a view too small or thin to decide gives no evidence
   }
-  const auto can_judge = [](const Classification& c) { return !(c.unknown && !std::isfinite(c.novelty)); };
-  if (std::any_of(judged.begin(), judged.end(), can_judge))
-    std::erase_if(judged, [&](const Classification& c) { return !can_judge(c); });
   if (judged.empty()) return failed_precondition("no view of the scan can be decided alone");
+  const auto by_points = [](const Classification& a, const Classification& b) { return a.points < b.points; };
+  const auto can_judge = [](const Classification& c) { return !(c.unknown && !std::isfinite(c.novelty)); };
+  // No view the method can judge (no keypoint in any): the largest view's answer, unknown and why.
+  if (std::none_of(judged.begin(), judged.end(), can_judge))
+    return std::move(*std::max_element(judged.begin(), judged.end(), by_points));
+  std::erase_if(judged, [&](const Classification& c) { return !can_judge(c); });
   if (judged.size() == 1) return std::move(judged.front());
-  const auto largest = std::max_element(judged.begin(), judged.end(),
-                                        [](const Classification& a, const Classification& b) { return a.points < b.points; });
-  Classification out = *largest;  // method, categories; the size judged on the largest view (its warning)
+  // The method and categories, and the size judged on the largest view (its warning).
+  Classification out = *std::max_element(judged.begin(), judged.end(), by_points);
   const size_t n_cat = out.scores.size();
   const bool novelty = std::all_of(judged.begin(), judged.end(),
                                    [&](const Classification& c) { return c.category_novelty.size() == n_cat; });

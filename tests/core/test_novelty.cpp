@@ -207,6 +207,14 @@ TEST(Novelty, AKeypointMethodWithNoKeypointCannotJudge) {
   EXPECT_GE(c->winner, 0);
   ASSERT_TRUE(set_known_acceptance(s.model, *c, 1.0).ok());  // no operating point makes it judge
   EXPECT_TRUE(c->unknown);
+  // Seen from above and from below (two views, decided apart): neither can be judged, nor can the scan.
+  std::vector<std::optional<Vec3>> sensors(plane.points.size(), Vec3(0.15f, 0.15f, 2.f));
+  for (size_t i = 0; i < sensors.size(); i += 2) sensors[i] = Vec3(0.15f, 0.15f, -2.f);
+  auto both = classify_fused(s.model, plane, sensors, MethodId::kBoK);
+  ASSERT_TRUE(both.ok()) << both.error().message;
+  EXPECT_TRUE(both->unknown);
+  EXPECT_TRUE(std::isnan(both->novelty));
+  EXPECT_NE(both->unknown_reason.find("bok cannot judge"), std::string::npos) << both->unknown_reason;
 }
 
 TEST(Novelty, TrainingRejectsAnImpossibleKnownAcceptanceOrPrefix) {
