@@ -37,6 +37,8 @@ Expected<Cloud> ReadInput(const std::string& file, const ClassifyOptions& o) {
   if (Status s = ApplySensor(*loaded, o.sensor, file); !s.ok()) return s.error();
   if (loaded->is_mesh)
     return MeshFileView(file, o.placement, o.protocol, o.whole ? std::nullopt : std::optional<int>(o.view));
+  if (o.view_given)
+    PrintError("classify " + file, "warning: --view and --whole are for meshes; a cloud file is sent as it is");
   RemoveNonFinite(loaded->cloud);
   if (Status s = PlaceCloud(loaded->cloud, o.placement, file); !s.ok()) return s.error();
   return std::move(loaded->cloud);

@@ -47,6 +47,7 @@ struct ClassifyOptions {
   ProtocolOptions protocol;  // meshes: samples, seed
   int view = 0;              // meshes: the paper's viewpoint (0-5) of the single view sent
   bool whole = false;        // meshes: the whole sampled cloud instead of a view
+  bool view_given = false;   // --view or --whole was given (a cloud file, sent as it is, is warned)
   std::optional<Vec3> sensor;  // clouds: the sensor position, replacing the file's (a PCD's identity
                                // VIEWPOINT reads as "no sensor"; --sensor 0,0,0 says it is at the origin)
   bool json = false;         // one JSON object per file, errors included

@@ -210,7 +210,10 @@ int Main(int argc, char** argv) {
   AddSensorOption(*classify, c.sensor);
   AddProtocolOptions(*classify, c.protocol, false);
   AddPlacementOptions(*classify, c.placement, false, true);
-  classify->callback([&] { run = [&] { return RunClassify(conn, c); }; });
+  classify->callback([&, view] {
+    c.view_given = view->count() > 0 || c.whole;
+    run = [&] { return RunClassify(conn, c); };
+  });
 
   // stream
   auto* stream = app.add_subcommand("stream", "simulate a scanner: reveal one view in chunks over StreamClassify, or "

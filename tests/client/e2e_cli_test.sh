@@ -221,6 +221,7 @@ run 0 classify "$GLIMPSE_TEST_TMP/blob_mm.xyz" --model folder && err_has "warnin
 run 0 classify "$GLIMPSE_TEST_TMP/blob_mm.xyz" --model folder --unit mm && out_has "blob_mm\.xyz +blob "
 [[ -s "$ERR" ]] && fail "a cloud given its unit warned"
 run 1 classify "$BLOB" --model folder --height 2 && err_has "s2\.xyz: INVALID_ARGUMENT: --height scales meshes"
+run 0 classify "$BLOB" --model folder --view 2 && err_has "s2\.xyz: warning: --view and --whole are for meshes"
 run 1 classify "$DATA" --model folder && err_has "$DATA: INVALID_ARGUMENT: is a folder, not a file"
 # A cloud the server refuses in a batch is named by its file, not by its place among the clouds sent.
 { cat "$BLOB"; echo "1e30 0 0"; } >"$GLIMPSE_TEST_TMP/far.xyz"
