@@ -200,21 +200,17 @@ Expected<StreamDecision> Session::add(const Cloud& chunk) {
         // until the scan has grown enough to decide it again.
         filters_change_ = true;
         classified_ = classify_fused(*model_, raw_, raw_sensors_, method_);
-        classified_points_ = n;
-        if (!classified_.ok()) return last_;
-        last_.keypoints = classified_->keypoints;
-        track(evidence_of(*classified_));
-        return last_;
+      } else {
+        const auto t0 = std::chrono::steady_clock::now();
+        ScanFilterReport report;
+        const Cloud scan = filter_scan(raw_, impl_.params.filters, &report);
+        // A floor or a thinned density changes what every method sees; a few stray points (1 % at most:
+        // a sparse top-down prefix's edge) do not, and the chunk-by-chunk features keep them until
+        // finish(), which is Classify's of the filtered scan.
+        filters_change_ = report.ground > 0 || report.voxel_m > 0 || double(report.outliers) > 0.01 * double(report.input);
+        if (filters_change_) classified_ = classify_filtered(*model_, raw_, raw_sensors_, &scan, report, method_, t0);
       }
-      const auto t0 = std::chrono::steady_clock::now();
-      ScanFilterReport report;
-      const Cloud scan = filter_scan(raw_, impl_.params.filters, &report);
-      // A floor or a thinned density changes what every method sees; a few stray points (1 % at most:
-      // a sparse top-down prefix's edge) do not, and the chunk-by-chunk features keep them until
-      // finish(), which is Classify's of the filtered scan.
-      filters_change_ = report.ground > 0 || report.voxel_m > 0 || double(report.outliers) > 0.01 * double(report.input);
-      if (filters_change_) {  // Classify's of the filtered scan
-        classified_ = classify_filtered(*model_, raw_, raw_sensors_, &scan, report, method_, t0);
+      if (filters_change_) {  // Classify's of the scan
         classified_points_ = n;
         if (!classified_.ok()) return last_;  // undecided: too few points, nothing but floor, a line
         last_.keypoints = classified_->keypoints;
