@@ -48,6 +48,7 @@ Expected<Chi2Logistic> fit_chi2_logistic(const Eigen::MatrixXd& features, const 
   if (features.rows() != static_cast<Eigen::Index>(labels.size()) || features.rows() < 2 || features.cols() < 1)
     return invalid_argument("the logistic decision needs at least 2 labelled training rows");
   if (!(params.c > 0)) return invalid_argument("the logistic decision's C must be positive");
+  if (!(params.tolerance > 0)) return invalid_argument("the logistic decision's tolerance must be positive");
   std::vector<int> seen(static_cast<size_t>(categories), 0);
   for (int l : labels) {
     if (l < 0 || l >= categories) return internal_error("a training label is out of range");
@@ -88,7 +89,7 @@ Expected<Chi2Logistic> fit_chi2_logistic(const Eigen::MatrixXd& features, const 
   }
   parameter param{};
   param.solver_type = L2R_LR;
-  param.eps = 1e-4;
+  param.eps = params.tolerance;
   param.C = params.c;
 
   Chi2Logistic head;

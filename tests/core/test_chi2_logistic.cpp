@@ -175,6 +175,9 @@ TEST(Chi2Logistic, Errors) {
   Chi2LogisticParams zero;
   zero.c = 0;
   EXPECT_FALSE(fit_chi2_logistic(t.features, t.labels, 3, zero).ok());
+  Chi2LogisticParams no_tolerance;
+  no_tolerance.tolerance = 0;
+  EXPECT_FALSE(fit_chi2_logistic(t.features, t.labels, 3, no_tolerance).ok());
   std::vector<int> bad = t.labels;
   bad[0] = 9;
   EXPECT_FALSE(fit_chi2_logistic(t.features, bad, 3, {}).ok());

@@ -987,10 +987,11 @@ TEST(RunEvaluation, ReducedProtocolOnShrec) {
   // known views settle "unknown": the threshold is the ideal views', no longer widened by the cameras').
   // Novelty adding its two evidences (format 9): 95.3 % settled, 95.1 % right, at 11.9 % visible.
   // Settling cautious both ways (stop 42): 94.0 % settled, 97.9 % right, at 12.5 % visible. The cameras'
-  // views at the model's one density (stop 47): 94.0 %, 97.9 %, at 12.0 % visible.
+  // views at the model's one density (stop 47): 94.0 %, 97.9 %, at 12.0 % visible. The logistic fit's
+  // tolerance 1e-3 (stop 50): 94.0 %, 97.9 %, at 12.1 % visible.
   EXPECT_GE(settled.settled_percent(), 93.0);    // measured 94.0 (141 of 150 views; 95.3 before)
   EXPECT_GE(settled.precision_percent(), 97.5);  // measured 97.9 (138 of 141; 95.1 before)
-  EXPECT_LE(settled.mean_visible_percent, 12.5); // measured 12.0 (12.5 before stop 47, 11.9 before)
+  EXPECT_LE(settled.mean_visible_percent, 12.5); // measured 12.1 (12.0 before stop 50, 12.5 before stop 47, 11.9 before)
   std::cout << "shrec reduced: full fusion " << accuracy(r->decisions, "full", MethodId::kFusion).percent()
             << " %, 20 % fusion " << accuracy(r->decisions, "20%", MethodId::kFusion).percent() << " %, full BoK "
             << accuracy(r->decisions, "full", MethodId::kBoK).percent() << " %; streams settled "
