@@ -12,7 +12,7 @@ namespace glimpse {
 namespace {
 
 // 1500 histograms of 20 bins in 3 categories, 5 rows per object: more than one tile of references
-// (512 rows) and a last pass of fewer than its 8 queries.
+// (512 rows) and a last pass of fewer than its 32 queries.
 struct Rows {
   Eigen::MatrixXd h;
   std::vector<int> labels, objects;
