@@ -14,6 +14,7 @@
 #include "glimpse/features.h"
 #include "glimpse/model.h"
 #include "glimpse/neighbourhoods.h"
+#include "glimpse/preprocess.h"
 #include "glimpse/scan_filters.h"
 #include "model_impl.h"
 
@@ -210,6 +211,13 @@ void judge_unknown(const Model& model, const MethodDecision& decision, const Clo
   (void)set_known_acceptance(model, c, 0);  // 0 (the default) is always valid
 }
 
+void judge_cloud(const Model& model, const MethodDecision& decision, const CloudFeatures& f, const Cloud& points,
+                 Classification& c) {
+  c.warning = size_warning(model.stats, points);
+  c.outside_learnt_sizes = !c.warning.empty();
+  judge_unknown(model, decision, f, c);
+}
+
 Status set_known_acceptance(const Model& model, Classification& c, double known_acceptance) {
   if (!(known_acceptance >= 0 && known_acceptance <= 1))
     return invalid_argument("known acceptance must be in (0, 1] (0: the model's default), not " +
@@ -269,6 +277,21 @@ std::vector<std::optional<Vec3>> sensors_after_filters(const Cloud& filtered, co
   return out;
 }
 
+// classify_fused once the points are clean.
+Expected<Classification> classify_filtering(const Model& model, const Cloud& cloud,
+                                            const std::vector<std::optional<Vec3>>& point_sensors, MethodId m,
+                                            const CancelFn& cancel) {
+  // Several views of a filtering model's scan are decided one by one (classify_views.cpp); when none can
+  // be decided alone, the fused scan is.
+  if (model.impl->params.filter_scans && !point_sensors.empty()) {
+    if (const auto views = scan_views(cloud, point_sensors); views.size() > 1) {
+      auto joined = classify_views(model, cloud, point_sensors, views, m, cancel);
+      if (joined.ok() || joined.error().code == ErrorCode::kCancelled) return joined;
+    }
+  }
+  return classify_scan(model, cloud, point_sensors, m, cancel);
+}
+
 }  // namespace
 
 Expected<Classification> classify(const Model& model, const Cloud& cloud, std::optional<MethodId> method,
@@ -286,15 +309,20 @@ Expected<Classification> classify_fused(const Model& model, const Cloud& cloud,
     return failed_precondition(std::string("the model was not trained for method '") + method_name(m) + "'");
   if (!point_sensors.empty() && point_sensors.size() != cloud.points.size())
     return invalid_argument("point_sensors must name one sensor per point");
-  // Several views of a filtering model's scan are decided one by one (classify_views.cpp); when none can
-  // be decided alone, the fused scan is.
-  if (model.impl->params.filter_scans && !point_sensors.empty()) {
-    if (const auto views = scan_views(cloud, point_sensors); views.size() > 1) {
-      auto joined = classify_views(model, cloud, point_sensors, views, m, cancel);
-      if (joined.ok() || joined.error().code == ErrorCode::kCancelled) return joined;
-    }
+  if (model.impl->params.filter_scans) {
+    // The filters meet the points a session keeps (Session::add_raw): non-finite points and duplicates
+    // out first, so a stray point copied many times (a depth camera's invalid pixels) is still a stray
+    // point, and a scan streamed ends as the same scan classified whole.
+    Cloud kept;
+    kept.sensor = cloud.sensor;
+    std::vector<std::optional<Vec3>> kept_sensors;
+    DuplicateFilter duplicates(model.impl->params.features.duplicate_tolerance_m, cloud.points.size());
+    clean_into(cloud, point_sensors, duplicates, kept, point_sensors.empty() ? nullptr : &kept_sensors);
+    // Nothing finite: the features' own error says how many points were NaN/Inf.
+    if (!kept.points.empty() && kept.points.size() < cloud.points.size())
+      return classify_filtering(model, kept, kept_sensors, m, cancel);
   }
-  return classify_scan(model, cloud, point_sensors, m, cancel);
+  return classify_filtering(model, cloud, point_sensors, m, cancel);
 }
 
 Expected<Classification> classify_scan(const Model& model, const Cloud& cloud,
@@ -347,9 +375,7 @@ Expected<Classification> classify_filtered(const Model& model, const Cloud& clou
   c.categories = model.categories;
   c.scores.assign(scores.data(), scores.data() + scores.size());
   c.winner = argmax(scores);
-  c.warning = size_warning(model.stats, points);  // after the filters: a stray point is not the object's size
-  c.outside_learnt_sizes = !c.warning.empty();
-  judge_unknown(model, decision, *f, c);
+  judge_cloud(model, decision, *f, points, c);  // after the filters: a stray point is not the object's size
   c.points = f->points;
   c.keypoints = f->positions.size();
   c.filters = report;

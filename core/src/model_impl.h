@@ -207,7 +207,13 @@ Eigen::VectorXd category_novelty(const Calibration& c, const std::vector<Nearest
 Eigen::VectorXd joint_novelty(const Eigen::VectorXd& whole, const Eigen::VectorXd& prefix);
 // novelty, unknown and unknown_reason of `c` (its method and winner set) from `decision` on `f`, at the
 // model's default operating point: what classify answers (the lab and sessions' final answer share it).
+// The codebook sizes a model can be trained with and read back (train refuses, the reader fails, alike).
+Status check_codebook_sizes(const TrainParams& params);
 void judge_unknown(const Model& model, const MethodDecision& decision, const CloudFeatures& f, Classification& c);
+// judge_unknown after the size rule: warning and outside_learnt_sizes from `points`, the cloud decided
+// (after the filters), as classify and a session's final answer judge it.
+void judge_cloud(const Model& model, const MethodDecision& decision, const CloudFeatures& f, const Cloud& points,
+                 Classification& c);
 // Why `method` cannot judge the features at all (a keypoint method with no keypoint); empty if it can.
 std::string cannot_judge(MethodId method, const std::vector<MethodId>& components, const CloudFeatures& f);
 

@@ -235,8 +235,7 @@ Expected<StreamDecision> Session::add(const Cloud& chunk) {
 }
 
 void Session::add_raw(const Cloud& chunk) {
-  for (const Vec3& p : chunk.points)
-    if (p.allFinite() && duplicates_.keep(p)) raw_.points.push_back(p), raw_sensors_.push_back(chunk.sensor);
+  clean_into(chunk, {}, duplicates_, raw_, &raw_sensors_);
   if (chunk.sensor) raw_.sensor = chunk.sensor;
 }
 
@@ -267,19 +266,22 @@ Expected<StreamDecision> Session::finish() {
     // The final decision is Classify's of the accumulated scan (filtered as a whole, each point facing
     // its chunk's sensor): the last chunk's, tracked once more.
     const Expected<Classification>& got = classify_so_far();
-    if (!got.ok()) return last_;
+    // Classify of the whole scan fails (the filters left too few points): so does the scan, never an
+    // answer that is not final.
+    if (!got.ok()) return Error{got.error().code, "the whole scan: " + got.error().message};
     last_.points = got->points;
     last_.keypoints = got->keypoints;
     track(evidence_of(*got));
     c = *got;
   } else {
-    if (!features_.ready()) return last_;
-    if (!update_method_features(true) && !have_features_) return last_;
+    if (!features_.ready() || (!update_method_features(true) && !have_features_))
+      return invalid_argument("the scan ended without a decision: its " + std::to_string(features_.points()) +
+                              " points gave no surface to judge (too few, or all on a line)");
     last_.keypoints = method_features_.positions.size();
     decide();
     c.method = method_;
     c.winner = static_cast<int>(std::max_element(last_.raw_scores.begin(), last_.raw_scores.end()) - last_.raw_scores.begin());
-    judge_unknown(*model_, method_decision_, method_features_, c);
+    judge_cloud(*model_, method_decision_, method_features_, features_.state().cloud, c);
   }
   // The scan is over: the answer is Classify's of the whole scan (at the session's operating point),
   // not the running average.

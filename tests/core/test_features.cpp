@@ -606,6 +606,17 @@ TEST(Clean, AChunkedScanKeepsWhatItsWholeCloudKeeps) {
   }
 }
 
+TEST(Clean, WithoutToleranceEveryCopyOfAKeptPointGoes) {
+  // Two distinct points closer than any grid's cell, the second sent three times, and -0 as 0.
+  const float a = 0.5f, b = std::nextafter(0.5f, 1.f);
+  CleanReport report;
+  const Cloud kept = clean({{Vec3(a, 0, 0), Vec3(b, 0, 0), Vec3(b, 0, 0), Vec3(b, 0, 0), Vec3(0, -0.f, 0), Vec3(0, 0, 0)},
+                            std::nullopt},
+                           0.f, &report);
+  EXPECT_EQ(kept.points, (Points{Vec3(a, 0, 0), Vec3(b, 0, 0), Vec3(0, -0.f, 0)}));
+  EXPECT_EQ(report.duplicates, 3u);
+}
+
 TEST(Hull, VolumeOfACubeAndAFlatSet) {
   const Points cube = test::cube(0.5f, 0.05f);
   EXPECT_NEAR(convex_hull_volume(cube), 0.125, 1e-4);

@@ -224,6 +224,83 @@ TEST(ScanSession, FinishedStreamScoresAreClassifysOfTheWholeCloud) {
   }
 }
 
+// A depth camera writes its invalid pixels as copies of one point: a stray point copied 3000 times is
+// still one stray point, streamed or classified whole (both clean the points before the scan filters),
+// and the answer is that of the scan with the stray point once.
+TEST(ScanSession, AStrayPointCopiedManyTimesIsOneStrayPointStreamedOrWhole) {
+  const auto& model = fixed_radius_model();
+  ASSERT_TRUE(model);
+  const TrainingCloud view = test::synthetic_views(1, 1, 81)[0];
+  std::vector<Cloud> chunks = chunks_of(view.cloud, 6, Order::kTopDown, 3);
+  const Vec3 stray = bounds(view.cloud.points).max + Vec3(0.3f, 0.3f, 0.3f);
+  Cloud once = concatenated(chunks);
+  once.points.push_back(stray);
+  chunks.back().points.insert(chunks.back().points.end(), 3000, stray);
+  ASSERT_GT(3000u, view.cloud.points.size());  // more copies than points: the spacing's median is 0
+  auto whole = classify(*model, concatenated(chunks), MethodId::kFusion);
+  ASSERT_TRUE(whole.ok()) << whole.error().message;
+  auto single = classify(*model, once, MethodId::kFusion);
+  ASSERT_TRUE(single.ok()) << single.error().message;
+  EXPECT_GE(whole->filters.outliers, 1u);  // was 0: the copies were the stray point's neighbours
+  EXPECT_EQ(whole->filters.outliers, single->filters.outliers);
+  EXPECT_EQ(whole->scores, single->scores);
+  const StreamDecision d = stream(model, chunks, MethodId::kFusion, true);
+  EXPECT_TRUE(d.final);
+  EXPECT_EQ(d.points, whole->points);
+  EXPECT_EQ(d.raw_scores, whole->scores);
+  EXPECT_EQ(d.unknown, whole->unknown);
+}
+
+// A scan whose chunks were decided but whose whole cloud Classify refuses (a view beside a cluster 70 m
+// away: the density filter's leaf follows the scan's extent and leaves too few points) ends in
+// Classify's error, never in an answer that is not final.
+TEST(ScanSession, AScanClassifyRefusesEndsInClassifysError) {
+  const auto& model = fixed_radius_model();
+  ASSERT_TRUE(model);
+  const Cloud view = test::synthetic_views(1, 1, 81)[0].cloud;
+  Cloud near, far;
+  near.sensor = far.sensor = view.sensor;
+  near.points.assign(view.points.begin(), view.points.begin() + 100);
+  for (int i = 0; i < 20; ++i)
+    for (int j = 0; j < 20; ++j) far.points.emplace_back(70.f + 0.01f * float(i), 0.01f * float(j), 0.f);
+  auto whole = classify(*model, concatenated({near, far}), MethodId::kFusion);
+  ASSERT_FALSE(whole.ok()) << "the scene no longer fails Classify: make another";
+  SessionParams sp;
+  sp.method = MethodId::kFusion;
+  auto session = *ScanSession::create(model, sp);
+  auto first = session->add(near);
+  ASSERT_TRUE(first.ok()) << first.error().message;
+  ASSERT_FALSE(session->last().raw_scores.empty());  // the first chunk was decided
+  ASSERT_TRUE(session->add(far).ok());
+  auto finished = session->finish();
+  ASSERT_FALSE(finished.ok()) << "final " << finished->final;
+  EXPECT_EQ(finished.error().code, whole.error().code);
+  EXPECT_NE(finished.error().message.find(whole.error().message), std::string::npos) << finished.error().message;
+}
+
+// A model that does not filter scans (one written before the filters) ends a stream as Classify does
+// too: a view in millimetres is unknown by its size, with Classify's reason.
+TEST(ScanSession, AnUnfilteredModelsStreamEndsUnknownBySizeAsClassifySays) {
+  TrainParams p;
+  p.methods = {MethodId::kUSH, MethodId::kVFH, MethodId::kFusion};
+  p.filter_scans = false;
+  auto trained = train(test::synthetic_views(4, 2, 11), p);
+  ASSERT_TRUE(trained.ok()) << trained.error().message;
+  const auto model = std::make_shared<const Model>(std::move(*trained));
+  Cloud mm = test::synthetic_views(1, 1, 83)[0].cloud;
+  for (Vec3& q : mm.points) q *= 1000.f;
+  if (mm.sensor) *mm.sensor *= 1000.f;
+  const std::vector<Cloud> chunks = chunks_of(mm, 2, Order::kTopDown, 7);
+  auto whole = classify(*model, concatenated(chunks));
+  ASSERT_TRUE(whole.ok()) << whole.error().message;
+  ASSERT_TRUE(whole->unknown);
+  const StreamDecision d = stream(model, chunks, MethodId::kFusion, true);
+  EXPECT_TRUE(d.final);
+  EXPECT_TRUE(d.unknown);
+  EXPECT_EQ(d.unknown_reason, whole->unknown_reason);
+  EXPECT_EQ(d.unknown_reason.find("size far outside what the model learnt"), 0u) << d.unknown_reason;
+}
+
 // A model of balls and boxes: a streamed can and a 2 m wavy sheet end unknown exactly when Classify says
 // so, at the stream's own operating point; the sheet, like nothing learnt, is unknown and settles so.
 TEST(ScanSession, AStreamOfSomethingNeverLearntEndsAsClassifySaysAtItsOperatingPoint) {
@@ -332,9 +409,9 @@ TEST(ScanSession, ALineStaysUndecided) {
     EXPECT_EQ(d->winner, -1) << "chunk " << k;  // no surface, nothing to judge: no winner
     EXPECT_FALSE(d->settled);
   }
-  auto end = session->finish();
-  ASSERT_TRUE(end.ok());
-  EXPECT_EQ(end->winner, -1);
+  auto end = session->finish();  // Classify of a line has nothing to judge: the scan ends in its error
+  ASSERT_FALSE(end.ok());
+  EXPECT_EQ(end.error().code, ErrorCode::kInvalidArgument) << end.error().message;
 }
 
 TEST(ScanSession, LimitsAndBadInput) {

@@ -4,6 +4,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "glimpse/cloud.h"
@@ -19,7 +20,7 @@ struct CleanReport {
 };
 
 // The duplicate rule: a point is a duplicate when it falls in the grid cell (of `tolerance_m`) of a
-// point kept before it; with tolerance 0 only a point equal to that earlier one is. Remembers the kept
+// point kept before it; with tolerance 0 when it equals a point kept before it. Remembers the kept
 // points' cells, so a scan fed chunk by chunk keeps exactly the points its whole cloud keeps.
 class DuplicateFilter {
  public:
@@ -31,7 +32,6 @@ class DuplicateFilter {
  private:
   void grow();
   float tolerance_;
-  float cell_;
   int bits_ = 4;
   std::vector<uint32_t> slots_;  // open addressing, linear probing: slot -> kept point
   std::vector<CellKey> cells_;   // per kept point
@@ -41,5 +41,11 @@ class DuplicateFilter {
 // Drops NaN/Inf points and duplicates (DuplicateFilter, first one kept). Order of the kept points is
 // preserved; the sensor is kept.
 Cloud clean(const Cloud& cloud, float duplicate_tolerance_m, CleanReport* report = nullptr);
+
+// clean()'s rule on a scan whose points may carry their own sensors: appends the finite points `filter`
+// keeps to `out` and, when `out_sensors` is given, each one's sensor (point_sensors[i], or the cloud's
+// when point_sensors is empty). One filter fed chunk by chunk keeps what the whole scan would.
+void clean_into(const Cloud& cloud, const std::vector<std::optional<Vec3>>& point_sensors, DuplicateFilter& filter,
+                Cloud& out, std::vector<std::optional<Vec3>>* out_sensors);
 
 }  // namespace glimpse

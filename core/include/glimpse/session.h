@@ -129,7 +129,8 @@ class ScanSession {
   virtual Expected<StreamDecision> add(const Cloud& chunk) = 0;
   // The scanner is done: every feature brought up to date on the whole scan (VFH and ESF too), so the
   // raw scores are Classify's of the accumulated cloud, and the final decision's scores and winner are
-  // those raw scores and their argmax (Classify's answer), not the running average.
+  // those raw scores and their argmax (Classify's answer), not the running average. Where Classify of
+  // the whole scan fails (too few points, after the filters), finish fails with its error.
   virtual Expected<StreamDecision> finish() = 0;
   virtual const StreamDecision& last() const = 0;
 };
