@@ -262,6 +262,8 @@ grpc::Status GlimpseService::StreamClassify(grpc::ServerContext* ctx,
     }
     if (ticket->expired()) return StreamTooLong(options_.limits);
     if (ctx->IsCancelled()) return cancelled("the caller cancelled the stream");
+    // A stream closed before its first chunk asked nothing: an error, not an OK with nothing decided.
+    if (!session && !caller_left) return invalid_argument("the stream ended before its first chunk: nothing to classify");
     // The scanner is done (WritesDone): the final answer, every feature on the whole scan, is Classify's.
     if (session && !caller_left) {
       // A scan that never gave a decision ends in an error, as Classify's of too few points does, not

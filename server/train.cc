@@ -80,6 +80,12 @@ Expected<ModelRecord> TrainAndStore(const TrainInput& input, const Engine& engin
   (void)google::protobuf::util::MessageToJsonString(used, &row.params);
   row.blob = engine.serialize(*model);
   if (row.blob.empty()) return internal_error("serialized model is empty");
+  // A model stored becomes the name's default: one that would not read back would break every Classify of
+  // the name, so it is read back before it is stored.
+  if (engine.deserialize) {
+    if (auto back = engine.deserialize(row.blob); !back)
+      return internal_error("the trained model does not read back (" + back.error().message + "); nothing was stored");
+  }
   return store.Put(row);
 }
 

@@ -52,6 +52,21 @@ Cloud training_view(const Cloud& cloud, const TrainParams& params, uint64_t salt
   return rotate_about_centroid(cloud, random_tilt(z ^ (z >> 31), params.tilt_deg));
 }
 
+Status check_codebook_sizes(const TrainParams& p) {
+  auto within = [](int v, int lo, int hi, const char* name) -> Status {
+    if (v >= lo && v <= hi) return {};
+    return invalid_argument(std::string(name) + " must be in [" + std::to_string(lo) + ", " + std::to_string(hi) +
+                            "], not " + std::to_string(v));
+  };
+  for (Status s : {within(p.bok_clusters, 2, 100000, "bok_clusters (bok_codebook_size)"),
+                   within(p.bog_keypoint_clusters, 2, 40, "bog_keypoint_clusters"),
+                   within(p.bog_volume_clusters, 1, 1000, "bog_volume_clusters"),
+                   within(p.kgh_clusters, 2, 1000, "kgh_clusters (kgh_keypoint_clusters)"),
+                   within(p.kgh_distance_bins, 1, 10000, "kgh_distance_bins")})
+    if (!s.ok()) return s;
+  return {};
+}
+
 namespace {
 
 template <class Sample>
@@ -64,10 +79,7 @@ Status validate(const std::vector<Sample>& data, const TrainParams& params) {
   for (const auto& d : data) categories.insert(d.category);
   if (categories.size() < 2)
     return failed_precondition("training needs at least 2 categories; got only '" + *categories.begin() + "'");
-  if (params.bok_clusters < 2 || params.bog_keypoint_clusters < 2 || params.kgh_clusters < 2 ||
-      params.bog_volume_clusters < 1 || params.kgh_distance_bins < 1)
-    return invalid_argument("codebook sizes must be at least 2 clusters (and 1 volume cluster / distance bin)");
-  if (params.bog_keypoint_clusters > 40) return invalid_argument("bog_keypoint_clusters above 40 is not supported");
+  if (Status s = check_codebook_sizes(params); !s.ok()) return s;
   if (!(params.known_acceptance > 0 && params.known_acceptance <= 1))
     return invalid_argument("known_acceptance must be in (0, 1]");
   if (!(params.novelty_prefix >= 0 && params.novelty_prefix <= 1))

@@ -198,11 +198,7 @@ std::shared_ptr<ModelImpl> read_impl(Reader& r, uint32_t ncat, uint32_t version,
   p.methods = read_methods(r);
   p.default_method = static_cast<MethodId>(r.u8("default method"));
   p.fusion_of = read_methods(r);
-  const int max_clusters = 100000;
-  if (p.bok_clusters < 2 || p.bok_clusters > max_clusters || p.bog_keypoint_clusters < 2 ||
-      p.bog_keypoint_clusters > 40 || p.kgh_clusters < 2 || p.kgh_clusters > 1000 || p.kgh_distance_bins < 1 ||
-      p.kgh_distance_bins > 10000 || p.bog_volume_clusters < 1 || p.bog_volume_clusters > 1000)
-    r.fail("codebook sizes out of range");
+  if (Status s = check_codebook_sizes(p); !s.ok()) r.fail("codebook sizes out of range: " + s.error().message);
   auto used = [&](MethodId m) {
     for (MethodId q : p.methods)
       if (q == m) return true;

@@ -169,6 +169,13 @@ TEST(Train, Errors) {
   auto tiny = train(data, small_params());
   ASSERT_FALSE(tiny.ok());
   EXPECT_NE(tiny.error().message.find(data[2].object_id), std::string::npos) << tiny.error().message;
+  // Codebook sizes the model's reader would refuse are refused before training, not stored unreadable.
+  TrainParams big = small_params();
+  big.kgh_clusters = 1001;
+  auto unreadable = train(test::synthetic_views(2, 1, 3), big);
+  ASSERT_FALSE(unreadable.ok());
+  EXPECT_EQ(unreadable.error().code, ErrorCode::kInvalidArgument);
+  EXPECT_NE(unreadable.error().message.find("kgh_clusters"), std::string::npos) << unreadable.error().message;
   std::vector<TrainingProgress> seen;
   auto cancelled = train(test::synthetic_views(2, 1, 3), small_params(), [&](const TrainingProgress& p) { seen.push_back(p); },
                          [] { return true; });

@@ -26,6 +26,7 @@ struct FakeBehaviour {
   std::optional<Error> train_error;
   std::optional<Error> classify_error;
   std::optional<Error> session_error;
+  std::optional<Error> deserialize_error;  // a stored (or just trained) model that does not read back
   bool classify_throws = false;
   bool train_waits_for_cancel = false;  // loops until the CancelFn says stop, then returns kCancelled
   std::atomic<int> deserialize_calls{0};
@@ -196,6 +197,7 @@ inline Engine FakeEngine(FakeBehaviour* b) {
   e.serialize = [](const Model& m) { return FakeSerialize(m); };
   e.deserialize = [b](std::span<const uint8_t> bytes) {
     ++b->deserialize_calls;
+    if (b->deserialize_error) return Expected<Model>(*b->deserialize_error);
     return FakeDeserialize(bytes);
   };
   e.create_session = [b](std::shared_ptr<const Model> model,

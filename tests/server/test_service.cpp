@@ -177,6 +177,24 @@ TEST(Train, CoreErrorsMapThroughToGrpcStatus) {
   EXPECT_TRUE(h.store->List()->empty());
 }
 
+// A model stored becomes its name's default: one that would not read back (codebook sizes the reader
+// refuses) would break every Classify of the name, so Train reads it back first and stores nothing.
+TEST(Train, AModelThatDoesNotReadBackIsNotStored) {
+  Harness h;
+  v1::TrainProgress last;
+  ASSERT_TRUE(h.Train("m", {"a", "b"}, &last).ok());
+  h.behaviour.deserialize_error = data_loss("corrupt model: codebook sizes out of range");
+  const grpc::Status s = h.Train("m", {"a", "b"}, &last);
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::INTERNAL);
+  EXPECT_NE(s.error_message().find("does not read back"), std::string::npos) << s.error_message();
+  EXPECT_NE(s.error_message().find("nothing was stored"), std::string::npos) << s.error_message();
+  h.behaviour.deserialize_error.reset();
+  EXPECT_EQ(h.store->List()->size(), 1u);
+  v1::ClassifyResponse r;
+  ASSERT_TRUE(Classify(h, ClassifyReq("m", 10), &r).ok());
+  EXPECT_EQ(r.model().version(), 1u);
+}
+
 TEST(Train, DeadlineStopsTrainingAndStoresNothing) {
   Harness h;
   h.behaviour.train_waits_for_cancel = true;
@@ -258,7 +276,7 @@ TEST(Classify, ScoresEveryCategoryWithTheDefaultVersion) {
   ASSERT_TRUE(Classify(h, req, &again).ok());
   EXPECT_EQ(again.method(), v1::METHOD_BOK);
   EXPECT_EQ(again.timings().model_load_ms(), 0);  // cached
-  EXPECT_EQ(h.behaviour.deserialize_calls, 1);
+  EXPECT_EQ(h.behaviour.deserialize_calls, 2);  // Train read it back before storing it; the first Classify
 }
 
 TEST(Classify, NamedVersionAndSetDefaultChooseTheModel) {
@@ -562,6 +580,10 @@ TEST(StreamClassify, Errors) {
   EXPECT_EQ(undecided.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
   EXPECT_NE(undecided.error_message().find("the scan ended without a decision: its 0 points"), std::string::npos)
       << undecided.error_message();
+  // So is a stream closed before its first chunk.
+  const grpc::Status nothing = run({});
+  EXPECT_EQ(nothing.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(nothing.error_message().find("before its first chunk"), std::string::npos) << nothing.error_message();
   v1::ScanChunk nan = Chunk(10, "m");
   nan.mutable_cloud()->mutable_xyz()->resize(13);
   EXPECT_EQ(run({nan}).error_code(), grpc::StatusCode::INVALID_ARGUMENT);
