@@ -2,6 +2,7 @@
 // io_off.cpp (OFF, OBJ), io_ply.cpp and io_pcd.cpp.
 #include "glimpse/io.h"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -32,11 +33,13 @@ Expected<std::string> read_file(const std::string& path) {
 
 bool LineCursor::next(std::string_view& line) {
   if (pos_ >= text_.size()) return false;
-  size_t end = text_.find('\n', pos_);
-  if (end == std::string_view::npos) end = text_.size();
+  // A line ends at "\n", "\r\n" or a lone "\r" (classic Mac files, which would otherwise read as one line).
+  size_t end = pos_;
+  while (end < text_.size() && text_[end] != '\n' && text_[end] != '\r') ++end;
   line = text_.substr(pos_, end - pos_);
-  if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-  pos_ = end < text_.size() ? end + 1 : end;
+  pos_ = end;
+  if (pos_ < text_.size() && text_[pos_] == '\r') ++pos_;
+  if (pos_ < text_.size() && text_[pos_] == '\n' && (pos_ == end || text_[end] == '\r')) ++pos_;
   ++line_no_;
   return true;
 }
@@ -149,8 +152,12 @@ Expected<Cloud> read_xyz(const std::string& path, std::string_view text) {
     bool ok = tok.size() >= 3;
     for (int i = 0; ok && i < 3; ++i) ok = parse_double(tok[i], v[i]);
     if (!ok) {
-      double dummy;
-      if (!seen_data && !parse_double(tok[0], dummy)) {  // a column header such as "x,y,z"
+      // A column header such as "x,y,z": no number in it ("0x10 0 0" is a bad row, not a header).
+      const bool header = std::none_of(tok.begin(), tok.end(), [](std::string_view t) {
+        double v;
+        return parse_double(t, v);
+      });
+      if (!seen_data && header) {
         seen_data = true;
         continue;
       }

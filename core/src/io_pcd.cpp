@@ -52,7 +52,7 @@ Expected<Cloud> read_pcd(const std::string& path, std::string_view text) {
   std::vector<std::string_view> tok;
   std::vector<Field> fields;
   uint64_t width = 0, height = 1, points = 0;
-  bool have_points = false, have_data = false, binary = false;
+  bool have_points = false, have_width = false, have_data = false, binary = false;
   Cloud cloud;
   std::optional<Vec3> commented_sensor;  // "# glimpse_sensor x y z": says "at the origin" too
   auto per_field = [&](size_t ln, auto&& set) -> Status {
@@ -88,8 +88,10 @@ Expected<Cloud> read_pcd(const std::string& path, std::string_view text) {
       st = per_field(ln, [](Field& f, std::string_view t) { return parse_u64(t, f.count) && f.count > 0; });
     } else if (key == "width") {
       if (tok.size() != 2 || !parse_u64(tok[1], width)) return text_error(path, ln, "bad WIDTH");
+      have_width = true;
     } else if (key == "height") {
-      if (tok.size() != 2 || !parse_u64(tok[1], height)) return text_error(path, ln, "bad HEIGHT");
+      if (tok.size() != 2 || !parse_u64(tok[1], height) || height == 0)
+        return text_error(path, ln, "bad HEIGHT (1 for an unorganised cloud)");
     } else if (key == "points") {
       if (tok.size() != 2 || !parse_u64(tok[1], points)) return text_error(path, ln, "bad POINTS");
       have_points = true;
@@ -115,9 +117,13 @@ Expected<Cloud> read_pcd(const std::string& path, std::string_view text) {
     if (!st) return st.error();
   }
   if (!have_data) return text_error(path, lines.line_no(), "missing DATA line (not a PCD file?)");
+  if (have_width && width > kMaxPoints / height) return text_error(path, lines.line_no(), "WIDTH*HEIGHT too large");
   if (!have_points) {
-    if (height != 0 && width > kMaxPoints / height) return text_error(path, lines.line_no(), "WIDTH*HEIGHT too large");
     points = width * height;
+  } else if (have_width && points != width * height) {
+    // Which one is the cloud? PCL refuses the file too; reading either would silently cut or pad it.
+    return text_error(path, lines.line_no(), "POINTS " + std::to_string(points) + " but WIDTH x HEIGHT is " +
+                                                 std::to_string(width * height));
   }
   if (commented_sensor) cloud.sensor = commented_sensor;
   int xyz[3] = {-1, -1, -1};
@@ -170,14 +176,18 @@ Expected<Cloud> read_pcd(const std::string& path, std::string_view text) {
                                                    " points, found " + std::to_string(cloud.points.size()));
     split(line, tok);
     if (tok.empty()) continue;
-    if (tok.size() < column)
-      return text_error(path, lines.line_no(), "expected " + std::to_string(column) + " values");
+    if (tok.size() != column)
+      return text_error(path, lines.line_no(), "expected " + std::to_string(column) + " values (FIELDS and COUNT), found " +
+                                                   std::to_string(tok.size()));
     double v[3];
     for (int a = 0; a < 3; ++a)
       if (!parse_double(tok[fields[xyz[a]].column], v[a]))
         return text_error(path, lines.line_no(), "not a number: '" + std::string(tok[fields[xyz[a]].column]) + "'");
     cloud.points.emplace_back(float(v[0]), float(v[1]), float(v[2]));
   }
+  while (lines.next(line))  // more points than the header says: which count is the cloud's?
+    if (split(line, tok); !tok.empty())
+      return text_error(path, lines.line_no(), "data after the " + std::to_string(points) + " points the header declares");
   return cloud;
 }
 

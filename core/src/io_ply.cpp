@@ -54,7 +54,7 @@ struct Element {
 
 enum class Format { kAscii, kLittle, kBig };
 
-// Reads the body value by value, in ascii (tokens across lines) or binary (either endianness).
+// Reads the body value by value, in ascii (one element item per line) or binary (either endianness).
 class Body {
  public:
   Body(const std::string& path, std::string_view text, size_t start, size_t start_line, Format f)
@@ -91,6 +91,25 @@ class Body {
     return true;
   }
 
+  // Ascii: an item's values are one line (the format's rule): the first may follow blank lines, the
+  // others stay on its line, and nothing may follow the last. Without it an extra column would shift
+  // every later value silently. Binary: nothing to check.
+  void begin_item(const std::string& element, size_t properties) {
+    element_ = &element;
+    properties_ = properties;
+    in_item_ = false;
+  }
+  bool end_item(Error& error) {
+    if (format_ != Format::kAscii) return true;
+    while (pos_ < text_.size() && text_[pos_] != '\n' && std::isspace(static_cast<unsigned char>(text_[pos_]))) ++pos_;
+    if (pos_ < text_.size() && text_[pos_] != '\n') {
+      error = text_error(path_, line_, "more values than element '" + *element_ + "' has properties (" +
+                                           std::to_string(properties_) + "; one item per line)");
+      return false;
+    }
+    return true;
+  }
+
   Error where(const std::string& why) const {
     return format_ == Format::kAscii ? text_error(path_, line_, why) : byte_error(path_, pos_, why);
   }
@@ -98,9 +117,17 @@ class Body {
  private:
   bool read_token(double& out, Error& error) {
     while (pos_ < text_.size() && std::isspace(static_cast<unsigned char>(text_[pos_]))) {
-      if (text_[pos_] == '\n') ++line_;
+      if (text_[pos_] == '\n') {
+        if (in_item_) {
+          error = text_error(path_, line_, "fewer values than element '" + *element_ + "' has properties (" +
+                                               std::to_string(properties_) + "; one item per line)");
+          return false;
+        }
+        ++line_;
+      }
       ++pos_;
     }
+    in_item_ = true;
     const size_t b = pos_;
     while (pos_ < text_.size() && !std::isspace(static_cast<unsigned char>(text_[pos_]))) ++pos_;
     if (b == pos_) {
@@ -119,6 +146,9 @@ class Body {
   size_t pos_;
   size_t line_;
   Format format_;
+  const std::string* element_ = nullptr;
+  size_t properties_ = 0;
+  bool in_item_ = false;
 };
 
 bool is_index_list(const Property& p) {
@@ -221,6 +251,7 @@ Expected<Mesh> read_ply(const std::string& path, std::string_view text, bool ver
       return text_error(path, e.header_line, "face element lacks a vertex_indices list");
     for (uint64_t i = 0; i < e.count; ++i) {
       double xyzv[3] = {0, 0, 0};
+      body.begin_item(e.name, e.props.size());
       for (size_t k = 0; k < e.props.size(); ++k) {
         const Property& p = e.props[k];
         double v = 0;
@@ -250,6 +281,7 @@ Expected<Mesh> read_ply(const std::string& path, std::string_view text, bool ver
           add_fan(polygon, mesh.faces);
         }
       }
+      if (!body.end_item(error)) return error;
       if (is_vertex) mesh.vertices.emplace_back(float(xyzv[0]), float(xyzv[1]), float(xyzv[2]));
     }
   }

@@ -325,7 +325,34 @@ std::vector<Bad> bad_inputs() {
       {"size.pcd", "FIELDS x y z\nSIZE 4 4\nPOINTS 1\nDATA ascii\n1 2 3\n", ":2:"},
       {"letters.xyz", "1 2 3\n4 five 6\n", ":2:"},
       {"short.xyz", "1 2 3\n4 5\n", ":2:"},
+      // An ascii PLY item is one line: an extra column would shift every later value, a missing one pull
+      // the next line's in.
+      {"extra.ply", "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
+                    "property float z\nend_header\n0 0 0 7\n1 1 1 7\n", ":8:"},
+      {"shortitem.ply", "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
+                        "property float z\nend_header\n0 0\n1 1 1\n2 2 2\n", ":8:"},
+      // A PCD whose counts disagree (PCL refuses it too), a row of more values than fields, more rows than
+      // points, an organised height of 0.
+      {"pointswh.pcd", "FIELDS x y z\nWIDTH 3\nHEIGHT 1\nPOINTS 1\nDATA ascii\n1 2 3\n4 5 6\n7 8 9\n",
+       "POINTS 1 but WIDTH x HEIGHT is 3"},
+      {"height0.pcd", "FIELDS x y z\nWIDTH 1\nHEIGHT 0\nDATA ascii\n", ":3:"},
+      {"extra.pcd", "FIELDS x y z\nPOINTS 1\nDATA ascii\n1 2 3 4\n", ":4:"},
+      {"more.pcd", "FIELDS x y z\nPOINTS 1\nDATA ascii\n1 2 3\n4 5 6\n", ":5:"},
+      // Not a column header: it has numbers in it.
+      {"hex.xyz", "0x10 0 0\n1 2 3\n", ":1:"},
+      // Lone carriage returns end lines (classic Mac files): the second line is short.
+      {"cr.xyz", "1 2 3\r4 5\r", ":2:"},
   };
+}
+
+TEST_F(IoTest, ClassicMacLineEndsAreLineEnds) {
+  Expected<Cloud> c = read_cloud(write("mac.xyz", "1 2 3\r4 5 6\r\r7 8 9\r"));
+  ASSERT_TRUE(c.ok()) << c.error().message;
+  EXPECT_EQ(c->points.size(), 3u);
+  Expected<Mesh> m = read_mesh(write("mac.obj", "v 0 0 0\rv 1 0 0\r\nv 0 1 0\rf 1 2 3"));
+  ASSERT_TRUE(m.ok()) << m.error().message;
+  EXPECT_EQ(m->vertices.size(), 3u);
+  EXPECT_EQ(m->faces.size(), 1u);
 }
 
 TEST_F(IoTest, MalformedInputsGiveErrorsNamingFileAndPlace) {
