@@ -250,6 +250,11 @@ Expected<Mesh> load_object(const DatasetObject& object, uint64_t seed, const Siz
   Expected<Mesh> mesh = read_mesh(object.path);
   if (!mesh) return mesh.error();
   if (mesh->vertices.empty()) return invalid_argument(object.path + ": mesh has no vertices");
+  // Views are cut from a mesh's surface; a file of vertices alone is a point cloud, which cutting would
+  // silently re-cut into views of views.
+  if (mesh->faces.empty())
+    return invalid_argument(object.path + ": no faces: a point cloud, not a mesh (an object is cut into views " +
+                            "from its surface; a cloud to learn as it is goes in a .pcd or .xyz file)");
   for (const Vec3& v : mesh->vertices)
     if (!v.allFinite()) return invalid_argument(object.path + ": mesh has non-finite vertices");
   Mesh m = stand_upright(std::move(*mesh), object.up);

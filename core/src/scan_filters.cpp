@@ -245,11 +245,18 @@ Cloud voxel_downsample(const Cloud& cloud, float leaf_m) {
   const std::vector<uint32_t> finite = finite_indices(cloud.points);
   if (!(leaf_m > 0) || finite.empty()) return cloud;
   // VoxelGrid indexes voxels with 32-bit integers; a leaf too fine for the extent would overflow (PCL
-  // then returns the input unchanged with a warning), so the leaf is at least extent / 2^20.
+  // then returns the input unchanged with a warning), so the leaf is at least extent / 2^20, and coarse
+  // enough that the grid's voxels (dx x dy x dz, a few points far apart make it wide) stay below 2^30.
   Points fin;
   for (uint32_t i : finite) fin.push_back(cloud.points[i]);
   const Vec3 e = bounds(fin).extent();
   leaf_m = std::max(leaf_m, e.maxCoeff() / float(1 << 20));
+  auto voxels = [&](float leaf) {
+    double n = 1;
+    for (int a = 0; a < 3; ++a) n *= std::floor(double(e[a]) / double(leaf)) + 1;
+    return n;
+  };
+  while (voxels(leaf_m) >= double(1 << 30)) leaf_m *= 1.25f;
   pcl::VoxelGrid<pcl::PointXYZ> grid;
   grid.setInputCloud(to_pcl(fin));
   grid.setLeafSize(leaf_m, leaf_m, leaf_m);

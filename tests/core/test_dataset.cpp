@@ -127,6 +127,23 @@ TEST_F(DatasetTest, BadSizeRowsNameFileAndLine) {
   }
 }
 
+// A file of vertices alone in a mesh format is a point cloud: cutting views from it would silently make
+// views of a view, so loading it as an object is an error that names the file.
+TEST_F(DatasetTest, AMeshFileWithoutFacesIsRefusedAsAnObject) {
+  file("chair/scan.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                         "property float z\nend_header\n0 0 0\n1 0 0\n0 1 0\n");
+  file("chair/cloud.off", "OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n");
+  Expected<Dataset> ds = scan_dataset(root_.string());
+  ASSERT_TRUE(ds.ok()) << ds.error().message;
+  ASSERT_EQ(ds->objects.size(), 2u);
+  for (const DatasetObject& o : ds->objects) {
+    Expected<Mesh> m = load_object(o, 1);
+    ASSERT_FALSE(m.ok()) << o.path;
+    EXPECT_EQ(m.error().code, ErrorCode::kInvalidArgument);
+    EXPECT_NE(m.error().message.find(o.path + ": no faces"), std::string::npos) << m.error().message;
+  }
+}
+
 TEST_F(DatasetTest, SizeTableCanBeOverridden) {
   file("human/1.off", kTallAlongY);
   Expected<Dataset> ds = scan_dataset(root_.string(), {{"human", CategorySize::kHeight, 0.1f, 0.2f}});

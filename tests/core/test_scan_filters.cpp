@@ -147,6 +147,16 @@ TEST(VoxelGrid, OnePointPerOccupiedVoxel) {
   EXPECT_EQ(voxel_downsample(dense, 0.f).points.size(), dense.points.size());
 }
 
+// A few points 50 m away make the grid 3000 voxels a side at 1 cm: 2.7e10 voxels, past PCL's 32-bit index,
+// where VoxelGrid gives the input back unchanged. The leaf grows until it fits, and the cloud is thinned.
+TEST(VoxelGrid, AWideCloudIsThinnedNotReturnedWhole) {
+  Cloud wide = concat(grid_plane(0.1f, 0.001f, 0.0005f), {});  // 201 x 201, 1 mm apart
+  for (int i = 0; i < 10; ++i) wide.points.emplace_back(30.f + 0.01f * float(i), 30.f, 30.f);
+  const Cloud out = voxel_downsample(wide, 0.01f);
+  EXPECT_LT(out.points.size(), wide.points.size() / 10);
+  EXPECT_GE(out.points.size(), 2u);  // the patch and the far points are still there
+}
+
 TEST(RelativeDensity, SameForGridsRandomSamplesAndAnyScale) {
   // 1 m square at 1 cm spacing: 10^4 points per m^2, extent 1 m -> about 10^4.
   const Points grid = grid_plane(0.5f, 0.01f);
