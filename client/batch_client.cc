@@ -33,7 +33,10 @@ BatchAnswers BatchClassifier::Classify(std::span<const Cloud> clouds) {
     const std::span<CloudAnswer> out(result.answers.data() + begin, end - begin);
     grpc::Status s = end - begin > 1 && batch_supported_ ? Batch(clouds.subspan(begin, end - begin), out)
                                                           : grpc::Status::OK;
-    if (s.error_code() == grpc::StatusCode::UNIMPLEMENTED) batch_supported_ = false;  // an older server
+    // An older server (UNIMPLEMENTED), or one whose limits are below ours (RESOURCE_EXHAUSTED: the
+    // batch's clouds or points in all): one call per cloud from here on, each refused alone if too big.
+    if (s.error_code() == grpc::StatusCode::UNIMPLEMENTED || s.error_code() == grpc::StatusCode::RESOURCE_EXHAUSTED)
+      batch_supported_ = false;
     if (end - begin == 1 || !batch_supported_)
       for (size_t i = begin; i < end; ++i) {
         const grpc::Status one = Single(clouds[i], result.answers[i]);
@@ -75,6 +78,7 @@ grpc::Status BatchClassifier::Batch(std::span<const Cloud> clouds, std::span<Clo
 }
 
 grpc::Status BatchClassifier::Single(const Cloud& cloud, CloudAnswer& out) {
+  out = CloudAnswer{};  // a refused batch's status is not this call's
   v1::ClassifyRequest request;
   *request.mutable_model() = model_;
   request.set_method(method_);

@@ -75,7 +75,7 @@ int RunModelsSetDefault(const ConnectionOptions& conn, const std::string& ref) {
   if (!stub) return kExitError;
   grpc::ClientContext context;
   PrepareContext(context, conn, kTimeoutS);
-  const v1::ModelRef model = *ParseModelRef(ref);
+  const v1::ModelRef model = *ParseModelRef(ref, /*allow_latest=*/true);
   v1::SetDefaultModelRequest request;
   request.set_name(model.name());
   request.set_version(model.version());

@@ -29,7 +29,7 @@ CLI::Validator Checked(Parse parse, const std::string& description) {
       description);
 }
 
-const CLI::Validator kModelRef = Checked(ParseModelRef, "NAME[:VERSION]");
+const CLI::Validator kModelRef = Checked([](std::string_view s) { return ParseModelRef(s); }, "NAME[:VERSION]");
 const CLI::Validator kMethod = Checked(ParseMethod, "METHOD");
 const CLI::Validator kMethodList = Checked(ParseMethodList, "M1,M2,..");
 const CLI::Validator kOrder = Checked(ParseRevealOrder, "top-down|random|sweep");
@@ -144,7 +144,8 @@ int Main(int argc, char** argv) {
   auto* set_default = models->add_subcommand("set-default", "serve NAME:VERSION when NAME is asked for "
                                                             "(NAME:latest: serve the newest)");
   std::string default_ref;
-  set_default->add_option("MODEL", default_ref, "NAME:VERSION")->required()->check(kModelRef);
+  set_default->add_option("MODEL", default_ref, "NAME:VERSION or NAME:latest")->required()
+      ->check(Checked([](std::string_view s) { return ParseModelRef(s, /*allow_latest=*/true); }, "NAME:VERSION"));
   set_default->callback([&] { run = [&] { return RunModelsSetDefault(conn, default_ref); }; });
 
   // train
@@ -163,7 +164,7 @@ int Main(int argc, char** argv) {
   train->add_option("--per-category", t.per_category, "zoo objects per category")->capture_default_str()
       ->check(CLI::Range(size_t{1}, size_t{10000}));
   train->add_option("--name", t.name, "model name ([A-Za-z0-9._-], 1-128)")->required()
-      ->check(Checked([](const std::string& s) { return ParseModelRef(s + ":latest"); }, "NAME"));
+      ->check(Checked([](const std::string& s) { return ParseModelRef(s + ":latest", /*allow_latest=*/true); }, "NAME"));
   train->add_option("--methods", t.methods, "comma-separated: bok,bog,kgh,vfh,esf,ush,size,fusion (default: the server's)")
       ->check(kMethodList);
   train->add_option("--description", t.description, "free text stored with the model");

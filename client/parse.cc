@@ -37,7 +37,7 @@ constexpr MethodEntry kMethods[] = {{"bok", v1::METHOD_BOK}, {"bog", v1::METHOD_
 
 }  // namespace
 
-Expected<v1::ModelRef> ParseModelRef(std::string_view text) {
+Expected<v1::ModelRef> ParseModelRef(std::string_view text, bool allow_latest) {
   v1::ModelRef ref;
   std::string_view name = text, version;
   if (auto colon = text.find(':'); colon != std::string_view::npos) {
@@ -47,12 +47,17 @@ Expected<v1::ModelRef> ParseModelRef(std::string_view text) {
   if (!ValidName(name))
     return invalid_argument("bad model name '" + std::string(name) + "': 1-128 characters from [A-Za-z0-9._-]");
   ref.set_name(std::string(name));
-  if (version.data() == nullptr || version == "latest") return ref;
+  if (version.data() == nullptr) return ref;
+  if (version == "latest") {
+    if (allow_latest) return ref;
+    return invalid_argument("'" + std::string(text) + "': 'latest' is for models set-default only; NAME alone is its " +
+                            "default version (the newest unless one is pinned), NAME:N a version");
+  }
   uint32_t v = 0;
   auto [end, ec] = std::from_chars(version.data(), version.data() + version.size(), v);
   if (ec != std::errc() || end != version.data() + version.size() || v == 0)
     return invalid_argument("bad model version '" + std::string(version) + "' in '" + std::string(text) +
-                            "': a positive integer or 'latest'");
+                            "': a positive integer");
   ref.set_version(v);
   return ref;
 }

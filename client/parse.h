@@ -14,9 +14,11 @@
 
 namespace glimpse::client {
 
-// "NAME" or "NAME:VERSION" (VERSION a positive integer, or "latest" = 0 = the name's default).
+// "NAME" or "NAME:VERSION" (VERSION a positive integer; NAME alone is version 0, the name's default).
 // Names are 1-128 characters from [A-Za-z0-9._-], as in the proto.
-Expected<v1::ModelRef> ParseModelRef(std::string_view text);
+// "latest" (version 0: unpinned, the newest) only where `allow_latest` (models set-default): elsewhere
+// version 0 asks for the name's default, which may be pinned, and deleting it would delete every version.
+Expected<v1::ModelRef> ParseModelRef(std::string_view text, bool allow_latest = false);
 // "name:3", or just "name" for version 0.
 std::string FormatModelRef(const v1::ModelRef& ref);
 

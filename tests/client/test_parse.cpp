@@ -19,9 +19,17 @@ TEST(ParseModelRef, NameAndVersion) {
   EXPECT_EQ(ref->name(), "shrec-07.v2_a");
   EXPECT_EQ(ref->version(), 12u);
   EXPECT_EQ(FormatModelRef(*ref), "shrec-07.v2_a:12");
-  auto latest = ParseModelRef("zoo:latest");
+  auto latest = ParseModelRef("zoo:latest", /*allow_latest=*/true);
   ASSERT_TRUE(latest.ok());
   EXPECT_EQ(latest->version(), 0u);
+}
+
+// "latest" as version 0 would ask for the default (perhaps pinned), and `models delete NAME:latest`
+// would delete every version: only set-default takes it.
+TEST(ParseModelRef, LatestOnlyWhereAllowed) {
+  auto refused = ParseModelRef("zoo:latest");
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.error().message.find("set-default"), std::string::npos) << refused.error().message;
 }
 
 TEST(ParseModelRef, RejectsBadNamesAndVersions) {
