@@ -21,7 +21,6 @@ DuplicateFilter::DuplicateFilter(float tolerance_m, size_t expected_points)
   while ((size_t{1} << bits_) < 2 * expected_points) ++bits_;
   slots_.assign(size_t{1} << bits_, kEmpty);
   cells_.reserve(expected_points);
-  points_.reserve(expected_points);
 }
 
 void DuplicateFilter::grow() {
@@ -36,14 +35,13 @@ void DuplicateFilter::grow() {
 }
 
 bool DuplicateFilter::keep(const Vec3& p) {
-  if (2 * (points_.size() + 1) > slots_.size()) grow();
+  if (2 * (cells_.size() + 1) > slots_.size()) grow();
   const size_t mask = slots_.size() - 1;
   const CellKey key = tolerance_ > 0 ? cell_key(p, tolerance_) : exact_key(p);
   size_t h = CellKeyHash{}(key) >> (64 - bits_);
   while (slots_[h] != kEmpty && !(cells_[slots_[h]] == key)) h = (h + 1) & mask;
   if (slots_[h] != kEmpty) return false;
-  slots_[h] = static_cast<uint32_t>(points_.size());
-  points_.push_back(p);
+  slots_[h] = static_cast<uint32_t>(cells_.size());
   cells_.push_back(key);
   return true;
 }

@@ -27,15 +27,14 @@ class DuplicateFilter {
   explicit DuplicateFilter(float tolerance_m, size_t expected_points = 0);
   // True when `p` (finite) is kept; it is then remembered.
   bool keep(const Vec3& p);
-  size_t kept() const { return points_.size(); }
+  size_t kept() const { return cells_.size(); }
 
  private:
   void grow();
   float tolerance_;
   int bits_ = 4;
   std::vector<uint32_t> slots_;  // open addressing, linear probing: slot -> kept point
-  std::vector<CellKey> cells_;   // per kept point
-  std::vector<Vec3> points_;
+  std::vector<CellKey> cells_;   // per kept point: its cell, or with no tolerance the point itself
 };
 
 // Drops NaN/Inf points and duplicates (DuplicateFilter, first one kept). Order of the kept points is
