@@ -88,7 +88,9 @@ void write_protocol(std::ostringstream& o, const EvalResult& r) {
   for (const std::string& c : r.categories) cats += (cats.empty() ? "" : ", ") + c + " " + std::to_string(per_cat[c]);
 
   o << "## Protocol\n\n| parameter | ours | paper |\n|---|---|---|\n";
-  o << "| data | " << r.source << " (" << r.object_ids.size() << " objects: " << cats << ") | SHREC 2007, same 5 categories, 20 objects each |\n";
+  // Across sources the count is of both sides; the cross-source row below splits it.
+  o << "| data | " << r.source << " (" << r.object_ids.size() << (r.cross_source ? " objects learnt and tested in all: " : " objects: ")
+    << cats << ") | SHREC 2007, same 5 categories, 20 objects each |\n";
   if (r.cross_source) {
     auto count = [&](bool tested) {
       std::map<std::string, size_t> n;

@@ -606,6 +606,8 @@ TEST(RunEvaluation, CrossSourceTrainsOneModelOnOneSourceAndTestsOnlyTheOther) {
   const std::string report = markdown_report(*r);
   EXPECT_NE(report.find("cross-source"), std::string::npos);
   EXPECT_NE(report.find("How much is size"), std::string::npos);
+  // The data row counts both sides (the cross-source row splits them), and says so.
+  EXPECT_NE(report.find("(" + std::to_string(objects.size()) + " objects learnt and tested in all: "), std::string::npos);
   // Chance is 20 %: a model of 4 zoo objects per category on 3 others of another seed (45 views, one is
   // 2.2 points). Measured: fusion full / 20 % 86.7 / 95.6 (86.7 / 86.7 before the fusion's logistic
   // decision was the default), USH full 91.1, size only full 60.0.
