@@ -153,8 +153,14 @@ int RunEvaluate(const ConnectionOptions& conn, const EvaluateOptions& o) {
     report.object_truth.push_back(int(std::find(report.categories.begin(), report.categories.end(), obj.category) -
                                       report.categories.begin()));
   }
-  if (!o.quiet)
-    for (const std::string& line : folder->applied) std::fprintf(stderr, "evaluate: %s\n", line.c_str());
+  if (!o.quiet) {
+    for (const std::string& line : folder->applied)
+      if (line.find(" cloud files: ") == std::string::npos) std::fprintf(stderr, "evaluate: %s\n", line.c_str());
+    // A cloud file has no object to view at every stage: evaluate judges the meshes only.
+    if (!folder->clouds.empty())
+      std::fprintf(stderr, "evaluate: %zu cloud files not evaluated (a cloud is one view of an unknown object; "
+                           "glimpse classify decides them)\n", folder->clouds.size());
+  }
 
   v1::ModelRef pinned;
   pinned.set_name(info.name());

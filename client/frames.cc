@@ -58,7 +58,19 @@ Expected<std::map<std::string, Pose>> ReadPoses(const fs::path& path) {
     std::stringstream row(line);
     for (std::string cell; std::getline(row, cell, ',');) cells.push_back(cell);
     const std::string where = path.string() + ":" + std::to_string(ln) + ": ";
-    if (ln == 1 && cells.size() > 1 && cells[1] == "x") continue;  // a header
+    if (ln == 1 && cells.size() > 1 && cells[1] == "x") {  // a header: its columns must be the ones read
+      std::string header;
+      for (std::string c : cells) {
+        c.erase(0, c.find_first_not_of(" \t"));
+        c.erase(c.find_last_not_of(" \t") + 1);
+        header += (header.empty() ? "" : ",") + c;
+      }
+      // A quaternion written x,y,z,w read as w,x,y,z turns every frame the wrong way, silently.
+      if (header.substr(header.find(',')) != ",x,y,z" && header.substr(header.find(',')) != ",x,y,z,qw,qx,qy,qz")
+        return invalid_argument(where + "the header must be file,x,y,z or file,x,y,z,qw,qx,qy,qz (w first), not '" +
+                                header + "'");
+      continue;
+    }
     if (cells.size() != 4 && cells.size() != 8)
       return invalid_argument(where + "expected file,x,y,z or file,x,y,z,qw,qx,qy,qz, got " +
                               std::to_string(cells.size()) + " fields");

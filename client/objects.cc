@@ -48,7 +48,7 @@ std::vector<std::string> Applied(const Folder& f, const Placement& p, bool manif
   else if (d.has_up_axes)
     out.push_back("up: from up_axis.csv (meshes it does not list: +y)" +
                   (d.unmatched_up_rows ? ", " + std::to_string(d.unmatched_up_rows) + " rows match no mesh" : std::string()));
-  else out.push_back("up: +z (no manifest; --up AXIS to change)");
+  else out.push_back("up: +z (no up_axis.csv; --up AXIS to change)");
   if (p.sizing) {
     out.push_back("size: " + SizingText(*p.sizing) + (p.sizing->kind == Sizing::kHeight ? " (--height)" : " (--unit)"));
   } else if (manifest) {
@@ -99,7 +99,7 @@ Expected<Folder> ScanFolder(const std::string& dir, const Placement& placement) 
   const bool manifest = f.dataset.has_up_axes || f.dataset.has_sizes;
   for (DatasetObject& o : f.dataset.objects) {
     if (placement.up) o.up = *placement.up;
-    else if (!manifest) o.up = Vec3::UnitZ();  // the contract's frame
+    else if (!f.dataset.has_up_axes) o.up = Vec3::UnitZ();  // the contract's frame: sizes.csv says nothing of up
   }
   if (placement.sizing) f.sizing = *placement.sizing;
   else if (!manifest) f.sizing = Sizing{Sizing::kUnit, 1.f};

@@ -63,7 +63,7 @@ Expected<v1::ModelRef> ParseModelRef(std::string_view text, bool allow_latest) {
 }
 
 Expected<Vec3> ParseSensor(std::string_view text) {
-  const std::string bad = "bad sensor '" + std::string(text) + "': three finite numbers X,Y,Z in metres";
+  const std::string bad = "bad sensor '" + std::string(text) + "': three finite numbers X,Y,Z in the cloud's own frame and unit";
   Vec3 out;
   std::string_view rest = text;
   for (int axis = 0; axis < 3; ++axis) {

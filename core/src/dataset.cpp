@@ -203,7 +203,9 @@ Expected<Dataset> scan_dataset(const std::string& dir, const std::vector<Categor
       if (!folder.is_directory() || category.empty() || category.front() == '.') continue;
       bool any = false;
       for (const fs::directory_entry& file : fs::directory_iterator(folder.path())) {
-        if (!file.is_regular_file() || !is_mesh_file(file.path())) continue;
+        // Hidden files are not objects (macOS's "._x.off" beside x.off is not a mesh at all).
+        if (!file.is_regular_file() || !is_mesh_file(file.path()) || file.path().filename().string().front() == '.')
+          continue;
         DatasetObject o;
         o.category = category;
         o.id = file.path().stem().string();

@@ -100,6 +100,9 @@ TEST_F(FramesTest, EveryBadInputNamesTheFile) {
   expect_error("poses.csv:1: 'nan' is not a finite number");
   Text("poses.csv", "f1.xyz,0,0,1,1,1,0,0\n");
   expect_error("poses.csv:1: the quaternion qw,qx,qy,qz must be a unit one");
+  // A header naming the quaternion x,y,z,w: read w first it would turn every frame the wrong way.
+  Text("poses.csv", "file,x,y,z,qx,qy,qz,qw\nf1.xyz,3,0,1,0,0,0.707106781,0.707106781\n");
+  expect_error("poses.csv:1: the header must be file,x,y,z or file,x,y,z,qw,qx,qy,qz (w first)");
   Text("poses.csv", "f1.xyz,0,0,1\nf9.xyz,0,0,1\n");
   expect_error("'f9.xyz' is not a frame of the folder");
   Text("poses.csv", "f1.xyz,0,0,1\nf1.xyz,0,0,2\n");

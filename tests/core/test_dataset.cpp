@@ -41,6 +41,8 @@ TEST_F(DatasetTest, ScanSortsByCategoryThenNumericIdAndReadsUpAxes) {
   file("chair/7.OFF", kTallAlongY);
   file("widget/w1.off", kTallAlongY);
   file(".hidden/1.off", kTallAlongY);
+  file("human/._10.off", "macOS resource fork, not a mesh");  // hidden files are not objects
+  file("human/.old.off", kTallAlongY);
   fs::create_directories(root_ / "empty");
   file("up_axis.csv", "# id,up\n\n10,+z\n7, -x  # trailing comment\n999,+z\n");
   Expected<Dataset> ds = scan_dataset(root_.string());
