@@ -129,6 +129,9 @@ void write_protocol(std::ostringstream& o, const EvalResult& r) {
   std::string stages;
   for (const Stage& s : p.stages) stages += (stages.empty() ? "" : ", ") + stage_name(s);
   o << "| stages | " << stages << " | 10 kp (~10 %), 25 kp (~20 %), 55 kp, full view |\n";
+  // glimpse-lab compare reads this row: runs of different seeds are not the same views (nor, for the zoo,
+  // the same objects).
+  o << "| seed (`--seed`) | " << p.seed << " | – |\n";
   o << "| keypoint stage cut | keypoints of the full view sorted by height; prefix = points above the k-th highest minus "
     << p.cut_margin_supports << " support radii; features re-extracted on that prefix | prefix with k visible keypoints |\n";
   o << "| fraction stages | top prefix holding the fraction of the FULL 3D cloud's point count | ~10 %, ~20 % visible |\n";

@@ -9,6 +9,8 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <optional>
+#include <set>
 #include <sstream>
 #include <string>
 #include <tuple>
@@ -74,6 +76,26 @@ Expected<RunDecisions> read_run(const std::string& run) {
   return out;
 }
 
+// The seed a run's report.md records beside its decisions.csv, if it has one.
+std::optional<std::string> run_seed(const std::string& run) {
+  std::filesystem::path path(run);
+  path = std::filesystem::is_directory(path) ? path / "report.md" : path.parent_path() / "report.md";
+  std::ifstream in(path);
+  const std::string row = "| seed (`--seed`) | ";
+  for (std::string line; std::getline(in, line);)
+    if (line.rfind(row, 0) == 0) return line.substr(row.size(), line.find(' ', row.size()) - row.size());
+  return std::nullopt;
+}
+
+// Views per object in a run: with another --views, view k is another camera.
+std::map<std::string, size_t> views_per_object(const RunDecisions& run) {
+  std::map<std::string, std::set<std::string>> views;
+  for (const auto& [key, right] : run) views[std::get<0>(key)].insert(std::get<1>(key));
+  std::map<std::string, size_t> out;
+  for (const auto& [object, v] : views) out[object] = v.size();
+  return out;
+}
+
 int run_compare(const CompareOptions& o) {
   if (o.runs.size() < 2 || o.runs.size() % 2)
     return std::fprintf(stderr, "compare takes runs in pairs, BEFORE AFTER [BEFORE AFTER ...]: %zu given\n", o.runs.size()), 2;
@@ -88,6 +110,19 @@ int run_compare(const CompareOptions& o) {
     auto after = before.ok() ? read_run(o.runs[p + 1]) : before;
     for (const auto* r : {&before, &after})
       if (!r->ok()) return std::fprintf(stderr, "compare: %s\n", r->error().message.c_str()), 1;
+    // A pair is one draw of views seen before and after a change: the same seed, the same views.
+    if (const auto a = run_seed(o.runs[p]), b = run_seed(o.runs[p + 1]); a && b && *a != *b)
+      return std::fprintf(stderr, "compare: %s and %s drew with seeds %s and %s: not the same views (nor, for the zoo, "
+                                  "the same objects); pair runs of one seed\n", o.runs[p].c_str(), o.runs[p + 1].c_str(),
+                          a->c_str(), b->c_str()), 1;
+    {
+      const auto a = views_per_object(*before), b = views_per_object(*after);
+      for (const auto& [object, n] : a)
+        if (const auto it = b.find(object); it != b.end() && it->second != n)
+          return std::fprintf(stderr, "compare: %s has %zu views of %s and %s has %zu: with another --views a view's "
+                                      "index is another camera\n", o.runs[p].c_str(), n, object.c_str(),
+                              o.runs[p + 1].c_str(), it->second), 1;
+    }
     size_t both = 0;
     for (const auto& [key, right] : *before) {
       const auto it = after->find(key);

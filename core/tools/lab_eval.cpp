@@ -99,11 +99,67 @@ size_t tested_known_objects(const EvalResult& r) {
   return n;
 }
 
+// A source named twice (its objects learnt twice, or learnt and cross-validated at once) is an error;
+// --train X --test X is not (resubstitution, which the report flags).
+Status check_sources(const EvalOptions& o) {
+  if (o.data.empty() && o.train.empty() && (!o.unknown.empty() || !o.also_train.empty()))
+    return invalid_argument("--unknown and --also-train go with --data or --train (the zoo as a source: --data zoo:N)");
+  std::map<std::string, std::string> seen;  // source -> the flag that named it
+  auto key = [](const std::string& dir) {
+    if (dir.rfind("zoo:", 0) == 0) return dir;
+    std::error_code ec;
+    const auto canonical = std::filesystem::weakly_canonical(dir, ec);
+    return ec ? dir : canonical.string();
+  };
+  for (const auto& [list, flag] : {std::pair{o.data, "--data"}, {o.train, "--train"}, {o.also_train, "--also-train"},
+                                   {o.unknown, "--unknown"}}) {
+    for (const std::string& dir : split_list(list))
+      if (auto [it, fresh] = seen.emplace(key(dir), flag); !fresh)
+        return invalid_argument(std::string(flag) + ": " + dir + " is named already (" + it->second +
+                                "): its objects would be learnt twice, or learnt and tested at once");
+  }
+  std::set<std::string> tests;
+  for (const std::string& dir : split_list(o.test)) {
+    if (!tests.insert(key(dir)).second) return invalid_argument("--test: " + dir + " is named twice");
+    if (const auto it = seen.find(key(dir)); it != seen.end() && it->second != std::string("--train"))
+      return invalid_argument("--test: " + dir + " is named already (" + it->second + ")");
+  }
+  return {};
+}
+
+// Across sources every tested category must be learnt: a category the model never saw cannot be right,
+// and its objects belong in --unknown.
+Status check_tested_categories_learnt(const std::vector<EvalObject>& objects) {
+  std::set<std::string> learnt, missing;
+  for (const EvalObject& x : objects)
+    if (x.role == EvalRole::kTrainOnly) learnt.insert(x.category);
+  for (const EvalObject& x : objects)
+    if (x.role == EvalRole::kTestOnly && !learnt.count(x.category)) missing.insert(x.category);
+  if (missing.empty()) return {};
+  std::string names;
+  for (const std::string& c : missing) names += (names.empty() ? "" : ", ") + c;
+  return invalid_argument("--test: categories no training source holds: " + names +
+                          " (objects of categories the model never learnt go in --unknown)");
+}
+
 int run_eval(const EvalOptions& o) {
   auto params = params_from(o);
   if (!params.ok()) {
     std::fprintf(stderr, "glimpse-lab eval: %s\n", params.error().message.c_str());
     return 2;
+  }
+  if (Status s = check_sources(o); !s.ok()) {
+    std::fprintf(stderr, "glimpse-lab eval: %s\n", s.error().message.c_str());
+    return 2;
+  }
+  {  // the report folder, before the run rather than after it
+    std::error_code ec;
+    std::filesystem::create_directories(o.out, ec);
+    if (ec || !std::filesystem::is_directory(o.out)) {
+      std::fprintf(stderr, "glimpse-lab eval: --out: cannot use %s as the report folder%s%s\n", o.out.c_str(),
+                   ec ? ": " : " (not a folder)", ec ? ec.message().c_str() : "");
+      return 2;
+    }
   }
   const auto t0 = std::chrono::steady_clock::now();
   const size_t max_objects = o.quick && o.max_objects == 0 ? 8 : o.max_objects;
@@ -143,6 +199,10 @@ int run_eval(const EvalOptions& o) {
       for (EvalObject& x : *second) objects.push_back(std::move(x));
       source = "trained on " + o.train + (o.also_train.empty() ? "" : "," + o.also_train) + ", tested on " + o.test +
                (o.unknown.empty() ? "" : " and on " + o.unknown + " (unknown)");
+      if (Status s = check_tested_categories_learnt(objects); !s.ok()) {
+        std::fprintf(stderr, "glimpse-lab eval: %s\n", s.error().message.c_str());
+        return 2;
+      }
     }
   } else {
     const size_t n = max_objects ? std::min(o.zoo, max_objects) : o.zoo;

@@ -1,5 +1,6 @@
 // glimpse-lab eval's flags as EvalParams: the paper preset and the checks on every flag.
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <numbers>
 #include <sstream>
@@ -47,6 +48,8 @@ Expected<EvalParams> params_from(const EvalOptions& o) {
     if (n <= 0 || *end) return invalid_argument("--points must be 'vertices' or a positive count, not '" + o.points + "'");
     p.points_per_object = static_cast<size_t>(n);
   }
+  // The report prints the count asked for: one the protocol would clamp is refused instead.
+  if (o.views < 1 || o.views > 6) return invalid_argument("--views takes 1-6 (of the paper's 6 viewpoints), not " + std::to_string(o.views));
   p.views_per_object = o.views;
   {
     std::stringstream list(o.train_elevations);
@@ -115,10 +118,17 @@ Expected<EvalParams> params_from(const EvalOptions& o) {
     char* end = nullptr;
     const double x = std::strtod(name.c_str(), &end);
     if (name == "full") p.stages.push_back({StageKind::kFull, 0});
-    else if (end && std::string(end) == "kp" && x >= 1) p.stages.push_back({StageKind::kKeypoints, x});
+    else if (end && std::string(end) == "kp" && x >= 1 && std::isfinite(x)) p.stages.push_back({StageKind::kKeypoints, x});
     else if (end && std::string(end) == "%" && x > 0 && x <= 100) p.stages.push_back({StageKind::kFraction, x / 100});
     else return invalid_argument("--stages takes full, Nkp and N% items, not '" + name + "'");
+    // A stage twice would write its decisions twice (and compare could not pair them).
+    for (size_t k = 0; k + 1 < p.stages.size(); ++k)
+      if (stage_name(p.stages[k]) == stage_name(p.stages.back()))
+        return invalid_argument("--stages names " + stage_name(p.stages.back()) + " twice");
   }
+  // The size-blind ablation runs after the whole evaluation: its methods are checked before it starts.
+  for (const std::string& name : split_list(o.size_blind == "none" ? "" : o.size_blind))
+    if (auto m = parse_method(name); !m.ok()) return Error{m.error().code, "--size-blind: " + m.error().message};
   if (!std::any_of(p.stages.begin(), p.stages.end(), [](const Stage& s) { return s.kind == StageKind::kKeypoints; }))
     p.explore_max_keypoints = 0;
   if (!(o.stream_chunk >= 0 && o.stream_chunk < 1)) return invalid_argument("--stream-chunk must be in [0, 1)");

@@ -39,6 +39,10 @@ int run_views(const ViewsOptions& o) {
     std::fprintf(stderr, "glimpse-lab views: --up: %s\n", up.error().message.c_str());
     return 2;
   }
+  if (mesh->vertices.empty()) {
+    std::fprintf(stderr, "glimpse-lab views: %s: no vertices, nothing to view\n", o.mesh.c_str());
+    return 1;
+  }
   Mesh m = stand_upright(std::move(*mesh), *up);
   if (o.height_m > 0) m = scale_to_height(std::move(m), o.height_m);
   m = place_on_ground(std::move(m));
@@ -46,11 +50,17 @@ int run_views(const ViewsOptions& o) {
   if (o.points == "vertices") {
     cloud = mesh_vertices(m);
   } else {
-    const long n = std::strtol(o.points.c_str(), nullptr, 10);
-    const double area = surface_area(m);
-    if (n <= 0 || !(area > 0)) {
-      std::fprintf(stderr, "glimpse-lab views: --points must be 'vertices' or a positive count (mesh area %g)\n", area);
+    char* end = nullptr;
+    const long n = std::strtol(o.points.c_str(), &end, 10);
+    if (n <= 0 || *end) {
+      std::fprintf(stderr, "glimpse-lab views: --points must be 'vertices' or a positive count, not '%s'\n", o.points.c_str());
       return 2;
+    }
+    const double area = surface_area(m);
+    if (!(area > 0)) {
+      std::fprintf(stderr, "glimpse-lab views: %s: the mesh has no area to sample (--points vertices takes its vertices)\n",
+                   o.mesh.c_str());
+      return 1;
     }
     cloud = sample_surface(m, double(n) / area, o.seed);
   }

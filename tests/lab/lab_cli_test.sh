@@ -33,6 +33,23 @@ if [[ $MODE == zoo ]]; then
   run 2 eval --zoo 3 --hold-out dragon --out "$TMP/x" && has "$TMP/err" "--hold-out: no object of category 'dragon' \(categories: chair, fourleg"
   run 2 eval --zoo 3 --hold-out human,chair,table,mechanic --out "$TMP/x" && has "$TMP/err" "at least two learnt categories must remain"
   run 105 eval --zoo 3 --poses upright --out "$TMP/x" && has "$TMP/err" "--poses: upright not in \{dataset,given\}"
+  # What would make the figures wrong is refused before the run, not found after it (or never).
+  run 2 eval --zoo 3 --views 0 --out "$TMP/x" && has "$TMP/err" "--views takes 1-6"
+  run 2 eval --zoo 3 --views 10 --out "$TMP/x" && has "$TMP/err" "--views takes 1-6"
+  run 2 eval --zoo 3 --stages full,20%,full --out "$TMP/x" && has "$TMP/err" "--stages names full twice"
+  run 2 eval --zoo 3 --stages infkp --out "$TMP/x" && has "$TMP/err" "--stages takes full, Nkp and N% items"
+  run 2 eval --zoo 3 --size-blind ush,bogus --out "$TMP/x" && has "$TMP/err" "--size-blind: .*bogus"
+  run 2 eval --zoo 3 --unknown zoo:2 --out "$TMP/x" && has "$TMP/err" "go with --data or --train"
+  run 2 eval --data zoo:3 --also-train zoo:3 --out "$TMP/x" && has "$TMP/err" "--also-train: zoo:3 is named already \(--data\)"
+  : >"$TMP/afile"
+  run 2 eval --zoo 3 --out "$TMP/afile" && has "$TMP/err" "--out: cannot use"
+  mkdir -p "$TMP/dragons/dragon"
+  printf 'OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n' >"$TMP/dragons/dragon/a.off"
+  run 2 eval --train zoo:2 --test "$TMP/dragons" --out "$TMP/x" && has "$TMP/err" "categories no training source holds: dragon"
+  # views: a mesh of no vertices, and a count with junk after it.
+  printf 'OFF\n0 0 0\n' >"$TMP/empty.off"
+  run 1 views "$TMP/empty.off" --out "$TMP/v" && has "$TMP/err" "no vertices, nothing to view"
+  run 2 views "$TMP/dragons/dragon/a.off" --points 10abc --out "$TMP/v" && has "$TMP/err" "--points must be 'vertices' or a positive count, not '10abc'"
   # compare: paired runs' decisions.csv. Before: 10 objects x 2 views right at full; after: object 0 wrong
   # in both views, object 1 right in the one view it had wrong (95 -> 90 %). An unknown view is left out.
   mkdir -p "$TMP/cmp"
@@ -52,6 +69,14 @@ if [[ $MODE == zoo ]]; then
     has "$TMP/out" "^\| fusion \| full \| 20 \| 10 \| 95\.0 \| 90\.0 \| -5\.0 \|"
   fi
   run 2 compare "$TMP/cmp/before.csv" && has "$TMP/err" "compare takes runs in pairs"
+  # A pair is one draw of views: runs of two seeds, or of two view counts, are refused.
+  mkdir -p "$TMP/cmp/s42" "$TMP/cmp/s7"
+  cp "$TMP/cmp/before.csv" "$TMP/cmp/s42/decisions.csv" && cp "$TMP/cmp/after.csv" "$TMP/cmp/s7/decisions.csv"
+  echo '| seed (`--seed`) | 42 | – |' >"$TMP/cmp/s42/report.md"
+  echo '| seed (`--seed`) | 7 | – |' >"$TMP/cmp/s7/report.md"
+  run 1 compare "$TMP/cmp/s42" "$TMP/cmp/s7" && has "$TMP/err" "drew with seeds 42 and 7"
+  grep -v ',1,full,' "$TMP/cmp/after.csv" >"$TMP/cmp/oneview.csv"
+  run 1 compare "$TMP/cmp/before.csv" "$TMP/cmp/oneview.csv" && has "$TMP/err" "has 2 views of zoo:chair/0 .* has 1"
   run 1 compare "$TMP/cmp/before.csv" "$TMP/cmp/nothing.csv" && has "$TMP/err" "nothing.csv: cannot read"
   cut -d, -f1-6 "$TMP/cmp/before.csv" >"$TMP/cmp/nowinner.csv"
   run 1 compare "$TMP/cmp/before.csv" "$TMP/cmp/nowinner.csv" && has "$TMP/err" "nowinner.csv: no column 'winner'"
