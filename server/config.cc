@@ -1,6 +1,7 @@
 #include "config.h"
 
 #include <charconv>
+#include <limits>
 #include <cstdlib>
 #include <algorithm>
 
@@ -15,30 +16,36 @@ struct Option {
   std::function<Status(ServerConfig&, const std::string&)> set;
 };
 
+// A number in [min, max]: the largest values are bounded where a conversion would overflow (a stream
+// limit as int threads, seconds as steady_clock nanoseconds) and a huge setting turned into a tiny one.
 template <class T>
-Status ParseNumber(const std::string& text, T min, T& out) {
+Status ParseNumber(const std::string& text, T min, T& out, T max = std::numeric_limits<T>::max()) {
   T v{};
   auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
-  if (ec != std::errc() || end != text.data() + text.size() || v < min)
-    return invalid_argument("'" + text + "' is not a number >= " + std::to_string(min));
+  if (ec != std::errc() || end != text.data() + text.size() || v < min || v > max)
+    return invalid_argument("'" + text + "' is not a number in [" + std::to_string(min) + ", " + std::to_string(max) + "]");
   out = v;
   return {};
 }
 
 template <class T>
-std::function<Status(ServerConfig&, const std::string&)> Number(T ServerConfig::*field, T min) {
-  return [field, min](ServerConfig& c, const std::string& v) { return ParseNumber(v, min, c.*field); };
+std::function<Status(ServerConfig&, const std::string&)> Number(T ServerConfig::*field, T min,
+                                                                T max = std::numeric_limits<T>::max()) {
+  return [field, min, max](ServerConfig& c, const std::string& v) { return ParseNumber(v, min, c.*field, max); };
 }
 
 template <class T>
-std::function<Status(ServerConfig&, const std::string&)> Limit(T Limits::*field, T min) {
-  return [field, min](ServerConfig& c, const std::string& v) { return ParseNumber(v, min, c.limits.*field); };
+std::function<Status(ServerConfig&, const std::string&)> Limit(T Limits::*field, T min,
+                                                               T max = std::numeric_limits<T>::max()) {
+  return [field, min, max](ServerConfig& c, const std::string& v) { return ParseNumber(v, min, c.limits.*field, max); };
 }
+
+constexpr long long kMaxSeconds = 100LL * 365 * 24 * 3600;  // a century: "no limit" in practice
 
 std::function<Status(ServerConfig&, const std::string&)> Seconds(std::chrono::seconds* (*get)(ServerConfig&)) {
   return [get](ServerConfig& c, const std::string& v) {
     long long s = 0;
-    if (Status st = ParseNumber(v, 1LL, s); !st.ok()) return st;
+    if (Status st = ParseNumber(v, 1LL, s, kMaxSeconds); !st.ok()) return st;
     *get(c) = std::chrono::seconds(s);
     return Status{};
   };
@@ -78,7 +85,7 @@ const std::vector<Option>& Options() {
       {"metrics-port", "GLIMPSE_METRICS_PORT", "N", "Prometheus /metrics HTTP port, 0 disables [9464]",
        Number(&ServerConfig::metrics_port, 0)},
       {"threads", "GLIMPSE_THREADS", "N", "gRPC worker threads, 0 = max streams + 2 per usable CPU [0]",
-       Number(&ServerConfig::threads, 0)},
+       Number(&ServerConfig::threads, 0, 100000)},
       {"request-threads", "GLIMPSE_REQUEST_THREADS", "N",
        "threads one request computes with, 0 = the CPUs the process may use (affinity, cgroup quota) [0]",
        Number(&ServerConfig::request_threads, 0)},
@@ -90,7 +97,7 @@ const std::vector<Option>& Options() {
       {"max-points", "GLIMPSE_MAX_POINTS", "N", "points per cloud or chunk, and per ClassifyBatch call [1000000]",
        Limit(&Limits::max_points_per_cloud, size_t{1})},
       {"max-streams", "GLIMPSE_MAX_STREAMS", "N", "concurrent Train/StreamClassify calls [64]",
-       Limit(&Limits::max_concurrent_streams, size_t{1})},
+       Limit(&Limits::max_concurrent_streams, size_t{1}, size_t{100000})},
       {"max-stream-seconds", "GLIMPSE_MAX_STREAM_SECONDS", "N",
        "longest StreamClassify call, and Train while receiving [600]",
        Seconds([](ServerConfig& c) { return &c.limits.max_stream_duration; })},

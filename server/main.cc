@@ -23,6 +23,15 @@ using namespace glimpse::server;
 namespace {
 
 int Run(const ServerConfig& config, const sigset_t& signals) {
+  const int cpus = ProcessCpus();
+  // Each completion queue holds a thread polling it: a thread quota no larger leaves none to serve, and
+  // every call would be RESOURCE_EXHAUSTED while health says SERVING.
+  if (config.threads > 0 && config.threads <= CompletionQueues(cpus)) {
+    std::fprintf(stderr, "glimpse-server: --threads %d leaves no thread to serve calls: gRPC's %d completion queues "
+                         "hold one each (give at least %d, or 0 for the default)\n",
+                 config.threads, CompletionQueues(cpus), CompletionQueues(cpus) + 1);
+    return 2;
+  }
   // Secrets first: a bad certificate or token file stops the server before it opens anything.
   auto credentials = LoadServerCredentials(config.tls);
   if (!credentials) {
@@ -59,7 +68,6 @@ int Run(const ServerConfig& config, const sigset_t& signals) {
 
   ServiceOptions options;
   options.store = store->get();
-  const int cpus = ProcessCpus();
   const int request_threads = RequestThreads(config, cpus);
   options.engine = CoreEngine(request_threads);
   options.limits = config.limits;

@@ -54,8 +54,14 @@ Expected<LoadedModel> ModelCache::Load(std::string_view name, uint32_t version) 
   {
     std::lock_guard lock(mutex_);
     if (auto it = entries_.find(id); it != entries_.end()) {
-      lru_.splice(lru_.begin(), lru_, it->second.lru);
-      return LoadedModel{std::move(*record), it->second.model, 0};
+      // An id names one blob only within one store's lineage: a store restored from another trainer's
+      // (model-sync.sh pull) starts its ids again, so the entry must hold the record's very bytes.
+      if (it->second.sha256 == record->sha256) {
+        lru_.splice(lru_.begin(), lru_, it->second.lru);
+        return LoadedModel{std::move(*record), it->second.model, 0};
+      }
+      lru_.erase(it->second.lru);
+      entries_.erase(it);
     }
   }
   // Miss: read and deserialize outside the lock, so one slow load does not stall cached models.
@@ -70,12 +76,16 @@ Expected<LoadedModel> ModelCache::Load(std::string_view name, uint32_t version) 
   auto shared = std::make_shared<const Model>(std::move(*model));
   const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   std::lock_guard lock(mutex_);
-  if (auto it = entries_.find(id); it != entries_.end()) {  // another thread loaded it meanwhile
-    lru_.splice(lru_.begin(), lru_, it->second.lru);
-    return LoadedModel{std::move(*record), it->second.model, ms};
+  if (auto it = entries_.find(id); it != entries_.end()) {
+    if (it->second.sha256 == record->sha256) {  // another thread loaded it meanwhile
+      lru_.splice(lru_.begin(), lru_, it->second.lru);
+      return LoadedModel{std::move(*record), it->second.model, ms};
+    }
+    lru_.erase(it->second.lru);  // another blob under this id: ours is the record's
+    entries_.erase(it);
   }
   lru_.push_front(id);
-  entries_.emplace(id, Entry{shared, lru_.begin()});
+  entries_.emplace(id, Entry{shared, lru_.begin(), record->sha256});
   while (entries_.size() > capacity_) {
     entries_.erase(lru_.back());
     lru_.pop_back();

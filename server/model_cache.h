@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <list>
+#include <string>
 #include <memory>
 #include <mutex>
 #include <string_view>
@@ -47,6 +48,7 @@ class ModelCache {
   struct Entry {
     std::shared_ptr<const Model> model;
     std::list<int64_t>::iterator lru;
+    std::string sha256;  // the blob's: an id alone names another blob in a restored store
   };
   std::unordered_map<int64_t, Entry> entries_;
 };

@@ -110,6 +110,15 @@ Expected<std::unique_ptr<ModelStore>> ModelStore::Open(const std::string& path, 
     if (!*row || wal.text(0) != "wal")
       return failed_precondition(path + ": cannot switch to WAL journal mode (got '" + (*row ? wal.text(0) : "") + "')");
   }
+  if (!in_memory) {
+    // A file whose pages are damaged past its header opens and migrates; the store would then say
+    // SERVING and fail every call. quick_check reads every page once (model-sync.sh checks the same).
+    Stmt check(db, "PRAGMA quick_check");
+    auto row = check.step();
+    if (!row) return fail(row.error());
+    if (!*row || check.text(0) != "ok")
+      return data_loss(path + ": model store corrupt (quick_check: " + (*row ? check.text(0) : "no answer") + ")");
+  }
   if (Status s = MigrateStore(db); !s.ok()) return fail(s.error());
   return store;
 }

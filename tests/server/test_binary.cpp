@@ -130,6 +130,17 @@ TEST(Binary, HelpAndBadFlags) {
   Process bad({"--max-points=lots"}, dir / "bad.txt", dir / "");
   EXPECT_EQ(bad.Wait(), 2);
   EXPECT_THAT(bad.Output(), HasSubstr("--max-points"));
+  // Values that would overflow into another setting (a negative thread count, a stream limit in the
+  // past) and a thread quota the pollers use up are refused, not served as RESOURCE_EXHAUSTED.
+  Process streams({"--max-streams=2147483648"}, dir / "streams.txt", dir / "");
+  EXPECT_EQ(streams.Wait(), 2);
+  EXPECT_THAT(streams.Output(), HasSubstr("--max-streams"));
+  Process seconds({"--max-stream-seconds=9223372037"}, dir / "seconds.txt", dir / "");
+  EXPECT_EQ(seconds.Wait(), 2);
+  EXPECT_THAT(seconds.Output(), HasSubstr("--max-stream-seconds"));
+  Process one({"--threads=1", "--db=" + (dir / "t.db").string(), "--metrics-port=0"}, dir / "one.txt", dir / "");
+  EXPECT_EQ(one.Wait(), 2);
+  EXPECT_THAT(one.Output(), HasSubstr("--threads 1 leaves no thread to serve calls"));
 }
 
 TEST(Binary, CorruptDatabaseIsAClearStartupError) {

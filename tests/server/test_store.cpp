@@ -309,6 +309,30 @@ TEST(Store, CorruptBlobIsDataLoss) {
   EXPECT_EQ(store->Blob(id).error().code, ErrorCode::kDataLoss);
 }
 
+// Pages damaged past the header: the file still opens and migrates, and without a check at startup the
+// server would say SERVING and fail every call. Open reads every page once and refuses it.
+TEST(Store, APageDamagedPastTheHeaderIsAClearOpenError) {
+  TempDir dir;
+  const std::string path = dir.file("g.db");
+  {
+    auto store = OpenOk(path);
+    NewModel big = Sample("m");
+    big.blob.assign(64 * 1024, 7);  // pages enough to damage some
+    ASSERT_TRUE(store->Put(big).ok());
+  }
+  ASSERT_GT(std::filesystem::file_size(path), 8u * 4096u);
+  {
+    std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(4096);
+    const std::string garbage(3 * 4096, '\x5a');
+    f.write(garbage.data(), std::streamsize(garbage.size()));
+  }
+  auto store = ModelStore::Open(path);
+  ASSERT_FALSE(store.ok());
+  EXPECT_EQ(store.error().code, ErrorCode::kDataLoss) << store.error().message;
+  EXPECT_NE(store.error().message.find("g.db"), std::string::npos) << store.error().message;
+}
+
 TEST(Store, MigratesAnOlderSchema) {
   TempDir dir;
   const std::string path = dir.file("old.db");
@@ -451,6 +475,39 @@ TEST(ModelCache, SeesVersionsAndDeletesFromAnotherProcess) {
   ASSERT_TRUE(theirs->Delete("m", 1).ok());
   EXPECT_EQ(cache.Load("m", 1).error().code, ErrorCode::kNotFound);
   EXPECT_EQ(cache.size(), 1u);  // the deleted version's entry was dropped
+}
+
+// A store restored from another trainer's (model-sync.sh pull) starts its ids again: id 1 is then
+// another blob, and the cache must serve the record's bytes, not what it held under that id.
+TEST(ModelCache, AnIdWhoseBlobChangedIsLoadedAgain) {
+  TempDir dir;
+  const std::string path = dir.file("restored.db");
+  auto store = OpenOk(path);
+  ASSERT_TRUE(store->Put(Deserializable("m", {"a", "b"})).ok());
+  int calls = 0;
+  ModelCache cache(*store, [&](std::span<const uint8_t> b) { ++calls; return testing::FakeDeserialize(b); });
+  auto before = cache.Load("m", 0);
+  ASSERT_TRUE(before.ok());
+  EXPECT_EQ(before->model->categories.size(), 2u);
+  {  // what a restore leaves: the same id, another blob (and its digest)
+    Model other;
+    other.categories = {"a", "b", "c"};
+    other.methods = {MethodId::kBoK, MethodId::kFusion};
+    const std::vector<uint8_t> blob = testing::FakeSerialize(other);
+    std::string hex;
+    for (uint8_t b : blob) {
+      static const char* digits = "0123456789abcdef";
+      hex += digits[b >> 4], hex += digits[b & 15];
+    }
+    RawExec(path, "DROP TRIGGER versions_immutable; UPDATE versions SET blob = x'" + hex + "', sha256 = '" + Sha256Hex(blob) + "' WHERE id = " +
+                      std::to_string(before->record.id) + ";");
+  }
+  auto after = cache.Load("m", 0);
+  ASSERT_TRUE(after.ok()) << after.error().message;
+  EXPECT_EQ(after->record.id, before->record.id);
+  EXPECT_EQ(after->model->categories.size(), 3u);
+  EXPECT_EQ(calls, 2);
+  EXPECT_EQ(cache.size(), 1u);
 }
 
 TEST(ModelCache, UndeserializableBlobIsAnErrorNotACrash) {
