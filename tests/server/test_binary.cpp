@@ -127,20 +127,19 @@ TEST(Binary, HelpAndBadFlags) {
   Process help({"--help"}, dir / "help.txt", dir / "");
   EXPECT_EQ(help.Wait(), 0);
   EXPECT_THAT(help.Output(), HasSubstr("--max-streams"));
-  Process bad({"--max-points=lots"}, dir / "bad.txt", dir / "");
-  EXPECT_EQ(bad.Wait(), 2);
-  EXPECT_THAT(bad.Output(), HasSubstr("--max-points"));
-  // Values that would overflow into another setting (a negative thread count, a stream limit in the
-  // past) and a thread quota the pollers use up are refused, not served as RESOURCE_EXHAUSTED.
-  Process streams({"--max-streams=2147483648"}, dir / "streams.txt", dir / "");
-  EXPECT_EQ(streams.Wait(), 2);
-  EXPECT_THAT(streams.Output(), HasSubstr("--max-streams"));
-  Process seconds({"--max-stream-seconds=9223372037"}, dir / "seconds.txt", dir / "");
-  EXPECT_EQ(seconds.Wait(), 2);
-  EXPECT_THAT(seconds.Output(), HasSubstr("--max-stream-seconds"));
-  Process one({"--threads=1", "--db=" + (dir / "t.db").string(), "--metrics-port=0"}, dir / "one.txt", dir / "");
-  EXPECT_EQ(one.Wait(), 2);
-  EXPECT_THAT(one.Output(), HasSubstr("--threads 1 leaves no thread to serve calls"));
+  // Besides a word for a number: values that would overflow into another setting (a negative thread
+  // count, a stream limit in the past) and a thread quota the pollers use up are refused, not served as
+  // RESOURCE_EXHAUSTED on every call.
+  const std::vector<std::pair<std::vector<std::string>, std::string>> refused = {
+      {{"--max-points=lots"}, "--max-points"},
+      {{"--max-streams=2147483648"}, "--max-streams"},
+      {{"--max-stream-seconds=9223372037"}, "--max-stream-seconds"},
+      {{"--threads=1", "--db=" + (dir / "t.db").string(), "--metrics-port=0"}, "--threads 1 leaves no thread to serve calls"}};
+  for (size_t i = 0; i < refused.size(); ++i) {
+    Process bad(refused[i].first, dir / ("bad" + std::to_string(i) + ".txt"), dir / "");
+    EXPECT_EQ(bad.Wait(), 2) << refused[i].second;
+    EXPECT_THAT(bad.Output(), HasSubstr(refused[i].second));
+  }
 }
 
 TEST(Binary, CorruptDatabaseIsAClearStartupError) {
