@@ -66,7 +66,8 @@ Expected<std::map<std::string, Pose>> ReadPoses(const fs::path& path) {
         header += (header.empty() ? "" : ",") + c;
       }
       // A quaternion written x,y,z,w read as w,x,y,z turns every frame the wrong way, silently.
-      if (header.substr(header.find(',')) != ",x,y,z" && header.substr(header.find(',')) != ",x,y,z,qw,qx,qy,qz")
+      const std::string columns = header.substr(header.find(','));  // after the file's column
+      if (columns != ",x,y,z" && columns != ",x,y,z,qw,qx,qy,qz")
         return invalid_argument(where + "the header must be file,x,y,z or file,x,y,z,qw,qx,qy,qz (w first), not '" +
                                 header + "'");
       continue;
