@@ -42,9 +42,9 @@ Prepared Prepare(const Folder& folder, const std::vector<DatasetObject>& objects
     }
     for (size_t v = 0; v < views->views.size(); ++v)
       for (size_t s = 0; s < stages.size(); ++s) {
-        p.clouds.push_back(StageCloud(views->views[v], views->full_points, stages[s]));
+        p.clouds.push_back(StageCloud(views->views[v], views->full.size(), stages[s]));
         p.items.push_back({int(i), int(v), s});
-        p.full_points.push_back(views->full_points);
+        p.full_points.push_back(views->full.size());
       }
   }
   return p;

@@ -13,8 +13,8 @@
 #include "client/parse.h"
 #include "client/render.h"
 #include "client/scan.h"
-#include "glimpse/views.h"
-#include "glimpse/zoo.h"
+#include "glimpse/views/sampling.h"
+#include "glimpse/views/zoo.h"
 
 namespace glimpse::client {
 namespace {
@@ -58,7 +58,7 @@ Expected<Cloud> StreamView(const StreamOptions& o) {
   if (!file) return file.error();
   if (Status s = ApplySensor(*file, o.sensor, o.file); !s.ok()) return s.error();
   if (file->is_mesh) {
-    ProtocolOptions protocol = o.protocol;
+    ViewRecipe protocol = o.protocol;
     protocol.seed = o.seed;
     return MeshFileView(o.file, o.placement, protocol, o.viewpoint.value_or(0));
   }

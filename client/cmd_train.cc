@@ -12,9 +12,9 @@
 #include "client/objects.h"
 #include "client/parse.h"
 #include "client/render.h"
-#include "glimpse/evaluation.h"
-#include "glimpse/scan_filters.h"
-#include "glimpse/zoo.h"
+#include "glimpse/learning/object_views.h"
+#include "glimpse/geometry/scan_filters.h"
+#include "glimpse/views/zoo.h"
 
 namespace glimpse::client {
 namespace {
@@ -37,9 +37,9 @@ bool EmitViews(const std::string& category, const std::string& object_id, const 
 }
 
 // Every mesh of the folder as glimpse-lab loads and views it.
-Status EmitMeshes(const ProtocolOptions& protocol, const Folder& folder, const Emit& emit) {
+Status EmitMeshes(const ViewRecipe& recipe, double sensor_density, const Folder& folder, const Emit& emit) {
   for (const DatasetObject& object : folder.dataset.objects) {
-    auto views = ProtocolViews(object, folder.sizing, protocol);
+    auto views = ProtocolViews(object, folder.sizing, recipe, sensor_density);
     if (!views) return views.error();
     if (!EmitViews(object.category, ObjectKey(object), *views, emit)) return {};
   }
@@ -62,12 +62,12 @@ Status EmitCloudFiles(const Folder& folder, const Emit& emit) {
 // The procedural zoo's objects (upright, real-life size), viewed as glimpse-lab views them; only
 // those of `categories` when given (a folder's, which the zoo adds to: then they are augmented, learnt
 // but not what "unknown" measures against, as glimpse-lab's --also-train zoo:N).
-Status EmitZoo(const TrainOptions& o, const ProtocolOptions& protocol, const std::set<std::string>& categories,
-               const Emit& emit) {
-  for (const EvalObject& object : zoo_objects(o.per_category, protocol.seed)) {
+Status EmitZoo(const TrainOptions& o, const ViewRecipe& recipe, double sensor_density,
+               const std::set<std::string>& categories, const Emit& emit) {
+  for (const LabelledMesh& object : make_zoo(o.per_category, recipe.seed)) {
     if (!categories.empty() && !categories.count(object.category)) continue;
     const std::string key = object.category + "/" + object.id;
-    if (!EmitViews(object.category, key, ViewsOfMesh(object.mesh, key, object.any_pose, protocol), emit,
+    if (!EmitViews(object.category, key, training_views(object.mesh, key, object.any_pose, recipe, sensor_density), emit,
                    !categories.empty()))
       return {};
   }
@@ -79,7 +79,7 @@ Status EmitZoo(const TrainOptions& o, const ProtocolOptions& protocol, const std
 // are thinned to (glimpse-lab: EvalResult::trained_density). Returns it and how many views it is of.
 Expected<std::pair<double, size_t>> SensorDensity(const TrainOptions& o, const Folder& folder,
                                                   const std::set<std::string>& zoo_categories) {
-  ProtocolOptions ideal = o.protocol;
+  ViewRecipe ideal = o.protocol;
   ideal.train_sensors.clear();
   std::vector<double> density;
   const Emit measure = [&](const std::string&, const std::string&, const Cloud& cloud, bool) {
@@ -87,9 +87,9 @@ Expected<std::pair<double, size_t>> SensorDensity(const TrainOptions& o, const F
     return true;
   };
   if (!o.dir.empty())
-    if (Status s = EmitMeshes(ideal, folder, measure); !s.ok()) return s.error();
+    if (Status s = EmitMeshes(ideal, 0, folder, measure); !s.ok()) return s.error();
   if (o.zoo)
-    if (Status s = EmitZoo(o, ideal, zoo_categories, measure); !s.ok()) return s.error();
+    if (Status s = EmitZoo(o, ideal, 0, zoo_categories, measure); !s.ok()) return s.error();
   const size_t views = density.size();
   return std::pair{median_density(std::move(density)), views};
 }
@@ -173,7 +173,8 @@ int RunTrain(const ConnectionOptions& conn, const TrainOptions& o) {
                                                 : "whole sampled clouds, no views");
     for (const std::string& line : folder.applied) std::fprintf(stderr, "train: %s\n", line.c_str());
   }
-  ProtocolOptions protocol = o.protocol;
+  const ViewRecipe& protocol = o.protocol;
+  double sensor_density = 0;  // what the sensors' views are thinned to
   if (meshes && protocol.views && !protocol.train_sensors.empty()) {
     if (!o.quiet) std::fprintf(stderr, "train: measuring every mesh's ideal views' density (a first pass) ...\n");
     auto density = SensorDensity(o, folder, zoo_extra);
@@ -181,14 +182,14 @@ int RunTrain(const ConnectionOptions& conn, const TrainOptions& o) {
       PrintError(what, density.error().message);
       return kExitError;
     }
-    protocol.sensor_density = density->first;
+    sensor_density = density->first;
     if (!o.quiet) {
       std::string sensors;
       for (const ScanCondition& c : protocol.train_sensors) sensors += (sensors.empty() ? "" : "; ") + describe(c);
       std::fprintf(stderr,
                    "train: and the same azimuths seen by a simulated %s, filtered to the ideal views' density (%.1f "
                    "points per extent^2, the median over %zu views; --sensor-views none: not)\n",
-                   sensors.c_str(), protocol.sensor_density, density->second);
+                   sensors.c_str(), sensor_density, density->second);
     }
   }
   auto stub = ConnectGlimpse(conn, what);
@@ -230,9 +231,9 @@ int RunTrain(const ConnectionOptions& conn, const TrainOptions& o) {
     return open;
   };
   Status loaded;
-  if (open && !o.dir.empty()) loaded = EmitMeshes(protocol, folder, emit);
+  if (open && !o.dir.empty()) loaded = EmitMeshes(protocol, sensor_density, folder, emit);
   if (open && loaded.ok() && !o.dir.empty()) loaded = EmitCloudFiles(folder, emit);
-  if (open && loaded.ok() && o.zoo) loaded = EmitZoo(o, protocol, zoo_extra, emit);
+  if (open && loaded.ok() && o.zoo) loaded = EmitZoo(o, protocol, sensor_density, zoo_extra, emit);
   if (!loaded.ok()) context.TryCancel();  // a failed call stores nothing
   if (open && loaded.ok()) stream->WritesDone();
   reader.join();

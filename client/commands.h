@@ -31,7 +31,7 @@ struct TrainOptions {
   std::string methods;         // "bok,bog"; empty: the server's default set
   std::string description;
   Placement placement;         // --up, --unit, --height (override the folder's manifest)
-  ProtocolOptions protocol;    // views, samples, seed (glimpse-lab's defaults)
+  ViewRecipe protocol;    // views, samples, seed (glimpse-lab's defaults)
   std::optional<uint64_t> train_seed;  // TrainParameters.seed
   bool no_scan_filters = false;        // TrainParameters.filter_scans = false
   bool json = false;           // print the stored ModelInfo as JSON instead of a summary
@@ -44,7 +44,7 @@ struct ClassifyOptions {
   std::string model;   // "NAME[:VERSION]"
   std::string method;  // empty: the model's default
   Placement placement;       // meshes: --up, --unit, --height
-  ProtocolOptions protocol;  // meshes: samples, seed
+  ViewRecipe protocol;  // meshes: samples, seed
   int view = 0;              // meshes: the paper's viewpoint (0-5) of the single view sent
   bool whole = false;        // meshes: the whole sampled cloud instead of a view
   bool view_given = false;   // --view or --whole was given (a cloud file, sent as it is, is warned)
@@ -71,7 +71,7 @@ struct StreamOptions {
   std::optional<int> viewpoint;
   std::optional<Vec3> sensor;  // cloud files: as ClassifyOptions::sensor
   Placement placement;        // meshes: --up, --unit, --height
-  ProtocolOptions protocol;   // meshes: samples
+  ViewRecipe protocol;   // meshes: samples
   bool json = false;
   double known_acceptance = 0;  // the operating point of "unknown" (0: the model's default)
 };
@@ -89,7 +89,7 @@ struct EvaluateOptions {
   std::string method;          // empty: the model's default
   std::string stages = "full,10,20";  // full and N (% of the object's full cloud, top-down)
   Placement placement;
-  ProtocolOptions protocol;
+  ViewRecipe protocol;
   size_t max_per_category = 0;  // 0: every object
   size_t batch_clouds = 48;    // clouds per ClassifyBatch call
   bool json = false;

@@ -7,7 +7,7 @@
 #include <set>
 
 #include "client/render.h"
-#include "glimpse/views.h"
+#include "glimpse/views/exploration.h"
 
 namespace glimpse::client {
 namespace {

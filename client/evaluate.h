@@ -7,7 +7,8 @@
 #include <string_view>
 #include <vector>
 
-#include "glimpse/evaluation.h"
+#include "glimpse/learning/metrics.h"
+#include "glimpse/views/exploration.h"
 
 namespace glimpse::client {
 

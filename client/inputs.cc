@@ -5,8 +5,9 @@
 #include <filesystem>
 
 #include "client/cloud_convert.h"
-#include "glimpse/io.h"
-#include "glimpse/views.h"
+#include "glimpse/io/files.h"
+#include "glimpse/views/sampling.h"
+#include "glimpse/views/hidden_point_removal.h"
 
 namespace glimpse::client {
 namespace {

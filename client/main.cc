@@ -11,8 +11,10 @@
 #include "client/evaluate.h"
 #include "client/parse.h"
 #include "client/scan.h"
-#include "glimpse/views.h"
-#include "glimpse/zoo.h"
+#include "glimpse/views/placement.h"
+#include "glimpse/learning/object_views.h"
+#include "glimpse/views/scan_conditions.h"
+#include "glimpse/views/zoo.h"
 
 using namespace glimpse::client;
 
@@ -94,7 +96,7 @@ void AddPlacementOptions(CLI::App& cmd, Placement& placement, bool folder, bool 
 }
 
 // Surface samples and their seed; train and evaluate also choose the number of views.
-void AddProtocolOptions(CLI::App& cmd, ProtocolOptions& p, bool views) {
+void AddViewOptions(CLI::App& cmd, glimpse::ViewRecipe& p, bool views) {
   cmd.add_option("--mesh-points", p.points, "points sampled on a mesh's surface (0: its vertices), as glimpse-lab's --points")
       ->capture_default_str()->check(CLI::Range(size_t{0}, size_t{5'000'000}))->group("Meshes");
   cmd.add_option("--seed", p.seed, std::string("seed of sizes, samples and poses (glimpse-lab's --seed)") +
@@ -168,7 +170,7 @@ int Main(int argc, char** argv) {
   train->add_option("--methods", t.methods, "comma-separated: bok,bog,kgh,vfh,esf,ush,size,fusion (default: the server's)")
       ->check(kMethodList);
   train->add_option("--description", t.description, "free text stored with the model");
-  AddProtocolOptions(*train, t.protocol, true);
+  AddViewOptions(*train, t.protocol, true);
   AddPlacementOptions(*train, t.placement, true, true);
   train->add_option_function<uint64_t>("--train-seed", [&t](const uint64_t& s) { t.train_seed = s; },
                                        "k-means and sampling seed of training (default: the server's)");
@@ -209,7 +211,7 @@ int Main(int argc, char** argv) {
                    ->capture_default_str()->check(CLI::Range(0, 5))->group("Meshes");
   classify->add_flag("--whole", c.whole, "meshes: the whole sampled cloud instead of a single view")->excludes(view)->group("Meshes");
   AddSensorOption(*classify, c.sensor);
-  AddProtocolOptions(*classify, c.protocol, false);
+  AddViewOptions(*classify, c.protocol, false);
   AddPlacementOptions(*classify, c.placement, false, true);
   classify->callback([&, view] {
     c.view_given = view->count() > 0 || c.whole;
@@ -275,7 +277,7 @@ int Main(int argc, char** argv) {
       ->check(CLI::Range(size_t{1}, size_t{256}));
   evaluate->add_flag("--json", e.json, "the report as one JSON object");
   evaluate->add_flag("-q,--quiet", e.quiet, "no progress on stderr");
-  AddProtocolOptions(*evaluate, e.protocol, true);
+  AddViewOptions(*evaluate, e.protocol, true);
   AddPlacementOptions(*evaluate, e.placement, true, false);
   evaluate->callback([&] { run = [&] { return RunEvaluate(conn, e); }; });
 

@@ -7,7 +7,9 @@
 #include <set>
 
 #include "client/cloud_convert.h"
-#include "glimpse/views.h"
+#include "glimpse/views/sampling.h"
+#include "glimpse/views/placement.h"
+#include "glimpse/views/hidden_point_removal.h"
 
 namespace glimpse::client {
 namespace {
@@ -108,38 +110,11 @@ Expected<Folder> ScanFolder(const std::string& dir, const Placement& placement) 
   return f;
 }
 
-ObjectViews ViewsOfMesh(const Mesh& mesh, const std::string& key, bool any_pose, const ProtocolOptions& options) {
-  const uint64_t seed = object_seed(options.seed, key);
-  ObjectViews out;
-  Points full = object_cloud(mesh, options.points, seed);
-  std::erase_if(full, [](const Vec3& p) { return !p.allFinite(); });
-  out.full_points = full.size();
-  if (options.views == 0) {
-    out.views.push_back(Cloud{std::move(full), std::nullopt});
-    return out;
-  }
-  for (size_t v = 0; v < options.views; ++v)
-    out.views.push_back(object_view(full, v, options.views, any_pose, seed, options.hpr_radius_factor));
-  for (float elevation : options.train_elevations_deg)
-    if (elevation != kPaperElevationDeg)
-      for (size_t v = 0; v < options.views; ++v)
-        out.views.push_back(object_view(full, v, options.views, any_pose, seed, options.hpr_radius_factor, elevation));
-  if (!options.train_sensors.empty()) {
-    out.first_augmented = out.views.size();
-    EvalObject object;
-    object.mesh = mesh, object.any_pose = any_pose;
-    for (const ScanCondition& sensor : options.train_sensors)
-      for (size_t v = 0; v < options.views; ++v)
-        out.views.push_back(sensor_training_view(object, full, v, options.views, seed, sensor, options.points,
-                                                 options.hpr_radius_factor, options.sensor_density));
-  }
-  return out;
-}
-
-Expected<ObjectViews> ProtocolViews(const DatasetObject& object, const Sizing& sizing, const ProtocolOptions& options) {
-  auto mesh = load_object(object, options.seed, sizing);
+Expected<ObjectViews> ProtocolViews(const DatasetObject& object, const Sizing& sizing, const ViewRecipe& recipe,
+                                    double sensor_density) {
+  auto mesh = load_object(object, recipe.seed, sizing);
   if (!mesh) return mesh.error();
-  return ViewsOfMesh(*mesh, ObjectKey(object), object.size.any_pose, options);
+  return training_views(*mesh, ObjectKey(object), object.size.any_pose, recipe, sensor_density);
 }
 
 Status PlaceCloud(Cloud& cloud, const Placement& placement, const std::string& path) {
@@ -154,20 +129,19 @@ Status PlaceCloud(Cloud& cloud, const Placement& placement, const std::string& p
   return {};
 }
 
-Expected<Cloud> MeshFileView(const std::string& path, const Placement& placement, const ProtocolOptions& options,
+Expected<Cloud> MeshFileView(const std::string& path, const Placement& placement, const ViewRecipe& recipe,
                              std::optional<int> view) {
   DatasetObject object;
   object.path = path;
   object.id = std::filesystem::path(path).stem().string();
   object.up = placement.up.value_or(Vec3::UnitZ());
-  auto mesh = load_object(object, options.seed, placement.sizing.value_or(Sizing{Sizing::kUnit, 1.f}));
+  auto mesh = load_object(object, recipe.seed, placement.sizing.value_or(Sizing{Sizing::kUnit, 1.f}));
   if (!mesh) return mesh.error();
-  const uint64_t seed = object_seed(options.seed, object.id);
-  Points full = object_cloud(*mesh, options.points, seed);
-  std::erase_if(full, [](const Vec3& p) { return !p.allFinite(); });
+  Points full = full_cloud(*mesh, object.id, recipe);
   if (full.empty()) return invalid_argument(path + ": the mesh gives no points");
   if (!view) return Cloud{std::move(full), std::nullopt};
-  return object_view(full, static_cast<size_t>(std::clamp(*view, 0, 5)), 6, false, seed, options.hpr_radius_factor);
+  const uint64_t seed = object_seed(recipe.seed, object.id);
+  return object_view(full, static_cast<size_t>(std::clamp(*view, 0, 5)), 6, false, seed, recipe.hpr_radius_factor);
 }
 
 }  // namespace glimpse::client

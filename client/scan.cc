@@ -6,7 +6,7 @@
 #include <numeric>
 #include <random>
 
-#include "glimpse/views.h"
+#include "glimpse/views/exploration.h"
 
 namespace glimpse::client {
 

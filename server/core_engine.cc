@@ -6,7 +6,7 @@
 #include <limits>
 
 #include "engine.h"
-#include "glimpse/train_params.h"
+#include "glimpse/learning/train_params.h"
 
 namespace glimpse::server {
 namespace {

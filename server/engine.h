@@ -9,8 +9,8 @@
 #include <span>
 #include <vector>
 
-#include "glimpse/model.h"
-#include "glimpse/session.h"
+#include "glimpse/learning/model.h"
+#include "glimpse/session/session.h"
 #include "glimpse/v1/glimpse.pb.h"
 
 namespace glimpse::server {

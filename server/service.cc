@@ -166,8 +166,7 @@ grpc::Status GlimpseService::ClassifyBatch(grpc::ServerContext* ctx, const v1::C
     log.model = RefText(loaded->record.name, loaded->record.version);
     // What concerns every cloud fails the call, not each result.
     const MethodId used = method->value_or(loaded->model->default_method);
-    if (std::find(loaded->model->methods.begin(), loaded->model->methods.end(), used) == loaded->model->methods.end())
-      return failed_precondition(std::string("the model was not trained for method '") + method_name(used) + "'");
+    if (Status s = check_trained_for(*loaded->model, used); !s.ok()) return s.error();
     if (CancelFor(ctx)()) return cancelled("the caller cancelled or the deadline passed before classification");
     std::vector<Expected<Classification>> results = options_.engine.classify_batch(*loaded->model, batch->clouds, *method, CancelFor(ctx));
     for (const Expected<Classification>& r : results)

@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "glimpse/expected.h"
-#include "glimpse/model.h"
+#include "glimpse/learning/model.h"
 
 struct sqlite3;
 

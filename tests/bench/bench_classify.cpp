@@ -45,13 +45,15 @@
 #include "scene.h"
 #include "../core/format3.h"
 #include "../core/synthetic.h"
-#include "glimpse/codebook.h"
-#include "glimpse/global_descriptors.h"
-#include "glimpse/model.h"
-#include "glimpse/scan_filters.h"
-#include "glimpse/train_params.h"
-#include "glimpse/views.h"
-#include "glimpse/zoo.h"
+#include "glimpse/learning/codebook.h"
+#include "glimpse/features/global_descriptors.h"
+#include "glimpse/learning/model.h"
+#include "glimpse/geometry/scan_filters.h"
+#include "glimpse/learning/train_params.h"
+#include "glimpse/views/sampling.h"
+#include "glimpse/views/placement.h"
+#include "glimpse/views/hidden_point_removal.h"
+#include "glimpse/views/zoo.h"
 
 namespace glimpse {
 namespace {

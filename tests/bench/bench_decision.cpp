@@ -12,8 +12,8 @@
 #include <cmath>
 #include <random>
 
-#include "glimpse/codebook.h"
-#include "glimpse/decision.h"
+#include "glimpse/learning/codebook.h"
+#include "glimpse/learning/decision.h"
 
 using namespace glimpse;
 

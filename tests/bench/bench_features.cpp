@@ -18,12 +18,12 @@
 #include <optional>
 
 #include "scene.h"
-#include "glimpse/features.h"
-#include "glimpse/descriptor.h"
-#include "glimpse/neighbourhoods.h"
-#include "glimpse/preprocess.h"
-#include "glimpse/surface_fit.h"
-#include "glimpse/keypoints.h"
+#include "glimpse/features/local_features.h"
+#include "glimpse/features/descriptor.h"
+#include "glimpse/geometry/neighbourhoods.h"
+#include "glimpse/geometry/clean.h"
+#include "glimpse/geometry/surface_fit.h"
+#include "glimpse/features/keypoints.h"
 
 namespace glimpse {
 namespace {

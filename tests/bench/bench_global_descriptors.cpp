@@ -8,8 +8,8 @@
 #include <random>
 
 #include "scene.h"
-#include "glimpse/codebook.h"
-#include "glimpse/global_descriptors.h"
+#include "glimpse/learning/codebook.h"
+#include "glimpse/features/global_descriptors.h"
 
 namespace glimpse {
 namespace {

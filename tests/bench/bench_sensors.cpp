@@ -4,8 +4,8 @@
 // did before it cast each row as packets of 8 (RayScene::cast_many); both find the same hits.
 #include <benchmark/benchmark.h>
 
-#include "glimpse/sensors.h"
-#include "glimpse/zoo.h"
+#include "glimpse/views/sensors.h"
+#include "glimpse/views/zoo.h"
 
 namespace {
 

@@ -19,10 +19,10 @@
 #include <numeric>
 #include <random>
 
-#include "glimpse/evaluation.h"
-#include "glimpse/train_params.h"
-#include "glimpse/views.h"
-#include "glimpse/zoo.h"
+#include "glimpse/learning/train_params.h"
+#include "glimpse/views/sampling.h"
+#include "glimpse/views/hidden_point_removal.h"
+#include "glimpse/views/zoo.h"
 #include "server/convert.h"
 #include "server/server.h"
 #include "server/service.h"
@@ -63,7 +63,7 @@ Cloud QueryView() {
 constexpr size_t kBatchViews = 32;
 std::vector<Cloud> BatchViews() {
   std::vector<Cloud> views;
-  for (const EvalObject& o : zoo_objects(7, /*seed=*/77)) {
+  for (const LabelledMesh& o : make_zoo(7, /*seed=*/77)) {
     if (views.size() == kBatchViews) break;
     const uint64_t seed = object_seed(77, o.category + "/" + o.id);
     views.push_back(object_view(object_cloud(o.mesh, 6000, seed), 1, 6, o.any_pose, seed));

@@ -8,10 +8,12 @@
 #include <benchmark/benchmark.h>
 
 #include "../core/synthetic.h"
-#include "glimpse/session.h"
-#include "glimpse/train_params.h"
-#include "glimpse/views.h"
-#include "glimpse/zoo.h"
+#include "glimpse/session/session.h"
+#include "glimpse/learning/train_params.h"
+#include "glimpse/views/sampling.h"
+#include "glimpse/views/hidden_point_removal.h"
+#include "glimpse/views/exploration.h"
+#include "glimpse/views/zoo.h"
 
 #include <Eigen/Geometry>
 

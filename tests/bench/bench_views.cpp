@@ -1,8 +1,9 @@
 // Cost of making the paper's single views: hidden point removal (Katz 2007) and surface sampling.
 #include <benchmark/benchmark.h>
 
-#include "glimpse/views.h"
-#include "glimpse/zoo.h"
+#include "glimpse/views/sampling.h"
+#include "glimpse/views/hidden_point_removal.h"
+#include "glimpse/views/zoo.h"
 
 namespace {
 

@@ -4,7 +4,7 @@
 
 #include "client/batch_client.h"
 #include "client/evaluate.h"
-#include "glimpse/views.h"
+#include "glimpse/views/exploration.h"
 
 namespace glimpse::client {
 namespace {

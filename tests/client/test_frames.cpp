@@ -8,7 +8,7 @@
 #include <fstream>
 
 #include "client/frames.h"
-#include "glimpse/io.h"
+#include "glimpse/io/files.h"
 
 namespace glimpse::client {
 namespace {

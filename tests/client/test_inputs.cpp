@@ -4,7 +4,7 @@
 #include <fstream>
 
 #include "client/inputs.h"
-#include "glimpse/io.h"
+#include "glimpse/io/files.h"
 
 namespace glimpse::client {
 namespace {

@@ -10,9 +10,10 @@
 
 #include "client/commands.h"
 #include "client/objects.h"
-#include "glimpse/evaluation.h"
-#include "glimpse/io.h"
-#include "glimpse/views.h"
+#include "glimpse/learning/object_views.h"
+#include "glimpse/io/files.h"
+#include "glimpse/views/sampling.h"
+#include "glimpse/views/hidden_point_removal.h"
 
 namespace glimpse::client {
 namespace {
@@ -175,72 +176,39 @@ TEST_F(ObjectsTest, ABadManifestRowIsAnErrorNamingTheFile) {
   EXPECT_FALSE(ScanFolder((dir_ / "missing").string(), {}).ok());
 }
 
+// The client views a folder as the lab does: the manifest read by core's scan_dataset, each object loaded
+// by load_object at the lab's seed, and its views made by core's training_views.
 TEST_F(ObjectsTest, ProtocolViewsAreTheLabsViews) {
   WriteBox(dir_ / "human" / "1.off", 20, 170, 40);
   WriteBox(dir_ / "mechanic" / "7.off", 3, 1, 2);  // no natural up: random poses
   WriteText(dir_ / "up_axis.csv", "1,+y\n");
   auto f = ScanFolder(dir_.string(), {});
   ASSERT_TRUE(f.ok());
-  auto lab = load_dataset_objects(dir_.string(), 42);  // what glimpse-lab loads
+  auto lab = scan_dataset(dir_.string());  // what glimpse-lab reads
   ASSERT_TRUE(lab.ok());
-  ASSERT_EQ(lab->size(), f->dataset.objects.size());
-  ProtocolOptions options;
-  options.points = 1500;
-  for (size_t i = 0; i < lab->size(); ++i) {
-    const EvalObject& o = (*lab)[i];
-    auto views = ProtocolViews(f->dataset.objects[i], f->sizing, options);
+  ASSERT_EQ(lab->objects.size(), f->dataset.objects.size());
+  ViewRecipe recipe;
+  recipe.points = 1500;
+  for (size_t i = 0; i < lab->objects.size(); ++i) {
+    const DatasetObject& o = lab->objects[i];
+    auto mesh = load_object(o, 42);
+    ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+    const ObjectViews expected = training_views(*mesh, o.category + "/" + o.id, o.size.any_pose, recipe, 0);
+    auto views = ProtocolViews(f->dataset.objects[i], f->sizing, recipe);
     ASSERT_TRUE(views.ok()) << views.error().message;
-    const uint64_t seed = object_seed(42, o.category + "/" + o.id);
-    const Points full = object_cloud(o.mesh, options.points, seed);
-    EXPECT_EQ(views->full_points, full.size());
+    EXPECT_EQ(views->full, expected.full);
     ASSERT_EQ(views->views.size(), 6u);
     for (size_t v = 0; v < 6; ++v) {
-      const Cloud expected = object_view(full, v, 6, o.any_pose, seed, 100.0);
-      EXPECT_EQ(views->views[v].points, expected.points) << o.id << " view " << v;
-      EXPECT_EQ(views->views[v].sensor, expected.sensor);
+      EXPECT_EQ(views->views[v].points, expected.views[v].points) << o.id << " view " << v;
+      EXPECT_EQ(views->views[v].sensor, expected.views[v].sensor);
     }
   }
   EXPECT_TRUE(f->dataset.objects[1].size.any_pose);
 }
 
-// glimpse train's --sensor-views: after the ideal views, the cameras' views of the same azimuths, thinned
-// to the density glimpse train's first pass measured over every object's ideal views, as the lab makes
-// them (glimpse-lab --train-sensors), and marked augmented (sent as LabelledCloud.augmented: learnt, not
-// what novelty measures against).
-TEST(Objects, SensorViewsFollowTheIdealOnesAsTheLabMakesThem) {
-  const EvalObject chair = zoo_objects(1, 5).at(1);  // a chair: seen whole from 1.5 m and 3 m
-  ProtocolOptions options;
-  options.points = 3000;
-  const ObjectViews plain = ViewsOfMesh(chair.mesh, "chair/1", chair.any_pose, options);
-  EXPECT_EQ(plain.first_augmented, SIZE_MAX);
-  options.train_sensors = default_training_sensors();
-  const uint64_t seed = object_seed(options.seed, "chair/1");
-  const Points full = object_cloud(chair.mesh, options.points, seed);
-  size_t thinned = 0;
-  for (double density : {0.0, median_relative_density(plain.views)}) {  // 0: not thinned
-    options.sensor_density = density;
-    const ObjectViews views = ViewsOfMesh(chair.mesh, "chair/1", chair.any_pose, options);
-    ASSERT_EQ(views.views.size(), 18u);
-    EXPECT_EQ(views.first_augmented, 6u);
-    for (size_t v = 0; v < 6; ++v) {
-      EXPECT_EQ(views.views[v].points, plain.views[v].points);
-      for (size_t s = 0; s < 2; ++s) {
-        const Cloud expected = sensor_training_view(chair, full, v, 6, seed, options.train_sensors[s], 3000,
-                                                    options.hpr_radius_factor, density);
-        EXPECT_EQ(views.views[6 * (s + 1) + v].points, expected.points) << "sensor " << s << " view " << v;
-        if (density > 0)
-          thinned += expected.points.size() <
-                     sensor_training_view(chair, full, v, 6, seed, options.train_sensors[s], 3000, options.hpr_radius_factor, 0)
-                         .points.size();
-      }
-    }
-  }
-  EXPECT_GE(thinned, 6u);  // the near camera's views at least
-}
-
 TEST_F(ObjectsTest, AMeshFileIsOneViewOrWholeAndItsUnitApplies) {
   const std::string box = WriteBox(dir_ / "box.off", 500, 400, 300);  // millimetres
-  ProtocolOptions options;
+  ViewRecipe options;
   options.points = 2000;
   auto whole = MeshFileView(box, {}, options, std::nullopt);
   ASSERT_TRUE(whole.ok());

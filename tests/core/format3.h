@@ -11,9 +11,9 @@
 #include <string>
 #include <vector>
 
-#include "glimpse/global_descriptors.h"
-#include "glimpse/model.h"
-#include "glimpse/upright_histogram.h"
+#include "glimpse/features/global_descriptors.h"
+#include "glimpse/learning/model.h"
+#include "glimpse/features/upright_histogram.h"
 
 namespace glimpse::test {
 

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "glimpse/cloud.h"
-#include "glimpse/model.h"
+#include "glimpse/learning/model.h"
 
 namespace glimpse::test {
 

@@ -7,11 +7,11 @@
 #include <random>
 
 #include "format3.h"
-#include "glimpse/chi2_logistic.h"
-#include "glimpse/model.h"
-#include "glimpse/train_params.h"
-#include "glimpse/upright_histogram.h"
-#include "glimpse/global_descriptors.h"
+#include "glimpse/learning/chi2_logistic.h"
+#include "glimpse/learning/model.h"
+#include "glimpse/learning/train_params.h"
+#include "glimpse/features/upright_histogram.h"
+#include "glimpse/features/global_descriptors.h"
 #include "synthetic.h"
 
 namespace glimpse {

@@ -1,4 +1,4 @@
-#include "glimpse/codebook.h"
+#include "glimpse/learning/codebook.h"
 
 #include <gtest/gtest.h>
 

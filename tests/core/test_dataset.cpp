@@ -6,7 +6,8 @@
 #include <set>
 #include <unistd.h>
 
-#include "glimpse/dataset.h"
+#include "glimpse/views/dataset.h"
+#include "glimpse/views/placement.h"
 
 namespace glimpse {
 namespace {

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <random>
 
-#include "glimpse/decision.h"
+#include "glimpse/learning/decision.h"
 
 namespace glimpse {
 namespace {

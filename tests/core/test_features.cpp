@@ -8,15 +8,15 @@
 #include <cstring>
 #include <random>
 
-#include "glimpse/descriptor.h"
-#include "glimpse/features.h"
-#include "glimpse/boundaries.h"
-#include "glimpse/neighbourhoods.h"
-#include "glimpse/normal_orientation.h"
-#include "glimpse/preprocess.h"
-#include "glimpse/surface_fit.h"
-#include "glimpse/keypoints.h"
-#include "glimpse/upright_histogram.h"
+#include "glimpse/features/descriptor.h"
+#include "glimpse/features/local_features.h"
+#include "glimpse/geometry/boundaries.h"
+#include "glimpse/geometry/neighbourhoods.h"
+#include "glimpse/geometry/normal_orientation.h"
+#include "glimpse/geometry/clean.h"
+#include "glimpse/geometry/surface_fit.h"
+#include "glimpse/features/keypoints.h"
+#include "glimpse/features/upright_histogram.h"
 #include "shapes.h"
 
 namespace glimpse {

@@ -8,9 +8,9 @@
 #include <cmath>
 #include <memory>
 
-#include "glimpse/features.h"
-#include "glimpse/session.h"
-#include "glimpse/train_params.h"
+#include "glimpse/features/local_features.h"
+#include "glimpse/session/session.h"
+#include "glimpse/learning/train_params.h"
 #include "synthetic.h"
 
 namespace glimpse {

@@ -1,4 +1,4 @@
-#include "glimpse/global_descriptors.h"
+#include "glimpse/features/global_descriptors.h"
 
 #include <gtest/gtest.h>
 
@@ -7,7 +7,7 @@
 #include <random>
 #include <thread>
 
-#include "glimpse/codebook.h"
+#include "glimpse/learning/codebook.h"
 
 namespace glimpse {
 namespace {

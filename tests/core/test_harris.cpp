@@ -14,10 +14,10 @@
 #include <cmath>
 #include <functional>
 
-#include "glimpse/features.h"
-#include "glimpse/keypoints.h"
-#include "glimpse/neighbourhoods.h"
-#include "glimpse/surface_fit.h"
+#include "glimpse/features/local_features.h"
+#include "glimpse/features/keypoints.h"
+#include "glimpse/geometry/neighbourhoods.h"
+#include "glimpse/geometry/surface_fit.h"
 #include "shapes.h"
 
 namespace glimpse {

@@ -12,7 +12,7 @@
 #include <string>
 #include <unistd.h>
 
-#include "glimpse/io.h"
+#include "glimpse/io/files.h"
 
 namespace glimpse {
 namespace {

@@ -8,10 +8,10 @@
 #include <iterator>
 #include <map>
 
-#include "glimpse/classifiers.h"
-#include "glimpse/decision.h"
-#include "glimpse/model.h"
-#include "glimpse/train_params.h"
+#include "glimpse/learning/classifiers.h"
+#include "glimpse/learning/decision.h"
+#include "glimpse/learning/model.h"
+#include "glimpse/learning/train_params.h"
 #include "format3.h"
 #include "synthetic.h"
 

@@ -9,9 +9,9 @@
 #include <iostream>
 #include <random>
 
-#include "glimpse/evaluation.h"
-#include "glimpse/model.h"
-#include "glimpse/train_params.h"
+#include "glimpse/learning/metrics.h"
+#include "glimpse/learning/model.h"
+#include "glimpse/learning/train_params.h"
 #include "format3.h"
 #include "synthetic.h"
 

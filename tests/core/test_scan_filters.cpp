@@ -6,7 +6,7 @@
 #include <cmath>
 #include <random>
 
-#include "glimpse/scan_filters.h"
+#include "glimpse/geometry/scan_filters.h"
 
 namespace glimpse {
 namespace {

@@ -7,7 +7,7 @@
 #include <set>
 #include <thread>
 
-#include "glimpse/sensors.h"
+#include "glimpse/views/sensors.h"
 
 namespace glimpse {
 namespace {

@@ -6,10 +6,10 @@
 #include <cmath>
 #include <numeric>
 
-#include "glimpse/features.h"
-#include "glimpse/session.h"
-#include "glimpse/train_params.h"
-#include "glimpse/views.h"
+#include "glimpse/features/local_features.h"
+#include "glimpse/session/session.h"
+#include "glimpse/learning/train_params.h"
+#include "glimpse/views/exploration.h"
 #include "shapes.h"
 #include "synthetic.h"
 

@@ -8,7 +8,10 @@
 #include <Eigen/Geometry>
 #include <Eigen/LU>
 
-#include "glimpse/views.h"
+#include "glimpse/views/sampling.h"
+#include "glimpse/views/placement.h"
+#include "glimpse/views/hidden_point_removal.h"
+#include "glimpse/views/exploration.h"
 
 namespace glimpse {
 namespace {
@@ -324,5 +327,55 @@ TEST(TopDown, HighestPointsAreTheSortedOrdersPrefix) {
   EXPECT_TRUE(highest_points({}, 5).empty());
 }
 
+
+// A view of 1000 points on a vertical line, z = 0.000 .. 0.999.
+Points column(size_t n = 1000) {
+  Points p;
+  for (size_t i = 0; i < n; ++i) p.emplace_back(0.f, 0.f, float(i) / float(n));
+  return p;
+}
+
+TEST(StageCuts, KeypointPrefixHoldsExactlyTheKHighestKeypoints) {
+  const Points view = column();
+  const std::vector<float> heights = {0.1f, 0.95f, 0.5f, 0.7f, 0.3f};  // unsorted, as extract() gives them
+  for (size_t k = 1; k <= heights.size(); ++k) {
+    const size_t count = keypoint_prefix(view, heights, k, 0.f);
+    const Cloud prefix = reveal_top_down({view, std::nullopt}, count);
+    const float lowest = prefix.points.back().z();
+    const size_t inside = std::count_if(heights.begin(), heights.end(), [&](float h) { return h >= lowest - 1e-6f; });
+    EXPECT_EQ(inside, k) << "k = " << k;
+  }
+  // The margin lowers the cut by that many metres.
+  EXPECT_EQ(keypoint_prefix(view, heights, 1, 0.f), 50u);   // z >= 0.95
+  EXPECT_EQ(keypoint_prefix(view, heights, 1, 0.1f), 150u);  // z >= 0.85
+}
+
+TEST(StageCuts, KeypointPrefixIsTheWholeViewWithTooFewKeypoints) {
+  const Points view = column();
+  EXPECT_EQ(keypoint_prefix(view, {0.5f, 0.6f}, 3, 0.f), view.size());
+  EXPECT_EQ(keypoint_prefix(view, {}, 1, 0.f), view.size());
+  EXPECT_EQ(keypoint_prefix(view, {0.5f}, 0, 0.f), 0u);
+  EXPECT_EQ(keypoint_prefix({}, {0.5f}, 1, 0.f), 0u);
+}
+
+TEST(StageCuts, FractionPrefixHoldsTheFractionOfTheFullCloud) {
+  EXPECT_EQ(fraction_prefix(3000, 10000, 0.10), 1000u);
+  EXPECT_EQ(fraction_prefix(3000, 10000, 0.20), 2000u);
+  EXPECT_EQ(fraction_prefix(1500, 10000, 0.20), 1500u);  // the view is smaller: all of it
+  EXPECT_EQ(fraction_prefix(1500, 0, 0.20), 0u);
+  const Points view = column(3000);
+  const Cloud prefix = reveal_top_down({view, std::nullopt}, fraction_prefix(view.size(), 10000, 0.1));
+  EXPECT_NEAR(double(prefix.points.size()) / 10000.0, 0.10, 1e-9);
+}
+
+TEST(StageCuts, ExplorationGrid) {
+  EXPECT_EQ(exploration_grid(55, 5), (std::vector<size_t>{1, 5, 10, 15, 20, 25, 30, 35, 40, 45, 50, 55}));
+  EXPECT_EQ(exploration_grid(12, 5), (std::vector<size_t>{1, 5, 10, 12}));
+  EXPECT_EQ(exploration_grid(55, 1).size(), 55u);
+  EXPECT_TRUE(exploration_grid(0, 5).empty());
+  EXPECT_EQ(stage_name({StageKind::kKeypoints, 25}), "25kp");
+  EXPECT_EQ(stage_name({StageKind::kFraction, 0.1}), "10%");
+  EXPECT_EQ(stage_name({StageKind::kFull, 0}), "full");
+}
 }  // namespace
 }  // namespace glimpse

@@ -4,9 +4,10 @@
 #include <cmath>
 #include <map>
 
-#include "glimpse/dataset.h"
-#include "glimpse/views.h"
-#include "glimpse/zoo.h"
+#include "glimpse/views/dataset.h"
+#include "glimpse/views/sampling.h"
+#include "glimpse/views/hidden_point_removal.h"
+#include "glimpse/views/zoo.h"
 
 namespace glimpse {
 namespace {

@@ -5,7 +5,7 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "glimpse/train_params.h"
+#include "glimpse/learning/train_params.h"
 #include "server/convert.h"
 #include "server/train.h"
 

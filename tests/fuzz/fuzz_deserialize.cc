@@ -9,7 +9,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "glimpse/model.h"
+#include "glimpse/learning/model.h"
 
 namespace {
 

@@ -7,7 +7,7 @@
 #include <string>
 #include <string_view>
 
-#include "io_internal.h"  // core/src: the parsers behind read_cloud/read_mesh
+#include "io/text.h"  // core/src: the parsers behind read_cloud/read_mesh
 
 namespace glimpse::fuzz {
 

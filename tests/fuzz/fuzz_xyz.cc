@@ -7,7 +7,7 @@
 #include <filesystem>
 #include <string>
 
-#include "glimpse/io.h"
+#include "glimpse/io/files.h"
 
 namespace {
 // The folder lives as long as the process (a leaked string: atexit handlers run after statics die).

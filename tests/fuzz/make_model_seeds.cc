@@ -7,10 +7,11 @@
 #include <fstream>
 #include <string>
 
-#include "glimpse/model.h"
-#include "glimpse/train_params.h"
-#include "glimpse/views.h"
-#include "glimpse/zoo.h"
+#include "glimpse/learning/model.h"
+#include "glimpse/learning/train_params.h"
+#include "glimpse/views/sampling.h"
+#include "glimpse/views/hidden_point_removal.h"
+#include "glimpse/views/zoo.h"
 
 int main(int argc, char** argv) {
   using namespace glimpse;

@@ -14,8 +14,9 @@
 #include <string>
 #include <vector>
 
-#include "glimpse/views.h"
-#include "glimpse/zoo.h"
+#include "glimpse/views/sampling.h"
+#include "glimpse/views/hidden_point_removal.h"
+#include "glimpse/views/zoo.h"
 #include "server/convert.h"
 #include "server/server.h"
 #include "server/service.h"

@@ -9,7 +9,7 @@
 #include <random>
 
 #include "fakes.h"
-#include "glimpse/train_params.h"
+#include "glimpse/learning/train_params.h"
 
 namespace glimpse::server {
 namespace {

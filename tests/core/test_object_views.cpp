@@ -1,0 +1,118 @@
+// The protocol's views of one object and the training recipe (learning/object_views.h), and views under
+// the scan conditions of real sensors (views/scan_conditions.h).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "glimpse/geometry/scan_filters.h"
+#include "glimpse/learning/object_views.h"
+#include "glimpse/views/hidden_point_removal.h"
+#include "glimpse/views/sampling.h"
+#include "glimpse/views/scan_conditions.h"
+#include "glimpse/views/zoo.h"
+
+namespace glimpse {
+namespace {
+
+TEST(ObjectViews, MedianDensityTakesThePositiveOnes) {
+  EXPECT_EQ(median_density({0.0, 3.0, 1.0, -1.0, 2.0}), 2.0);
+  EXPECT_EQ(median_density({4.0, 1.0, 3.0, 2.0}), 3.0);  // the upper of the middle two
+  EXPECT_EQ(median_density({0.0, -2.0}), 0.0);
+  EXPECT_EQ(median_density({}), 0.0);
+}
+
+// A sensor's training view is the camera's view filtered down to the ideal views' density; a camera that
+// sees a sliver (a 1 cm object at 3 m: a few pixels) gives none, which training would refuse.
+TEST(ObjectViews, SensorViewsAreThinnedToTheIdealDensityOrLeftOut) {
+  const LabelledMesh o = make_zoo(1, 5).front();
+  const std::string key = o.category + "/" + o.id;
+  ScanCondition near;
+  near.sensor = SensorKind::kDepthCamera, near.distance_m = 1.5f, near.elevation_deg = 15.f;
+  ViewRecipe recipe;
+  recipe.points = 3000, recipe.views = 3, recipe.seed = 7, recipe.train_sensors = {near};
+  const uint64_t seed = object_seed(7, key);
+  const Points full = full_cloud(o.mesh, key, recipe);
+  EXPECT_EQ(full, object_cloud(o.mesh, 3000, seed));
+  const std::vector<Cloud> ideal = ideal_views(full, key, o.any_pose, recipe);
+  ASSERT_EQ(ideal.size(), 3u);
+  const Cloud raw = condition_view(o.mesh, o.any_pose, full, 1, 3, seed, near, 3000, 100);
+  const std::vector<Cloud> kept = sensor_views(o.mesh, full, key, o.any_pose, recipe, median_relative_density(ideal));
+  ASSERT_EQ(kept.size(), 3u);
+  ASSERT_GT(raw.points.size(), 2 * ideal[1].points.size()) << o.category;  // a camera at 1.5 m: dense
+  EXPECT_GE(kept[1].points.size(), 40u) << o.category;
+  EXPECT_LT(kept[1].points.size(), raw.points.size() / 2) << o.category;  // thinned towards the ideal density
+  EXPECT_LT(relative_density(kept[1].points), 2.5 * relative_density(ideal[1].points)) << o.category;
+  Mesh speck = o.mesh;  // the same object 1 cm across
+  const Bounds b = bounds(speck.vertices);
+  for (Vec3& p : speck.vertices) p = (p - b.min) * (0.01f / b.extent().maxCoeff());
+  recipe.train_sensors[0].distance_m = 3.f;
+  for (const Cloud& view : sensor_views(speck, full_cloud(speck, key, recipe), key, o.any_pose, recipe,
+                                        median_relative_density(ideal)))
+    EXPECT_TRUE(view.points.empty());
+}
+
+// What `glimpse train` sends and the lab learns of an object: the ideal views, then the cameras' views of
+// the same azimuths (augmented), thinned to the density the model classifies at.
+TEST(ObjectViews, TrainingViewsAreTheIdealOnesThenTheSensorsThinnedToTheDensity) {
+  const LabelledMesh chair = make_zoo(1, 5).at(1);  // a chair: seen whole from 1.5 m and 3 m
+  ASSERT_EQ(chair.category, "chair");
+  const std::string key = "chair/" + chair.id;
+  ViewRecipe recipe;
+  recipe.points = 3000;
+  const ObjectViews plain = training_views(chair.mesh, key, chair.any_pose, recipe, 0);
+  EXPECT_EQ(plain.first_augmented, SIZE_MAX);
+  ASSERT_EQ(plain.views.size(), 6u);
+  const uint64_t seed = object_seed(recipe.seed, key);
+  for (size_t v = 0; v < 6; ++v)
+    EXPECT_EQ(plain.views[v].points, object_view(plain.full, v, 6, chair.any_pose, seed).points) << v;
+  recipe.train_sensors = default_training_sensors();
+  size_t thinned = 0;
+  const std::vector<Cloud> unthinned = sensor_views(chair.mesh, plain.full, key, chair.any_pose, recipe, 0);
+  for (double density : {0.0, median_relative_density(plain.views)}) {  // 0: not thinned
+    const ObjectViews views = training_views(chair.mesh, key, chair.any_pose, recipe, density);
+    ASSERT_EQ(views.views.size(), 18u);
+    EXPECT_EQ(views.first_augmented, 6u);
+    for (size_t v = 0; v < 6; ++v) {
+      EXPECT_EQ(views.views[v].points, plain.views[v].points);
+      for (size_t s = 0; s < 2; ++s) {
+        ScanFilterParams filters;
+        filters.relative_density = density;
+        const Cloud expected = filter_scan(condition_view(chair.mesh, chair.any_pose, plain.full, v, 6, seed,
+                                                          recipe.train_sensors[s], 3000, 100),
+                                           filters);
+        EXPECT_EQ(views.views[6 * (s + 1) + v].points, expected.points) << "sensor " << s << " view " << v;
+        if (density > 0) thinned += expected.points.size() < unthinned[6 * s + v].points.size();
+      }
+    }
+  }
+  EXPECT_GE(thinned, 6u);  // the near camera's views at least
+}
+
+TEST(TrainingSensors, ParseAndSpecRoundTripAndBadItemsAreNamed) {
+  auto d = parse_training_sensors(training_sensors_spec(default_training_sensors()));
+  ASSERT_TRUE(d.ok()) << d.error().message;
+  EXPECT_EQ(*d, default_training_sensors());
+  EXPECT_EQ(training_sensors_spec(default_training_sensors()), "depth:1.5:15,depth:3:45");
+  auto l = parse_training_sensors("lidar:8:5");
+  ASSERT_TRUE(l.ok());
+  ASSERT_EQ(l->size(), 1u);
+  EXPECT_EQ((*l)[0].sensor, SensorKind::kLidar);
+  EXPECT_FLOAT_EQ((*l)[0].distance_m, 8.f);
+  EXPECT_FLOAT_EQ((*l)[0].elevation_deg, 5.f);
+  auto none = parse_training_sensors("none");
+  ASSERT_TRUE(none.ok());
+  EXPECT_TRUE(none->empty());
+  EXPECT_EQ(training_sensors_spec({}), "none");
+  for (const char* bad : {"", "depth", "depth:2", "ideal:2:30", "depth:-1:30", "depth:2:95", "depth:2:30,x", "cam:2:30"}) {
+    auto r = parse_training_sensors(bad);
+    EXPECT_FALSE(r.ok()) << bad;
+    if (!r.ok() && std::string(bad).size() > 0) {
+      EXPECT_NE(r.error().message.find("not '"), std::string::npos) << r.error().message;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace glimpse
