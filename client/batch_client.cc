@@ -1,6 +1,6 @@
 #include "client/batch_client.h"
 
-#include "client/cloud_convert.h"
+#include "proto/wire/clouds.h"
 
 namespace glimpse::client {
 
@@ -52,7 +52,7 @@ grpc::Status BatchClassifier::Batch(std::span<const Cloud> clouds, std::span<Clo
   *request.mutable_model() = model_;
   request.set_method(method_);
   request.set_known_acceptance(known_acceptance_);
-  for (const Cloud& c : clouds) ToProto(c, request.add_clouds());
+  for (const Cloud& c : clouds) wire::CloudToProto(c, request.add_clouds());
   grpc::ClientContext context;
   PrepareContext(context, conn_, timeout_per_cloud_s_ * double(clouds.size()));
   v1::ClassifyBatchResponse response;
@@ -83,7 +83,7 @@ grpc::Status BatchClassifier::Single(const Cloud& cloud, CloudAnswer& out) {
   *request.mutable_model() = model_;
   request.set_method(method_);
   request.set_known_acceptance(known_acceptance_);
-  ToProto(cloud, request.mutable_cloud());
+  wire::CloudToProto(cloud, request.mutable_cloud());
   grpc::ClientContext context;
   PrepareContext(context, conn_, timeout_per_cloud_s_);
   v1::ClassifyResponse response;

@@ -6,10 +6,11 @@
 #include <algorithm>
 
 #include "client/batch_client.h"
-#include "client/cloud_convert.h"
 #include "client/commands.h"
 #include "client/parse.h"
 #include "client/render.h"
+#include "proto/wire/errors.h"
+#include "proto/wire/methods.h"
 
 namespace glimpse::client {
 namespace {
@@ -52,7 +53,7 @@ int RunClassify(const ConnectionOptions& conn, const ClassifyOptions& o) {
     results[i].file = o.files[i];
     auto cloud = ReadInput(o.files[i], o);
     if (cloud) results[i].cloud = std::move(*cloud);
-    else results[i].Fail(StatusCodeOf(cloud.error().code), cloud.error().message);
+    else results[i].Fail(wire::ToGrpcCode(cloud.error().code), cloud.error().message);
   }
   std::vector<Cloud> clouds;
   std::vector<FileResult*> sent;
@@ -65,7 +66,7 @@ int RunClassify(const ConnectionOptions& conn, const ClassifyOptions& o) {
     auto stub = ConnectGlimpse(conn, "classify");
     if (!stub) return kExitError;
     BatchClassifier classifier(conn, *stub, *ParseModelRef(o.model),
-                               o.method.empty() ? v1::METHOD_UNSPECIFIED : *ParseMethod(o.method), kTimeoutS);
+                               o.method.empty() ? v1::METHOD_UNSPECIFIED : *wire::ParseMethod(o.method), kTimeoutS);
     classifier.set_known_acceptance(o.known_acceptance);
     BatchAnswers answers = classifier.Classify(clouds);
     for (size_t i = 0; i < sent.size(); ++i) {
@@ -86,7 +87,7 @@ int RunClassify(const ConnectionOptions& conn, const ClassifyOptions& o) {
   for (FileResult& r : results) {
     if (!r.response) {
       exit_code = kExitError;
-      const char* code = StatusCodeName(r.code);
+      const char* code = wire::StatusCodeName(r.code);
       if (o.json) PrintOut(ClassifyErrorJson(r.file, code, r.message) + "\n");
       else PrintError("classify " + r.file, std::string(code) + ": " + r.message);
       continue;
@@ -98,7 +99,7 @@ int RunClassify(const ConnectionOptions& conn, const ClassifyOptions& o) {
   }
   if (!o.json && !rows.empty()) {
     const v1::ClassifyResponse& first = rows.front().response;
-    PrintOut("model " + FormatModelRef(first.model()) + "  method " + MethodName(first.method()) + "\n" +
+    PrintOut("model " + FormatModelRef(first.model()) + "  method " + wire::MethodName(first.method()) + "\n" +
              ClassifyTable(rows));
   }
   return exit_code;

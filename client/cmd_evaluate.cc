@@ -12,6 +12,8 @@
 #include "client/evaluate.h"
 #include "client/parse.h"
 #include "client/render.h"
+#include "proto/wire/errors.h"
+#include "proto/wire/methods.h"
 
 namespace glimpse::client {
 namespace {
@@ -37,7 +39,7 @@ Prepared Prepare(const Folder& folder, const std::vector<DatasetObject>& objects
   for (size_t i = begin; i < end; ++i) {
     auto views = ProtocolViews(objects[i], folder.sizing, o.protocol);
     if (!views) {
-      p.failures.push_back({int(i), -1, "", StatusCodeName(StatusCodeOf(views.error().code)), views.error().message});
+      p.failures.push_back({int(i), -1, "", wire::StatusCodeName(wire::ToGrpcCode(views.error().code)), views.error().message});
       continue;
     }
     for (size_t v = 0; v < views->views.size(); ++v)
@@ -103,6 +105,96 @@ StageDecision Decision(const EvaluationReport& r, const Item& item, size_t full_
   return d;
 }
 
+// The model once, by name: its categories, and the version pinned for every call of the run.
+grpc::Status GetModel(v1::Glimpse::Stub& stub, const ConnectionOptions& conn, const std::string& model,
+                      v1::ModelInfo* info) {
+  grpc::ClientContext context;
+  PrepareContext(context, conn, 30);
+  v1::GetModelRequest request;
+  *request.mutable_model() = *ParseModelRef(model);
+  return stub.GetModel(&context, request, info);
+}
+
+// The report before any answer: what is evaluated, against which model, method and categories.
+EvaluationReport NewReport(const EvaluateOptions& o, const Folder& folder, const std::vector<DatasetObject>& objects,
+                           const v1::ModelInfo& info, v1::Method method, const std::vector<Stage>& stages) {
+  EvaluationReport report;
+  report.folder = o.dir;
+  report.model = info.name() + ":" + std::to_string(info.version());
+  report.method = wire::MethodName(method);
+  const auto method_id = wire::MethodFromProto(method);
+  report.method_id = method_id.ok() && *method_id ? **method_id : MethodId::kFusion;
+  report.categories = ReportCategories({info.categories().begin(), info.categories().end()}, folder.dataset.categories);
+  report.model_categories = static_cast<size_t>(info.categories_size());
+  report.stages = stages;
+  report.views_per_object = std::max<size_t>(1, o.protocol.views);
+  for (const DatasetObject& obj : objects) {
+    report.objects.push_back(ObjectKey(obj));
+    report.object_truth.push_back(int(std::find(report.categories.begin(), report.categories.end(), obj.category) -
+                                      report.categories.begin()));
+  }
+  return report;
+}
+
+void PrintApplied(const Folder& folder) {
+  for (const std::string& line : folder.applied)
+    if (line.find(" cloud files: ") == std::string::npos) std::fprintf(stderr, "evaluate: %s\n", line.c_str());
+  // A cloud file has no object to view at every stage: evaluate judges the meshes only.
+  if (!folder.clouds.empty())
+    std::fprintf(stderr, "evaluate: %zu cloud files not evaluated (a cloud is one view of an unknown object; "
+                         "glimpse classify decides them)\n", folder.clouds.size());
+}
+
+// The answers of one step's clouds, and every view and stage of an object that did not load (all wrong).
+void AddAnswers(const Prepared& step, const BatchAnswers& answers, EvaluationReport& report) {
+  for (size_t i = 0; i < step.items.size(); ++i) {
+    const CloudAnswer& a = answers.answers[i];
+    report.decisions.push_back(Decision(report, step.items[i], step.full_points[i], step.clouds[i], a));
+    if (!a.response)
+      report.failures.push_back({step.items[i].object, step.items[i].view,
+                                 stage_name(report.stages[step.items[i].stage]), wire::StatusCodeName(a.code),
+                                 a.message});
+  }
+  for (const EvaluationReport::Failure& f : step.failures) {
+    report.failures.push_back(f);
+    for (size_t v = 0; v < report.views_per_object; ++v)
+      for (size_t s = 0; s < report.stages.size(); ++s) {
+        const Item item{f.object, int(v), s};
+        report.decisions.push_back(Decision(report, item, 0, Cloud{}, CloudAnswer{}));
+      }
+  }
+}
+
+// Every object's clouds classified in steps of whole objects; the next step is read and viewed while the
+// server classifies the current one. The status of a call that failed as a whole (the model, the server).
+grpc::Status ClassifyAll(BatchClassifier& classifier, const Folder& folder, const std::vector<DatasetObject>& objects,
+                         const EvaluateOptions& o, EvaluationReport& report) {
+  const size_t per_object = report.views_per_object * report.stages.size();
+  const size_t step = std::max<size_t>(1, o.batch_clouds / per_object);
+  Progress progress(objects.size(), o.quiet);
+  progress.Show(0);
+  const auto prepare = [&](size_t begin) {
+    return std::async(std::launch::async, Prepare, std::cref(folder), std::cref(objects), begin,
+                      std::min(begin + step, objects.size()), std::cref(o), std::cref(report.stages));
+  };
+  auto next = prepare(0);
+  for (size_t begin = 0; begin < objects.size(); begin += step) {
+    Prepared current = next.get();
+    const size_t after = begin + step;
+    if (after < objects.size()) next = prepare(after);
+    const BatchAnswers answers = classifier.Classify(current.clouds);
+    if (!answers.call.ok()) {  // about every cloud: no use going on
+      progress.End();
+      if (next.valid()) next.wait();
+      return answers.call;
+    }
+    AddAnswers(current, answers, report);
+    progress.Show(std::min(after, objects.size()));
+  }
+  progress.End();
+  return grpc::Status::OK;
+}
+
 }  // namespace
 
 int RunEvaluate(const ConnectionOptions& conn, const EvaluateOptions& o) {
@@ -125,85 +217,23 @@ int RunEvaluate(const ConnectionOptions& conn, const EvaluateOptions& o) {
   }
   auto stub = ConnectGlimpse(conn, what);
   if (!stub) return kExitError;
-
-  // The model once, by name: its categories, and the version pinned for every call of the run.
   v1::ModelInfo info;
-  {
-    grpc::ClientContext context;
-    PrepareContext(context, conn, 30);
-    v1::GetModelRequest request;
-    *request.mutable_model() = *ParseModelRef(o.model);
-    if (grpc::Status s = (*stub).GetModel(&context, request, &info); !s.ok()) {
-      PrintError(what, FormatStatus(s));
-      return kExitError;
-    }
+  if (grpc::Status s = GetModel(*stub, conn, o.model, &info); !s.ok()) {
+    PrintError(what, FormatStatus(s));
+    return kExitError;
   }
-  const v1::Method method = o.method.empty() ? info.default_method() : *ParseMethod(o.method);
-  EvaluationReport report;
-  report.folder = o.dir;
-  report.model = info.name() + ":" + std::to_string(info.version());
-  report.method = MethodName(method);
-  report.method_id = static_cast<MethodId>(static_cast<int>(method) - 1);  // the enums differ by UNSPECIFIED
-  report.categories = ReportCategories({info.categories().begin(), info.categories().end()}, folder->dataset.categories);
-  report.model_categories = static_cast<size_t>(info.categories_size());
-  report.stages = *stages;
-  report.views_per_object = std::max<size_t>(1, o.protocol.views);
-  for (const DatasetObject& obj : objects) {
-    report.objects.push_back(ObjectKey(obj));
-    report.object_truth.push_back(int(std::find(report.categories.begin(), report.categories.end(), obj.category) -
-                                      report.categories.begin()));
-  }
-  if (!o.quiet) {
-    for (const std::string& line : folder->applied)
-      if (line.find(" cloud files: ") == std::string::npos) std::fprintf(stderr, "evaluate: %s\n", line.c_str());
-    // A cloud file has no object to view at every stage: evaluate judges the meshes only.
-    if (!folder->clouds.empty())
-      std::fprintf(stderr, "evaluate: %zu cloud files not evaluated (a cloud is one view of an unknown object; "
-                           "glimpse classify decides them)\n", folder->clouds.size());
-  }
+  const v1::Method method = o.method.empty() ? info.default_method() : *wire::ParseMethod(o.method);
+  EvaluationReport report = NewReport(o, *folder, objects, info, method, *stages);
+  if (!o.quiet) PrintApplied(*folder);
 
   v1::ModelRef pinned;
   pinned.set_name(info.name());
   pinned.set_version(info.version());
   BatchClassifier classifier(conn, *stub, pinned, method, kTimeoutPerCloudS, {o.batch_clouds, 1'000'000});
-  const size_t per_object = report.views_per_object * stages->size();
-  const size_t step = std::max<size_t>(1, o.batch_clouds / per_object);
-  Progress progress(objects.size(), o.quiet);
-  progress.Show(0);
-  // The next objects are read and viewed while the server classifies the current ones.
-  auto next = std::async(std::launch::async, Prepare, std::cref(*folder), std::cref(objects), 0,
-                         std::min(step, objects.size()), std::cref(o), std::cref(*stages));
-  for (size_t begin = 0; begin < objects.size(); begin += step) {
-    Prepared current = next.get();
-    const size_t after = begin + step;
-    if (after < objects.size())
-      next = std::async(std::launch::async, Prepare, std::cref(*folder), std::cref(objects), after,
-                        std::min(after + step, objects.size()), std::cref(o), std::cref(*stages));
-    const BatchAnswers answers = classifier.Classify(current.clouds);
-    if (!answers.call.ok()) {  // about every cloud (the model, the server): no use going on
-      progress.End();
-      if (next.valid()) next.wait();
-      PrintError(what, FormatStatus(answers.call));
-      return kExitError;
-    }
-    for (size_t i = 0; i < current.items.size(); ++i) {
-      const CloudAnswer& a = answers.answers[i];
-      report.decisions.push_back(Decision(report, current.items[i], current.full_points[i], current.clouds[i], a));
-      if (!a.response)
-        report.failures.push_back({current.items[i].object, current.items[i].view,
-                                   stage_name(report.stages[current.items[i].stage]), StatusCodeName(a.code), a.message});
-    }
-    for (const EvaluationReport::Failure& f : current.failures) {  // an object that did not load: all wrong
-      report.failures.push_back(f);
-      for (size_t v = 0; v < report.views_per_object; ++v)
-        for (size_t s = 0; s < stages->size(); ++s) {
-          const Item item{f.object, int(v), s};
-          report.decisions.push_back(Decision(report, item, 0, Cloud{}, CloudAnswer{}));
-        }
-    }
-    progress.Show(std::min(after, objects.size()));
+  if (grpc::Status s = ClassifyAll(classifier, *folder, objects, o, report); !s.ok()) {
+    PrintError(what, FormatStatus(s));
+    return kExitError;
   }
-  progress.End();
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   PrintOut(o.json ? EvaluationJson(report) + "\n" : EvaluationText(report));
   return kExitOk;

@@ -7,12 +7,13 @@
 #include <stop_token>
 #include <thread>
 
-#include "client/cloud_convert.h"
 #include "client/commands.h"
 #include "client/frames.h"
 #include "client/parse.h"
 #include "client/render.h"
 #include "client/scan.h"
+#include "proto/wire/clouds.h"
+#include "proto/wire/methods.h"
 #include "glimpse/views/sampling.h"
 #include "glimpse/views/zoo.h"
 
@@ -43,6 +44,35 @@ class DecisionView {
   int lines_ = 0;
   std::string previous_;
 };
+
+// The scanner: chunks go out at the given rate whatever the server's pace, as a sensor's would; the
+// first names the model, the method and the operating point.
+void SendChunks(std::stop_token stop, grpc::ClientReaderWriter<v1::ScanChunk, v1::Decision>& stream,
+                const std::vector<Cloud>& scan, const StreamOptions& o) {
+  std::mutex mu;
+  std::condition_variable_any wake;
+  const auto start = std::chrono::steady_clock::now();
+  v1::ScanChunk chunk;
+  if (!o.model.empty()) *chunk.mutable_model() = *ParseModelRef(o.model);
+  if (!o.method.empty()) chunk.set_method(*wire::ParseMethod(o.method));
+  chunk.set_known_acceptance(o.known_acceptance);
+  for (size_t i = 0; i < scan.size(); ++i) {
+    if (o.rate_hz > 0 && i > 0) {
+      const auto due = start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                   std::chrono::duration<double>(static_cast<double>(i) / o.rate_hz));
+      std::unique_lock lock(mu);
+      if (wake.wait_until(lock, stop, due, [] { return false; }), stop.stop_requested()) return;
+    }
+    wire::CloudToProto(scan[i], chunk.mutable_cloud());
+    if (!stream.Write(chunk)) return;  // the call ended; Finish tells why
+    if (i == 0) {
+      chunk.clear_model();
+      chunk.clear_method();
+      chunk.clear_known_acceptance();
+    }
+  }
+  stream.WritesDone();
+}
 
 }  // namespace
 
@@ -117,33 +147,7 @@ int RunStream(const ConnectionOptions& conn, const StreamOptions& o) {
   PrepareContext(context, conn, 120 + scan_s);
   auto stream = stub->StreamClassify(&context);
 
-  // The scanner: chunks go out at the given rate whatever the server's pace, as a sensor's would.
-  std::mutex mu;
-  std::condition_variable_any wake;
-  std::jthread scanner([&](std::stop_token stop) {
-    const auto start = std::chrono::steady_clock::now();
-    v1::ScanChunk chunk;
-    if (!o.model.empty()) *chunk.mutable_model() = *ParseModelRef(o.model);
-    if (!o.method.empty()) chunk.set_method(*ParseMethod(o.method));
-    chunk.set_known_acceptance(o.known_acceptance);
-    for (size_t i = 0; i < scan.size(); ++i) {
-      if (o.rate_hz > 0 && i > 0) {
-        const auto due = start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                     std::chrono::duration<double>(static_cast<double>(i) / o.rate_hz));
-        std::unique_lock lock(mu);
-        if (wake.wait_until(lock, stop, due, [] { return false; }), stop.stop_requested()) return;
-      }
-      ToProto(scan[i], chunk.mutable_cloud());
-      if (!stream->Write(chunk)) return;  // the call ended; Finish tells why
-      if (i == 0) {
-        chunk.clear_model();
-        chunk.clear_method();
-        chunk.clear_known_acceptance();
-      }
-    }
-    stream->WritesDone();
-  });
-
+  std::jthread scanner([&](std::stop_token stop) { SendChunks(stop, *stream, scan, o); });
   DecisionView shown(scan.size(), o.json);
   v1::Decision decision;
   size_t answered = 0;

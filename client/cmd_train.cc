@@ -1,13 +1,11 @@
 // glimpse train: labelled clouds (from DIR or the procedural zoo) streamed over Train, with the
 // server's progress shown on stderr, and the stored model printed at the end.
-#include <atomic>
 #include <cstdio>
 #include <functional>
 #include <set>
 #include <utility>
 #include <thread>
 
-#include "client/cloud_convert.h"
 #include "client/commands.h"
 #include "client/objects.h"
 #include "client/parse.h"
@@ -15,6 +13,7 @@
 #include "glimpse/learning/object_views.h"
 #include "glimpse/geometry/scan_filters.h"
 #include "glimpse/views/zoo.h"
+#include "proto/wire/clouds.h"
 
 namespace glimpse::client {
 namespace {
@@ -122,6 +121,116 @@ class ProgressView {
   int decile_ = -1;
 };
 
+// With DIR, --zoo adds objects of the folder's categories only: those, and a line saying so.
+Expected<std::set<std::string>> ZooCategoriesOf(const TrainOptions& o, Folder& folder) {
+  std::set<std::string> in_folder(folder.dataset.categories.begin(), folder.dataset.categories.end());
+  for (const TrainFile& f : folder.clouds) in_folder.insert(f.category);
+  std::set<std::string> extra;
+  std::string names;
+  for (const std::string& c : zoo_categories())
+    if (in_folder.count(c)) {
+      extra.insert(c);
+      names += (names.empty() ? "" : ", ") + c;
+    }
+  if (extra.empty())
+    return invalid_argument("--zoo adds objects of the folder's categories, and the zoo has none of them (it has " +
+                            Joined(zoo_categories(), ", ") + ")");
+  folder.applied.push_back("also the procedural zoo: " + std::to_string(o.per_category) +
+                           " objects per category of " + names + ", upright, real-life size");
+  return extra;
+}
+
+// What is sent, on stderr: the folder's manifest and the zoo, then the views of meshes (the folder's or
+// the zoo's: a folder of cloud files alone says nothing of them).
+void PrintRecipe(const TrainOptions& o, const Folder& folder, bool meshes) {
+  for (const std::string& line : folder.applied) std::fprintf(stderr, "train: %s\n", line.c_str());
+  if (!meshes) return;
+  const std::string views = o.protocol.views ? std::to_string(o.protocol.views) +
+                                                   " views per mesh (hidden point removal from the paper's viewpoints), " +
+                                                   std::to_string(o.protocol.points) + " surface samples, seed " +
+                                                   std::to_string(o.protocol.seed)
+                                             : "whole sampled clouds, no views";
+  std::fprintf(stderr, "train: %s\n", views.c_str());
+}
+
+// What the simulated sensors' views are thinned to: 0 without sensors (or views, or meshes).
+Expected<double> MeasureSensorDensity(const TrainOptions& o, const Folder& folder,
+                                      const std::set<std::string>& zoo_extra, bool meshes) {
+  const ViewRecipe& protocol = o.protocol;
+  if (!meshes || !protocol.views || protocol.train_sensors.empty()) return 0.0;
+  if (!o.quiet) std::fprintf(stderr, "train: measuring every mesh's ideal views' density (a first pass) ...\n");
+  auto density = SensorDensity(o, folder, zoo_extra);
+  if (!density) return density.error();
+  if (!o.quiet) {
+    std::string sensors;
+    for (const ScanCondition& c : protocol.train_sensors) sensors += (sensors.empty() ? "" : "; ") + describe(c);
+    std::fprintf(stderr,
+                 "train: and the same azimuths seen by a simulated %s, filtered to the ideal views' density (%.1f "
+                 "points per extent^2, the median over %zu views; --sensor-views none: not)\n",
+                 sensors.c_str(), density->first, density->second);
+  }
+  return density->first;
+}
+
+v1::TrainRequest HeaderMessage(const TrainOptions& o, const std::vector<v1::Method>& methods) {
+  v1::TrainRequest header;
+  header.mutable_header()->set_model_name(o.name);
+  for (v1::Method m : methods) header.mutable_header()->add_methods(m);
+  header.mutable_header()->set_description(o.description);
+  if (o.train_seed) header.mutable_header()->mutable_parameters()->set_seed(*o.train_seed);
+  if (o.no_scan_filters) header.mutable_header()->mutable_parameters()->set_filter_scans(false);
+  return header;
+}
+
+struct TrainCall {
+  Status loaded;        // reading and viewing the files
+  grpc::Status status;  // the call's
+  v1::ModelInfo model;  // the stored model, when the server reported one
+};
+
+// The Train call: the header, then every cloud (the folder's meshes, its cloud files, the zoo's objects)
+// while the server's progress is read and shown.
+TrainCall SendTraining(v1::Glimpse::Stub& stub, const ConnectionOptions& conn, const TrainOptions& o,
+                       const v1::TrainRequest& header, const Folder& folder, const std::set<std::string>& zoo_extra,
+                       double sensor_density) {
+  grpc::ClientContext context;
+  PrepareContext(context, conn, kTimeoutS);
+  auto stream = stub.Train(&context);
+  // Progress is read while clouds are still being written: the server reports as it receives,
+  // and an unread stream would eventually stall both sides.
+  ProgressView view(o.quiet);
+  TrainCall call;
+  std::thread reader([&] {
+    v1::TrainProgress p;
+    while (stream->Read(&p)) {
+      view.Show(p);
+      if (p.has_model()) call.model = p.model();
+    }
+  });
+  bool open = stream->Write(header);
+  v1::TrainRequest request;
+  const Emit emit = [&](const std::string& category, const std::string& object_id, const Cloud& cloud, bool augmented) {
+    if (!open) return false;
+    v1::LabelledCloud* lc = request.mutable_cloud();
+    lc->set_category(category);
+    lc->set_object_id(object_id);
+    lc->set_augmented(augmented);
+    wire::CloudToProto(cloud, lc->mutable_cloud());
+    open = stream->Write(request);
+    return open;
+  };
+  Status& loaded = call.loaded;
+  if (open && !o.dir.empty()) loaded = EmitMeshes(o.protocol, sensor_density, folder, emit);
+  if (open && loaded.ok() && !o.dir.empty()) loaded = EmitCloudFiles(folder, emit);
+  if (open && loaded.ok() && o.zoo) loaded = EmitZoo(o, o.protocol, sensor_density, zoo_extra, emit);
+  if (!loaded.ok()) context.TryCancel();  // a failed call stores nothing
+  if (open && loaded.ok()) stream->WritesDone();
+  reader.join();
+  call.status = stream->Finish();
+  view.End();
+  return call;
+}
+
 }  // namespace
 
 int RunTrain(const ConnectionOptions& conn, const TrainOptions& o) {
@@ -141,118 +250,38 @@ int RunTrain(const ConnectionOptions& conn, const TrainOptions& o) {
       return kExitError;
     }
     folder = std::move(*scanned);
-    if (o.zoo) {
-      std::set<std::string> in_folder(folder.dataset.categories.begin(), folder.dataset.categories.end());
-      for (const TrainFile& f : folder.clouds) in_folder.insert(f.category);
-      std::string names;
-      for (const std::string& c : glimpse::zoo_categories())
-        if (in_folder.count(c)) {
-          zoo_extra.insert(c);
-          names += (names.empty() ? "" : ", ") + c;
-        }
-      if (zoo_extra.empty()) {
-        PrintError(what, "--zoo adds objects of the folder's categories, and the zoo has none of them (it has " +
-                             Joined(glimpse::zoo_categories(), ", ") + ")");
-        return kExitUsage;
-      }
-      folder.applied.push_back("also the procedural zoo: " + std::to_string(o.per_category) +
-                               " objects per category of " + names + ", upright, real-life size");
+    auto extra = o.zoo ? ZooCategoriesOf(o, folder) : std::set<std::string>();
+    if (!extra) {
+      PrintError(what, extra.error().message);
+      return kExitUsage;
     }
+    zoo_extra = std::move(*extra);
   } else {
     folder.applied = {"the procedural zoo: " + std::to_string(o.per_category) + " objects per category, upright, real-life size"};
   }
-  // Views, samples and the cameras' views are made of meshes (the folder's or the zoo's): a folder of
-  // cloud files alone says nothing of them.
   const bool meshes = o.zoo || !folder.dataset.objects.empty();
-  if (!o.quiet) {
-    if (meshes)
-      folder.applied.push_back(o.protocol.views ? std::to_string(o.protocol.views) +
-                                                      " views per mesh (hidden point removal from the paper's viewpoints), " +
-                                                      std::to_string(o.protocol.points) + " surface samples, seed " +
-                                                      std::to_string(o.protocol.seed)
-                                                : "whole sampled clouds, no views");
-    for (const std::string& line : folder.applied) std::fprintf(stderr, "train: %s\n", line.c_str());
-  }
-  const ViewRecipe& protocol = o.protocol;
-  double sensor_density = 0;  // what the sensors' views are thinned to
-  if (meshes && protocol.views && !protocol.train_sensors.empty()) {
-    if (!o.quiet) std::fprintf(stderr, "train: measuring every mesh's ideal views' density (a first pass) ...\n");
-    auto density = SensorDensity(o, folder, zoo_extra);
-    if (!density) {
-      PrintError(what, density.error().message);
-      return kExitError;
-    }
-    sensor_density = density->first;
-    if (!o.quiet) {
-      std::string sensors;
-      for (const ScanCondition& c : protocol.train_sensors) sensors += (sensors.empty() ? "" : "; ") + describe(c);
-      std::fprintf(stderr,
-                   "train: and the same azimuths seen by a simulated %s, filtered to the ideal views' density (%.1f "
-                   "points per extent^2, the median over %zu views; --sensor-views none: not)\n",
-                   sensors.c_str(), sensor_density, density->second);
-    }
+  if (!o.quiet) PrintRecipe(o, folder, meshes);
+  auto sensor_density = MeasureSensorDensity(o, folder, zoo_extra, meshes);
+  if (!sensor_density) {
+    PrintError(what, sensor_density.error().message);
+    return kExitError;
   }
   auto stub = ConnectGlimpse(conn, what);
   if (!stub) return kExitError;
-
-  grpc::ClientContext context;
-  PrepareContext(context, conn, kTimeoutS);
-  auto stream = stub->Train(&context);
-
-  // Progress is read while clouds are still being written: the server reports as it receives,
-  // and an unread stream would eventually stall both sides.
-  ProgressView view(o.quiet);
-  v1::ModelInfo model;
-  std::thread reader([&] {
-    v1::TrainProgress p;
-    while (stream->Read(&p)) {
-      view.Show(p);
-      if (p.has_model()) model = p.model();
-    }
-  });
-
-  v1::TrainRequest header;
-  header.mutable_header()->set_model_name(o.name);
-  for (v1::Method m : *methods) header.mutable_header()->add_methods(m);
-  header.mutable_header()->set_description(o.description);
-  if (o.train_seed) header.mutable_header()->mutable_parameters()->set_seed(*o.train_seed);
-  if (o.no_scan_filters) header.mutable_header()->mutable_parameters()->set_filter_scans(false);
-  bool open = stream->Write(header);
-
-  v1::TrainRequest request;
-  const Emit emit = [&](const std::string& category, const std::string& object_id, const Cloud& cloud, bool augmented) {
-    if (!open) return false;
-    v1::LabelledCloud* lc = request.mutable_cloud();
-    lc->set_category(category);
-    lc->set_object_id(object_id);
-    lc->set_augmented(augmented);
-    ToProto(cloud, lc->mutable_cloud());
-    open = stream->Write(request);
-    return open;
-  };
-  Status loaded;
-  if (open && !o.dir.empty()) loaded = EmitMeshes(protocol, sensor_density, folder, emit);
-  if (open && loaded.ok() && !o.dir.empty()) loaded = EmitCloudFiles(folder, emit);
-  if (open && loaded.ok() && o.zoo) loaded = EmitZoo(o, protocol, sensor_density, zoo_extra, emit);
-  if (!loaded.ok()) context.TryCancel();  // a failed call stores nothing
-  if (open && loaded.ok()) stream->WritesDone();
-  reader.join();
-  const grpc::Status status = stream->Finish();
-  view.End();
-
-  if (!loaded.ok()) {
-    PrintError(what, loaded.error().message);
+  const TrainCall call = SendTraining(*stub, conn, o, HeaderMessage(o, *methods), folder, zoo_extra, *sensor_density);
+  if (!call.loaded.ok()) {
+    PrintError(what, call.loaded.error().message);
     return kExitError;
   }
-  if (!status.ok()) {
-    PrintError(what, FormatStatus(status));
+  if (!call.status.ok()) {
+    PrintError(what, FormatStatus(call.status));
     return kExitError;
   }
-  if (model.name().empty()) {
+  if (call.model.name().empty()) {
     PrintError(what, "the server ended training without reporting a stored model");
     return kExitError;
   }
-  PrintOut((o.json ? ModelJson(model) : TrainSummary(model)) + "\n");
+  PrintOut((o.json ? ModelJson(call.model) : TrainSummary(call.model)) + "\n");
   return kExitOk;
 }
 

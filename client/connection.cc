@@ -9,7 +9,7 @@
 #include <sstream>
 #include <unistd.h>
 
-#include "client/parse.h"
+#include "proto/wire/errors.h"
 
 namespace glimpse::client {
 namespace {
@@ -74,7 +74,7 @@ std::unique_ptr<v1::Glimpse::Stub> ConnectGlimpse(const ConnectionOptions& optio
 }
 
 std::string FormatStatus(const grpc::Status& status) {
-  std::string out = StatusCodeName(status.error_code());
+  std::string out = wire::StatusCodeName(status.error_code());
   if (!status.error_message().empty()) out += ": " + status.error_message();
   return out;
 }

@@ -10,7 +10,6 @@
 
 #include <Eigen/Geometry>
 
-#include "client/cloud_convert.h"
 #include "client/inputs.h"
 
 namespace glimpse::client {

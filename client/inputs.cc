@@ -4,7 +4,6 @@
 #include <cctype>
 #include <filesystem>
 
-#include "client/cloud_convert.h"
 #include "glimpse/io/files.h"
 #include "glimpse/views/sampling.h"
 #include "glimpse/views/hidden_point_removal.h"
@@ -23,6 +22,12 @@ std::string Extension(const std::string& path) {
 bool Hidden(const fs::path& p) { return !p.filename().empty() && p.filename().string()[0] == '.'; }
 
 }  // namespace
+
+size_t RemoveNonFinite(Cloud& cloud) {
+  const size_t before = cloud.points.size();
+  std::erase_if(cloud.points, [](const Vec3& v) { return !v.allFinite(); });
+  return before - cloud.points.size();
+}
 
 bool IsInputFile(const std::string& path) {
   const std::string ext = Extension(path);

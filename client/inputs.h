@@ -21,6 +21,10 @@ struct ViewOptions {
   uint64_t seed = 1;          // surface sampling seed
 };
 
+// Drops points with a NaN or infinite coordinate (PCD files keep NaN points, and the server refuses
+// them); returns how many.
+size_t RemoveNonFinite(Cloud& cloud);
+
 // The extensions read: .pcd .ply .xyz .txt .csv (clouds) and .off .obj .ply (meshes).
 bool IsInputFile(const std::string& path);
 

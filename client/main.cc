@@ -15,6 +15,7 @@
 #include "glimpse/learning/object_views.h"
 #include "glimpse/views/scan_conditions.h"
 #include "glimpse/views/zoo.h"
+#include "proto/wire/methods.h"
 
 using namespace glimpse::client;
 
@@ -32,7 +33,7 @@ CLI::Validator Checked(Parse parse, const std::string& description) {
 }
 
 const CLI::Validator kModelRef = Checked([](std::string_view s) { return ParseModelRef(s); }, "NAME[:VERSION]");
-const CLI::Validator kMethod = Checked(ParseMethod, "METHOD");
+const CLI::Validator kMethod = Checked(glimpse::wire::ParseMethod, "METHOD");
 const CLI::Validator kMethodList = Checked(ParseMethodList, "M1,M2,..");
 const CLI::Validator kOrder = Checked(ParseRevealOrder, "top-down|random|sweep");
 const CLI::Validator kSensor = Checked(ParseSensor, "X,Y,Z");
@@ -107,55 +108,72 @@ void AddViewOptions(CLI::App& cmd, glimpse::ViewRecipe& p, bool views) {
         ->capture_default_str()->check(CLI::Range(size_t{0}, size_t{6}))->group("Meshes");
 }
 
-int Main(int argc, char** argv) {
-  CLI::App app{"glimpse: recognise an object's category from a partial point cloud, with a Glimpse server.\n"
-               "Exit status: 0 ok, 1 error, 2 usage.",
-               "glimpse"};
-  app.set_version_flag("--version", "glimpse 0.1.0");
-  app.require_subcommand(1);
-  app.fallthrough();  // connection options may also follow the subcommand
+// Every command's options: CLI11 binds references to these fields and fills them while it parses; the
+// parsed command's callback sets `run`.
+struct CommandLine {
   ConnectionOptions conn;
-  AddConnectionOptions(app, conn);
-  std::function<int()> run;
-
-  // health
-  auto* health = app.add_subcommand("health", "check the server's health (exit 0 when SERVING)");
   std::string health_service;
-  health->add_option("--service", health_service, "service to check (default: the whole server)");
-  health->callback([&] { run = [&] { return RunHealth(conn, health_service); }; });
+  std::string list_name, show_ref, delete_ref, default_ref;
+  bool list_json = false, show_json = false;
+  TrainOptions train;
+  ClassifyOptions classify;
+  StreamOptions stream;
+  EvaluateOptions evaluate;
+  std::function<int()> run;
+};
 
-  // models
+void AddHealth(CLI::App& app, CommandLine& cl) {
+  auto* health = app.add_subcommand("health", "check the server's health (exit 0 when SERVING)");
+  health->add_option("--service", cl.health_service, "service to check (default: the whole server)");
+  health->callback([&cl] { cl.run = [&cl] { return RunHealth(cl.conn, cl.health_service); }; });
+}
+
+void AddModels(CLI::App& app, CommandLine& cl) {
   auto* models = app.add_subcommand("models", "list, show, delete models, and choose the default version");
   models->require_subcommand(1);
   auto* list = models->add_subcommand("list", "list every model version (or one name's)");
-  std::string list_name;
-  bool list_json = false;
-  list->add_option("NAME", list_name, "only this name's versions");
-  list->add_flag("--json", list_json, "one JSON object per line");
-  list->callback([&] { run = [&] { return RunModelsList(conn, list_name, list_json); }; });
+  list->add_option("NAME", cl.list_name, "only this name's versions");
+  list->add_flag("--json", cl.list_json, "one JSON object per line");
+  list->callback([&cl] { cl.run = [&cl] { return RunModelsList(cl.conn, cl.list_name, cl.list_json); }; });
   auto* show = models->add_subcommand("show", "details of one model (NAME: its default version)");
-  std::string show_ref;
-  bool show_json = false;
-  show->add_option("MODEL", show_ref, "NAME[:VERSION]")->required()->check(kModelRef);
-  show->add_flag("--json", show_json, "as JSON");
-  show->callback([&] { run = [&] { return RunModelsShow(conn, show_ref, show_json); }; });
+  show->add_option("MODEL", cl.show_ref, "NAME[:VERSION]")->required()->check(kModelRef);
+  show->add_flag("--json", cl.show_json, "as JSON");
+  show->callback([&cl] { cl.run = [&cl] { return RunModelsShow(cl.conn, cl.show_ref, cl.show_json); }; });
   auto* del = models->add_subcommand("delete", "delete a version (NAME:VERSION) or every version (NAME)");
-  std::string delete_ref;
-  del->add_option("MODEL", delete_ref, "NAME[:VERSION]")->required()->check(kModelRef);
-  del->callback([&] { run = [&] { return RunModelsDelete(conn, delete_ref); }; });
+  del->add_option("MODEL", cl.delete_ref, "NAME[:VERSION]")->required()->check(kModelRef);
+  del->callback([&cl] { cl.run = [&cl] { return RunModelsDelete(cl.conn, cl.delete_ref); }; });
   auto* set_default = models->add_subcommand("set-default", "serve NAME:VERSION when NAME is asked for "
                                                             "(NAME:latest: serve the newest)");
-  std::string default_ref;
-  set_default->add_option("MODEL", default_ref, "NAME:VERSION or NAME:latest")->required()
+  set_default->add_option("MODEL", cl.default_ref, "NAME:VERSION or NAME:latest")->required()
       ->check(Checked([](std::string_view s) { return ParseModelRef(s, /*allow_latest=*/true); }, "NAME:VERSION"));
-  set_default->callback([&] { run = [&] { return RunModelsSetDefault(conn, default_ref); }; });
+  set_default->callback([&cl] { cl.run = [&cl] { return RunModelsSetDefault(cl.conn, cl.default_ref); }; });
+}
 
-  // train
+// Where the training views come from besides the paper's: more elevations and simulated sensors.
+void AddTrainingViewOptions(CLI::App& train, TrainOptions& t) {
+  train.add_option("--elevations", t.protocol.train_elevations_deg,
+                   "more training views of each mesh from these elevations (degrees above the horizon, besides the "
+                   "paper's 30), as glimpse-lab's --train-elevations: for cameras mounted low or high (0,15 "
+                   "measured in the README; training takes several times longer)")
+      ->delimiter(',')->check(CLI::Range(-90.f, 90.f))->group("Meshes");
+  train.add_option_function<std::string>(
+           "--sensor-views",
+           [&t](const std::string& text) { t.protocol.train_sensors = *glimpse::parse_training_sensors(text); },
+           "more training views of each mesh taken by simulated sensors, SENSOR:METRES:DEGREES[,...] (depth or "
+           "lidar, from that distance and elevation, filtered to the median density of every mesh's ideal views, "
+           "measured in a first pass; sent marked augmented: "
+           "learnt, but never what 'unknown' measures a cloud against), as glimpse-lab's --train-sensors; 'none': the paper's views alone (default: " + kSensorViews + ", the recipe the README "
+           "measures; training takes about 3 times longer)")
+      ->check(Checked([](const std::string& s) { return glimpse::parse_training_sensors(s); }, "LIST"))
+      ->group("Meshes");
+}
+
+CLI::App* AddTrain(CLI::App& app, CommandLine& cl) {
   auto* train = app.add_subcommand("train", "train a new model version from DIR/<category>/<files> or the shape zoo.\n"
                                             "Meshes are read as glimpse-lab reads them: up axes and real-life sizes from\n"
                                             "DIR/up_axis.csv and DIR/sizes.csv; without them +z up and metres (--up, --unit,\n"
                                             "--height); each cut into the protocol's single views. Cloud files go as they are.");
-  TrainOptions t;
+  TrainOptions& t = cl.train;
   t.protocol.train_sensors = glimpse::default_training_sensors();
   train->add_option("DIR", t.dir, "folder of category folders of .off .obj .ply .stl meshes or .pcd .xyz clouds")
                   ->check(CLI::ExistingDirectory);
@@ -174,31 +192,19 @@ int Main(int argc, char** argv) {
   AddPlacementOptions(*train, t.placement, true, true);
   train->add_option_function<uint64_t>("--train-seed", [&t](const uint64_t& s) { t.train_seed = s; },
                                        "k-means and sampling seed of training (default: the server's)");
-  train->add_option("--elevations", t.protocol.train_elevations_deg,
-                    "more training views of each mesh from these elevations (degrees above the horizon, besides the "
-                    "paper's 30), as glimpse-lab's --train-elevations: for cameras mounted low or high (0,15 "
-                    "measured in the README; training takes several times longer)")
-      ->delimiter(',')->check(CLI::Range(-90.f, 90.f))->group("Meshes");
-  train->add_option_function<std::string>(
-           "--sensor-views",
-           [&t](const std::string& text) { t.protocol.train_sensors = *glimpse::parse_training_sensors(text); },
-           "more training views of each mesh taken by simulated sensors, SENSOR:METRES:DEGREES[,...] (depth or "
-           "lidar, from that distance and elevation, filtered to the median density of every mesh's ideal views, "
-           "measured in a first pass; sent marked augmented: "
-           "learnt, but never what 'unknown' measures a cloud against), as glimpse-lab's --train-sensors; 'none': the paper's views alone (default: " + kSensorViews + ", the recipe the README "
-           "measures; training takes about 3 times longer)")
-      ->check(Checked([](const std::string& s) { return glimpse::parse_training_sensors(s); }, "LIST"))
-      ->group("Meshes");
+  AddTrainingViewOptions(*train, t);
   train->add_flag("--no-scan-filters", t.no_scan_filters,
                   "the model classifies every point sent as it is (default: it removes stray returns and a floor and "
                   "thins dense scans to its training density)");
   train->add_flag("--json", t.json, "print the stored model as JSON");
   train->add_flag("-q,--quiet", t.quiet, "no progress on stderr");
-  train->callback([&] { run = [&] { return RunTrain(conn, t); }; });
+  train->callback([&cl] { cl.run = [&cl] { return RunTrain(cl.conn, cl.train); }; });
+  return train;
+}
 
-  // classify
+void AddClassify(CLI::App& app, CommandLine& cl) {
   auto* classify = app.add_subcommand("classify", "classify point-cloud or mesh files");
-  ClassifyOptions c;
+  ClassifyOptions& c = cl.classify;
   classify->add_option("FILE", c.files, "clouds (.pcd .ply .xyz, as they are) or meshes (.off .obj .ply .stl, one view each)")->required();
   classify->add_option("--model", c.model, "NAME[:VERSION]")->envname("GLIMPSE_MODEL")->required()->check(kModelRef);
   classify->add_option("--method", c.method, "bok|bog|kgh|vfh|esf|ush|size|fusion (default: the model's)")->check(kMethod);
@@ -213,15 +219,16 @@ int Main(int argc, char** argv) {
   AddSensorOption(*classify, c.sensor);
   AddViewOptions(*classify, c.protocol, false);
   AddPlacementOptions(*classify, c.placement, false, true);
-  classify->callback([&, view] {
-    c.view_given = view->count() > 0 || c.whole;
-    run = [&] { return RunClassify(conn, c); };
+  classify->callback([&cl, view] {
+    cl.classify.view_given = view->count() > 0 || cl.classify.whole;
+    cl.run = [&cl] { return RunClassify(cl.conn, cl.classify); };
   });
+}
 
-  // stream
+CLI::App* AddStream(CLI::App& app, CommandLine& cl) {
   auto* stream = app.add_subcommand("stream", "simulate a scanner: reveal one view in chunks over StreamClassify, or "
                                               "stream a folder of frames from several sensor positions (--frames)");
-  StreamOptions s;
+  StreamOptions& s = cl.stream;
   auto* file = stream->add_option("FILE", s.file, "cloud or mesh file");
   auto* zoo_shape = stream->add_option("--zoo", s.zoo_category, "a zoo shape of this category instead of a file")
                         ->check(CLI::IsMember(glimpse::zoo_categories()));
@@ -258,13 +265,15 @@ int Main(int argc, char** argv) {
   stream->add_option("--mesh-points", s.protocol.points, "points sampled on a mesh's surface")
       ->capture_default_str()->check(CLI::Range(size_t{0}, size_t{5'000'000}))->group("Meshes");
   AddPlacementOptions(*stream, s.placement, false, true);
-  stream->callback([&] { run = [&] { return RunStream(conn, s); }; });
+  stream->callback([&cl] { cl.run = [&cl] { return RunStream(cl.conn, cl.stream); }; });
+  return stream;
+}
 
-  // evaluate
+void AddEvaluate(CLI::App& app, CommandLine& cl) {
   auto* evaluate = app.add_subcommand("evaluate", "classify the protocol's views of every mesh of a labelled folder\n"
                                                   "DIR/<category>/<meshes> (made exactly as glimpse-lab makes them) and report\n"
                                                   "accuracy, balanced accuracy, the confusion table and the misclassified objects");
-  EvaluateOptions e;
+  EvaluateOptions& e = cl.evaluate;
   evaluate->add_option("DIR", e.dir, "folder of category folders of meshes (its manifest applies as in train)")
       ->required()->check(CLI::ExistingDirectory);
   evaluate->add_option("--model", e.model, "NAME[:VERSION]")->envname("GLIMPSE_MODEL")->required()->check(kModelRef);
@@ -279,18 +288,34 @@ int Main(int argc, char** argv) {
   evaluate->add_flag("-q,--quiet", e.quiet, "no progress on stderr");
   AddViewOptions(*evaluate, e.protocol, true);
   AddPlacementOptions(*evaluate, e.placement, true, false);
-  evaluate->callback([&] { run = [&] { return RunEvaluate(conn, e); }; });
+  evaluate->callback([&cl] { cl.run = [&cl] { return RunEvaluate(cl.conn, cl.evaluate); }; });
+}
 
+int Main(int argc, char** argv) {
+  CLI::App app{"glimpse: recognise an object's category from a partial point cloud, with a Glimpse server.\n"
+               "Exit status: 0 ok, 1 error, 2 usage.",
+               "glimpse"};
+  app.set_version_flag("--version", "glimpse 0.1.0");
+  app.require_subcommand(1);
+  app.fallthrough();  // connection options may also follow the subcommand
+  CommandLine cl;
+  AddConnectionOptions(app, cl.conn);
+  AddHealth(app, cl);
+  AddModels(app, cl);
+  const CLI::App* train = AddTrain(app, cl);
+  AddClassify(app, cl);
+  const CLI::App* stream = AddStream(app, cl);
+  AddEvaluate(app, cl);
   try {
     app.parse(argc, argv);
-    if (train->parsed() && t.dir.empty() && !t.zoo) throw CLI::RequiredError("train needs DIR or --zoo");
-    if (stream->parsed() && s.file.empty() && s.zoo_category.empty() && s.frames_dir.empty())
+    if (train->parsed() && cl.train.dir.empty() && !cl.train.zoo) throw CLI::RequiredError("train needs DIR or --zoo");
+    if (stream->parsed() && cl.stream.file.empty() && cl.stream.zoo_category.empty() && cl.stream.frames_dir.empty())
       throw CLI::RequiredError("stream needs FILE, --zoo CATEGORY or --frames DIR");
   } catch (const CLI::ParseError& e) {
     const int code = app.exit(e);  // prints help/version (code 0) or the error
     return code == 0 ? kExitOk : kExitUsage;
   }
-  return run ? run() : kExitUsage;
+  return cl.run ? cl.run() : kExitUsage;
 }
 
 }  // namespace

@@ -6,7 +6,6 @@
 #include <filesystem>
 #include <set>
 
-#include "client/cloud_convert.h"
 #include "glimpse/views/sampling.h"
 #include "glimpse/views/placement.h"
 #include "glimpse/views/hidden_point_removal.h"

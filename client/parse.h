@@ -1,8 +1,6 @@
-// Small parsers and names shared by the commands: model references ("chair:3"), method names
-// ("bok,bog"), gRPC status code names. Pure functions, no I/O.
+// Small parsers shared by the commands: model references ("chair:3"), method lists ("bok,bog"), sensor
+// positions. Method and status code names are the wire library's (proto/wire). Pure functions, no I/O.
 #pragma once
-
-#include <grpcpp/support/status.h>
 
 #include <string>
 #include <string_view>
@@ -22,22 +20,12 @@ Expected<v1::ModelRef> ParseModelRef(std::string_view text, bool allow_latest = 
 // "name:3", or just "name" for version 0.
 std::string FormatModelRef(const v1::ModelRef& ref);
 
-// "bok", "bog", "kgh", "vfh", "esf", "ush", "fusion" (case-insensitive).
-Expected<v1::Method> ParseMethod(std::string_view name);
-// Comma-separated, e.g. "bok,bog"; blanks around names ignored; no duplicates; empty text -> empty list.
+// Comma-separated names of wire::ParseMethod, e.g. "bok,bog"; blanks around names ignored; no duplicates;
+// empty text -> empty list.
 Expected<std::vector<v1::Method>> ParseMethodList(std::string_view text);
-// "bok" ... "fusion"; "default" for METHOD_UNSPECIFIED.
-std::string MethodName(v1::Method method);
-std::vector<std::string> MethodNames();  // the names ParseMethod accepts, in enum order
 
 // A sensor position "X,Y,Z" in the cloud's frame (metres, finite), e.g. "0,0,0" for a camera-frame
 // scan whose file does not say where the camera was.
 Expected<Vec3> ParseSensor(std::string_view text);
-
-// "NOT_FOUND", "DEADLINE_EXCEEDED", ... as in grpc/status.h and every other gRPC client.
-const char* StatusCodeName(grpc::StatusCode code);
-// The gRPC code a core error would have over the wire (a missing file is NOT_FOUND, ...), so a local
-// failure reads like a server's.
-grpc::StatusCode StatusCodeOf(ErrorCode code);
 
 }  // namespace glimpse::client

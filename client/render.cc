@@ -8,6 +8,7 @@
 #include <ctime>
 
 #include "client/parse.h"
+#include "proto/wire/methods.h"
 
 namespace glimpse::client {
 namespace {
@@ -49,7 +50,7 @@ std::string Join(const std::vector<std::string>& items, std::string_view sep) {
 
 std::string Methods(const v1::ModelInfo& m) {
   std::vector<std::string> names;
-  for (int method : m.methods()) names.push_back(MethodName(static_cast<v1::Method>(method)));
+  for (int method : m.methods()) names.push_back(wire::MethodName(static_cast<v1::Method>(method)));
   return Join(names, ",");
 }
 
@@ -207,7 +208,7 @@ std::string ClassifyTable(const std::vector<ClassifyRow>& rows) {
 std::string ClassifyJson(const ClassifyRow& row) {
   const v1::ClassifyResponse& r = row.response;
   return "{\"file\":" + JsonString(row.file) + ",\"model\":" + JsonString(r.model().name()) +
-         ",\"version\":" + std::to_string(r.model().version()) + ",\"method\":" + JsonString(MethodName(r.method())) +
+         ",\"version\":" + std::to_string(r.model().version()) + ",\"method\":" + JsonString(wire::MethodName(r.method())) +
          ",\"winner\":" + JsonString(r.winner()) + ",\"scores\":" + JsonScores(r.scores()) +
          ",\"points\":" + std::to_string(r.points()) + ",\"keypoints\":" + std::to_string(r.keypoints()) +
          ",\"total_ms\":" + JsonNumber(r.timings().total_ms()) + ",\"warning\":" + JsonString(r.warning()) +
@@ -224,9 +225,8 @@ std::string ClassifyErrorJson(std::string_view file, std::string_view code, std:
 namespace {
 // "keypoints N " unless the method uses none (whole-cloud descriptors only) and found none.
 std::string KeypointsField(const v1::Decision& d, std::string_view gap) {
-  const bool global_only = d.method() == v1::METHOD_VFH || d.method() == v1::METHOD_ESF ||
-                           d.method() == v1::METHOD_USH || d.method() == v1::METHOD_SIZE ||
-                           d.method() == v1::METHOD_FUSION;
+  const auto method = wire::MethodFromProto(d.method());
+  const bool global_only = method.ok() && *method && !uses_keypoints(**method);
   if (global_only && d.keypoints() == 0) return "";
   return "keypoints " + std::to_string(d.keypoints()) + std::string(gap);
 }
@@ -248,7 +248,7 @@ std::string DecisionPanel(const v1::Decision& d, size_t chunks_total, std::strin
                           int bar_width) {
   const std::string which = d.final() ? "final (the whole scan, as Classify)"
                                       : "chunk " + std::to_string(d.chunk_index() + 1) + "/" + std::to_string(chunks_total);
-  std::string out = "model " + FormatModelRef(d.model()) + " (" + MethodName(d.method()) + ")   " + which + "   points " +
+  std::string out = "model " + FormatModelRef(d.model()) + " (" + wire::MethodName(d.method()) + ")   " + which + "   points " +
                     std::to_string(d.points()) + "   " + KeypointsField(d, "   ") +
                     Fixed(d.latency_ms(), 1) + " ms\n";
   if (d.winner().empty()) {
@@ -280,7 +280,7 @@ std::string DecisionJson(const v1::Decision& d, size_t chunks_total) {
          ",\"changes\":" + std::to_string(d.category_changes()) + ",\"held\":" + std::to_string(d.winner_held_chunks()) +
          ",\"settled\":" + (d.settled() ? "true" : "false") + ",\"confidence\":" + JsonNumber(d.confidence()) +
          ",\"model\":" + JsonString(d.model().name()) + ",\"version\":" + std::to_string(d.model().version()) +
-         ",\"method\":" + JsonString(MethodName(d.method())) + ",\"latency_ms\":" + JsonNumber(d.latency_ms()) +
+         ",\"method\":" + JsonString(wire::MethodName(d.method())) + ",\"latency_ms\":" + JsonNumber(d.latency_ms()) +
          UnknownJson(d) + "}";
 }
 
@@ -343,7 +343,7 @@ std::string ModelDetails(const v1::ModelInfo& m) {
       {"id:", std::to_string(m.id())},
       {"created:", FormatTimestamp(m.created())},
       {"description:", m.description().empty() ? "-" : m.description()},
-      {"methods:", Methods(m) + " (default " + MethodName(m.default_method()) + ")"},
+      {"methods:", Methods(m) + " (default " + wire::MethodName(m.default_method()) + ")"},
       {"categories:", Join(categories, ", ")},
       {"trained on:", std::to_string(m.stats().clouds()) + " clouds of " + std::to_string(m.stats().objects()) +
                           " objects, " + std::to_string(m.stats().keypoints()) + " keypoints, " +

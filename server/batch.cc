@@ -1,6 +1,8 @@
 #include "batch.h"
 
 #include "convert.h"
+#include "proto/wire/clouds.h"
+#include "proto/wire/errors.h"
 
 namespace glimpse::server {
 
@@ -11,14 +13,14 @@ Expected<BatchClouds> UnpackBatch(const v1::ClassifyBatchRequest& request, const
     return resource_exhausted("the batch has " + std::to_string(n) + " clouds; the limit is " +
                               std::to_string(limits.max_batch_clouds) + " per call");
   BatchClouds batch;
-  for (const v1::PointCloud& c : request.clouds()) batch.points += c.xyz().size() / 12;
+  for (const v1::PointCloud& c : request.clouds()) batch.points += c.xyz().size() / wire::kBytesPerPoint;
   if (batch.points > limits.max_points_per_cloud)
     return resource_exhausted("the batch has " + std::to_string(batch.points) + " points in all; the limit is " +
                               std::to_string(limits.max_points_per_cloud) + " per call");
   batch.slot.assign(n, -1);
   batch.errors.resize(n);
   for (size_t i = 0; i < n; ++i) {
-    auto cloud = CloudFromProto(request.clouds(static_cast<int>(i)), limits.max_points_per_cloud);
+    auto cloud = wire::CloudFromProto(request.clouds(static_cast<int>(i)), limits.max_points_per_cloud);
     if (!cloud) {
       batch.errors[i] = Error{cloud.error().code, "cloud " + std::to_string(i) + ": " + cloud.error().message};
       continue;
@@ -29,9 +31,16 @@ Expected<BatchClouds> UnpackBatch(const v1::ClassifyBatchRequest& request, const
   return batch;
 }
 
+Status CheckBatchResults(const std::vector<Expected<Classification>>& results) {
+  for (const Expected<Classification>& r : results)
+    if (!r && (r.error().code == ErrorCode::kCancelled || r.error().code == ErrorCode::kFailedPrecondition))
+      return r.error();
+  return {};
+}
+
 namespace {
 void SetError(const Error& e, v1::ClassifyResult* r) {
-  const grpc::Status s = ToGrpcStatus(e);
+  const grpc::Status s = wire::ToGrpcStatus(e);
   r->set_code(static_cast<int32_t>(s.error_code()));
   r->set_message(s.error_message());
 }
@@ -54,8 +63,7 @@ void FillBatchResponse(const BatchClouds& batch, const std::vector<Expected<Clas
     r->set_code(0);
     v1::ClassifyResponse* resp = r->mutable_response();
     ToProto(*c, resp);
-    resp->mutable_model()->set_name(model.name);
-    resp->mutable_model()->set_version(model.version);
+    ToProto(model, resp->mutable_model());
     resp->set_model_id(static_cast<uint64_t>(model.id));
     resp->mutable_timings()->set_model_load_ms(model_load_ms);
     resp->mutable_timings()->set_total_ms(c->feature_ms + c->decision_ms);

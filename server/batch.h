@@ -24,6 +24,10 @@ struct BatchClouds {
 // (CloudFromProto) and its error, if any, kept for its own result.
 Expected<BatchClouds> UnpackBatch(const v1::ClassifyBatchRequest& request, const Limits& limits);
 
+// What fails the whole call rather than one result: a cloud cancelled (the call was stopped) or a failed
+// precondition (the model cannot classify at all, e.g. its feature version).
+Status CheckBatchResults(const std::vector<Expected<Classification>>& results);
+
 // One result per request cloud: its unpacking error, its classification error, or the response
 // Classify would give (model, model id and load time from `model`).
 void FillBatchResponse(const BatchClouds& batch, const std::vector<Expected<Classification>>& results,

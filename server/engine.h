@@ -12,18 +12,12 @@
 #include "glimpse/learning/model.h"
 #include "glimpse/session/session.h"
 #include "glimpse/v1/glimpse.pb.h"
+#include "proto/wire/train_params.h"
 
 namespace glimpse::server {
 
-// What a Train header asks for, before it is mapped onto core's TrainParams.
-struct TrainSpec {
-  std::vector<MethodId> methods;  // empty: the recogniser's default set
-  std::optional<MethodId> default_method;
-  v1::TrainParameters parameters;
-};
-
 struct Engine {
-  std::function<Expected<Model>(const std::vector<TrainingCloud>&, const TrainSpec&, const ProgressFn&,
+  std::function<Expected<Model>(const std::vector<TrainingCloud>&, const wire::TrainSpec&, const ProgressFn&,
                                 const CancelFn&)>
       train;
   std::function<Expected<Classification>(const Model&, const Cloud&, std::optional<MethodId>,
@@ -43,16 +37,12 @@ struct Engine {
       create_session;
   // The parameters a spec trains with, every field set: the request's where it gave them, the
   // recogniser's defaults elsewhere (ModelInfo.parameters). Empty: the request's are stored as given.
-  std::function<Expected<v1::TrainParameters>(const TrainSpec&)> effective_parameters;
+  std::function<Expected<v1::TrainParameters>(const wire::TrainSpec&)> effective_parameters;
 };
 
 // The real recogniser (core_engine.cc, target glimpse_server_engine). Each call computes with
 // `request_threads` threads (0: OpenMP's default for the calling thread); a batch spreads its clouds
 // over them, one thread per cloud.
 Engine CoreEngine(int request_threads = 0);
-// Every field of TrainParameters from core's TrainParams (the inverse of ToTrainParams).
-v1::TrainParameters FromTrainParams(const TrainParams& params);
-// Maps a Train header onto core's TrainParams (train_params.h); unset fields keep core's defaults.
-Expected<TrainParams> ToTrainParams(const TrainSpec& spec);
 
 }  // namespace glimpse::server

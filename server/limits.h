@@ -27,6 +27,10 @@ struct Limits {
 
 using SteadyClock = std::function<std::chrono::steady_clock::time_point()>;
 
+inline double MsSince(std::chrono::steady_clock::time_point start, std::chrono::steady_clock::time_point now) {
+  return std::chrono::duration<double, std::milli>(now - start).count();
+}
+
 class StreamRegistry {
  public:
   StreamRegistry(size_t max_streams, std::chrono::steady_clock::duration max_duration, SteadyClock clock);

@@ -47,6 +47,10 @@ void Write(const std::string& line) {
 
 }  // namespace
 
+std::string LogModelRef(std::string_view name, uint32_t version) {
+  return version ? std::string(name) + "@" + std::to_string(version) : std::string(name);
+}
+
 std::string FormatLogLine(const RequestLog& e) {
   char latency[32];
   std::snprintf(latency, sizeof latency, "%.3f", e.latency_ms);

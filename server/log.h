@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <string_view>
 
 namespace glimpse::server {
 
@@ -21,6 +22,9 @@ struct RequestLog {
 };
 
 using LogFn = std::function<void(const RequestLog&)>;
+
+// RequestLog::model: "name@3", or "name" for version 0.
+std::string LogModelRef(std::string_view name, uint32_t version);
 
 // logfmt: `ts=... level=info rpc=Classify model=chairs@3 ... code=OK`, one write per line.
 std::string FormatLogLine(const RequestLog& entry);

@@ -22,49 +22,63 @@ using namespace glimpse::server;
 
 namespace {
 
+// --threads no larger than the completion queues: each queue holds a thread polling it, none would be left
+// to serve, and every call would be RESOURCE_EXHAUSTED while health says SERVING.
+bool ThreadsLeaveNoneToServe(const ServerConfig& config, int cpus) {
+  if (config.threads <= 0 || config.threads > CompletionQueues(cpus)) return false;
+  std::fprintf(stderr, "glimpse-server: --threads %d leaves no thread to serve calls: gRPC's %d completion queues "
+                       "hold one each (give at least %d, or 0 for the default)\n",
+               config.threads, CompletionQueues(cpus), CompletionQueues(cpus) + 1);
+  return true;
+}
+
+// The token model changes need: --auth-token, or the one in --auth-token-file.
+glimpse::Expected<std::string> AuthToken(const ServerConfig& config) {
+  if (config.auth_token_file.empty()) return config.auth_token;
+  return ReadTokenFile(config.auth_token_file);
+}
+
+// The metrics endpoint on 0.0.0.0:--metrics-port (none for port 0).
+glimpse::Expected<std::unique_ptr<prometheus::Exposer>> ServeMetrics(const ServerConfig& config, Metrics& metrics) {
+  if (config.metrics_port <= 0) return std::unique_ptr<prometheus::Exposer>();
+  try {
+    auto exposer = std::make_unique<prometheus::Exposer>("0.0.0.0:" + std::to_string(config.metrics_port));
+    exposer->RegisterCollectable(metrics.registry());
+    return exposer;
+  } catch (const std::exception& e) {
+    return glimpse::internal_error("cannot serve metrics on port " + std::to_string(config.metrics_port) +
+                                   " (in use? --metrics-port 0 turns metrics off): " + e.what());
+  }
+}
+
+std::string ServingLine(const ServerConfig& config, int port, int cpus, const GrpcServerOptions& grpc_options,
+                        int request_threads, bool token) {
+  return "serving glimpse.v1.Glimpse on " + config.address + " (port " + std::to_string(port) + "), store " +
+         config.db_path + ", metrics port " + std::to_string(config.metrics_port) + ", " + std::to_string(cpus) +
+         " usable CPUs, " + std::to_string(grpc_options.threads) + " gRPC threads, " +
+         std::to_string(request_threads) + " threads per request, " +
+         (config.tls.enabled() ? (config.tls.client_ca.empty() ? "TLS" : "mutual TLS") : "plaintext") +
+         (token ? ", model changes need the bearer token" : ", model changes open to every caller");
+}
+
+int Fail(const std::string& message) {
+  std::fprintf(stderr, "glimpse-server: %s\n", message.c_str());
+  return 1;
+}
+
 int Run(const ServerConfig& config, const sigset_t& signals) {
   const int cpus = ProcessCpus();
-  // Each completion queue holds a thread polling it: a thread quota no larger leaves none to serve, and
-  // every call would be RESOURCE_EXHAUSTED while health says SERVING.
-  if (config.threads > 0 && config.threads <= CompletionQueues(cpus)) {
-    std::fprintf(stderr, "glimpse-server: --threads %d leaves no thread to serve calls: gRPC's %d completion queues "
-                         "hold one each (give at least %d, or 0 for the default)\n",
-                 config.threads, CompletionQueues(cpus), CompletionQueues(cpus) + 1);
-    return 2;
-  }
+  if (ThreadsLeaveNoneToServe(config, cpus)) return 2;
   // Secrets first: a bad certificate or token file stops the server before it opens anything.
   auto credentials = LoadServerCredentials(config.tls);
-  if (!credentials) {
-    std::fprintf(stderr, "glimpse-server: %s\n", credentials.error().message.c_str());
-    return 1;
-  }
-  std::string token = config.auth_token;
-  if (!config.auth_token_file.empty()) {
-    auto read = ReadTokenFile(config.auth_token_file);
-    if (!read) {
-      std::fprintf(stderr, "glimpse-server: %s\n", read.error().message.c_str());
-      return 1;
-    }
-    token = std::move(*read);
-  }
+  if (!credentials) return Fail(credentials.error().message);
+  auto token = AuthToken(config);
+  if (!token) return Fail(token.error().message);
   auto store = ModelStore::Open(config.db_path);
-  if (!store) {
-    std::fprintf(stderr, "glimpse-server: cannot open the model store: %s\n", store.error().message.c_str());
-    return 1;
-  }
+  if (!store) return Fail("cannot open the model store: " + store.error().message);
   Metrics metrics;
-  std::unique_ptr<prometheus::Exposer> exposer;
-  if (config.metrics_port > 0) {
-    try {
-      exposer = std::make_unique<prometheus::Exposer>("0.0.0.0:" + std::to_string(config.metrics_port));
-      exposer->RegisterCollectable(metrics.registry());
-    } catch (const std::exception& e) {
-      std::fprintf(stderr,
-                   "glimpse-server: cannot serve metrics on port %d (in use? --metrics-port 0 turns metrics off): %s\n",
-                   config.metrics_port, e.what());
-      return 1;
-    }
-  }
+  auto exposer = ServeMetrics(config, metrics);
+  if (!exposer) return Fail(exposer.error().message);
 
   ServiceOptions options;
   options.store = store->get();
@@ -72,7 +86,7 @@ int Run(const ServerConfig& config, const sigset_t& signals) {
   options.engine = CoreEngine(request_threads);
   options.limits = config.limits;
   options.metrics = &metrics;
-  options.auth_token = token;
+  options.auth_token = *token;
   GlimpseService service(std::move(options));
 
   GrpcServerOptions grpc_options;
@@ -82,16 +96,8 @@ int Run(const ServerConfig& config, const sigset_t& signals) {
   grpc_options.max_message_bytes = config.limits.max_message_bytes;
   grpc_options.credentials = *credentials;
   auto running = StartGrpcServer(grpc_options, &service);
-  if (!running) {
-    std::fprintf(stderr, "glimpse-server: %s\n", running.error().message.c_str());
-    return 1;
-  }
-  LogEvent("info", "serving glimpse.v1.Glimpse on " + config.address + " (port " + std::to_string(running->port) +
-                       "), store " + config.db_path + ", metrics port " + std::to_string(config.metrics_port) +
-                       ", " + std::to_string(cpus) + " usable CPUs, " + std::to_string(grpc_options.threads) +
-                       " gRPC threads, " + std::to_string(request_threads) + " threads per request, " +
-                       (config.tls.enabled() ? (config.tls.client_ca.empty() ? "TLS" : "mutual TLS") : "plaintext") +
-                       (token.empty() ? ", model changes open to every caller" : ", model changes need the bearer token"));
+  if (!running) return Fail(running.error().message);
+  LogEvent("info", ServingLine(config, running->port, cpus, grpc_options, request_threads, !token->empty()));
 
   int signal = 0;
   sigwait(&signals, &signal);

@@ -2,30 +2,9 @@
 
 #include <string>
 
-namespace glimpse::server {
+#include "proto/wire/errors.h"
 
-const char* StatusCodeName(grpc::StatusCode code) {
-  switch (code) {
-    case grpc::StatusCode::OK: return "OK";
-    case grpc::StatusCode::CANCELLED: return "CANCELLED";
-    case grpc::StatusCode::UNKNOWN: return "UNKNOWN";
-    case grpc::StatusCode::INVALID_ARGUMENT: return "INVALID_ARGUMENT";
-    case grpc::StatusCode::DEADLINE_EXCEEDED: return "DEADLINE_EXCEEDED";
-    case grpc::StatusCode::NOT_FOUND: return "NOT_FOUND";
-    case grpc::StatusCode::ALREADY_EXISTS: return "ALREADY_EXISTS";
-    case grpc::StatusCode::PERMISSION_DENIED: return "PERMISSION_DENIED";
-    case grpc::StatusCode::UNAUTHENTICATED: return "UNAUTHENTICATED";
-    case grpc::StatusCode::RESOURCE_EXHAUSTED: return "RESOURCE_EXHAUSTED";
-    case grpc::StatusCode::FAILED_PRECONDITION: return "FAILED_PRECONDITION";
-    case grpc::StatusCode::ABORTED: return "ABORTED";
-    case grpc::StatusCode::OUT_OF_RANGE: return "OUT_OF_RANGE";
-    case grpc::StatusCode::UNIMPLEMENTED: return "UNIMPLEMENTED";
-    case grpc::StatusCode::INTERNAL: return "INTERNAL";
-    case grpc::StatusCode::UNAVAILABLE: return "UNAVAILABLE";
-    case grpc::StatusCode::DATA_LOSS: return "DATA_LOSS";
-    default: return "UNKNOWN";
-  }
-}
+namespace glimpse::server {
 
 namespace {
 // 1 ms .. ~2 min, roughly x2.5 apart: classification is milliseconds, training minutes.
@@ -63,7 +42,7 @@ Metrics::Metrics(std::shared_ptr<prometheus::Registry> registry)
                          .Add({})) {}
 
 void Metrics::RecordRpc(std::string_view rpc, grpc::StatusCode code, double seconds) {
-  prometheus::Labels labels{{"method", std::string(rpc)}, {"code", StatusCodeName(code)}};
+  prometheus::Labels labels{{"method", std::string(rpc)}, {"code", wire::StatusCodeName(code)}};
   requests_.Add(labels).Increment();
   if (code != grpc::StatusCode::OK) errors_.Add(labels).Increment();
   latency_.Add({{"method", std::string(rpc)}}, kLatencyBuckets).Observe(seconds);
@@ -74,7 +53,7 @@ void Metrics::StreamClosed(std::string_view rpc) { active_streams_.Add({{"method
 void Metrics::SetModelsLoaded(size_t n) { models_loaded_.Set(static_cast<double>(n)); }
 
 double Metrics::RequestCount(std::string_view rpc, grpc::StatusCode code) const {
-  return Value(requests_, {{"method", std::string(rpc)}, {"code", StatusCodeName(code)}});
+  return Value(requests_, {{"method", std::string(rpc)}, {"code", wire::StatusCodeName(code)}});
 }
 
 double Metrics::ActiveStreams(std::string_view rpc) const {

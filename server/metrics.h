@@ -15,8 +15,6 @@
 
 namespace glimpse::server {
 
-const char* StatusCodeName(grpc::StatusCode code);  // "OK", "INVALID_ARGUMENT", ...
-
 class Metrics {
  public:
   explicit Metrics(std::shared_ptr<prometheus::Registry> registry = std::make_shared<prometheus::Registry>());

@@ -3,37 +3,28 @@
 #include <grpcpp/server_context.h>
 
 #include <condition_variable>
-#include <algorithm>
 #include <exception>
 #include <mutex>
 
 #include "batch.h"
 #include "convert.h"
+#include "proto/wire/clouds.h"
+#include "proto/wire/errors.h"
+#include "proto/wire/methods.h"
+#include "proto/wire/model_names.h"
+#include "stream_classify.h"
 #include "train.h"
 
 namespace glimpse::server {
 namespace {
-
-double MsSince(std::chrono::steady_clock::time_point start, std::chrono::steady_clock::time_point now) {
-  return std::chrono::duration<double, std::milli>(now - start).count();
-}
-
-std::string RefText(std::string_view name, uint32_t version) {
-  return version ? std::string(name) + "@" + std::to_string(version) : std::string(name);
-}
-
-const char* MethodText(const std::optional<MethodId>& m) {
-  return m ? method_name(*m) : "default";
-}
 
 Error StreamTooLong(const Limits& limits) {
   return resource_exhausted("the stream ran longer than the limit of " +
                             std::to_string(limits.max_stream_duration.count()) + " s");
 }
 
-void FillRef(const ModelRecord& r, v1::ModelRef* ref) {
-  ref->set_name(r.name);
-  ref->set_version(r.version);
+Error CancelledBeforeClassification() {
+  return cancelled("the caller cancelled or the deadline passed before classification");
 }
 
 }  // namespace
@@ -88,7 +79,7 @@ grpc::Status GlimpseService::Handle(grpc::ServerContext* ctx, std::string_view r
     } catch (...) {
       result = internal_error("unexpected exception");
     }
-    status = result.ok() ? grpc::Status::OK : ToGrpcStatus(result.error(), DeadlinePassed(ctx));
+    status = result.ok() ? grpc::Status::OK : wire::ToGrpcStatus(result.error(), DeadlinePassed(ctx));
   }
   try {
     const double ms = MsSince(start, options_.clock());
@@ -98,7 +89,7 @@ grpc::Status GlimpseService::Handle(grpc::ServerContext* ctx, std::string_view r
     }
     if (options_.log) {
       log.latency_ms = ms;
-      log.code = StatusCodeName(status.error_code());
+      log.code = wire::StatusCodeName(status.error_code());
       log.message = status.error_message();
       options_.log(log);
     }
@@ -116,31 +107,28 @@ grpc::Status GlimpseService::Classify(grpc::ServerContext* ctx, const v1::Classi
   RequestLog log;
   return Handle(ctx, "Classify", Access::kOpen, log, [&]() -> Status {
     const auto start = options_.clock();
-    log.model = RefText(request->model().name(), request->model().version());
-    if (Status s = ValidateModelName(request->model().name()); !s.ok()) return s;
-    auto method = MethodFromProto(request->method());
-    if (!method) return method.error();
-    log.method = MethodText(*method);
-    auto acceptance = KnownAcceptanceFromProto(request->known_acceptance());
-    if (!acceptance) return acceptance.error();
-    auto cloud = CloudFromProto(request->cloud(), options_.limits.max_points_per_cloud);
+    log.model = LogModelRef(request->model().name(), request->model().version());
+    auto ask = ClassifyAskFromProto(request->model(), request->method(), request->known_acceptance(), &log.method);
+    if (!ask) return ask.error();
+    auto cloud = wire::CloudFromProto(request->cloud(), options_.limits.max_points_per_cloud);
     if (!cloud) return cloud.error();
     log.points = cloud->points.size();
     auto loaded = cache_.Load(request->model().name(), request->model().version());
     if (!loaded) return loaded.error();
-    log.model = RefText(loaded->record.name, loaded->record.version);
+    log.model = LogModelRef(loaded->record.name, loaded->record.version);
     // Core polls the CancelFn only after feature extraction: do not start work nobody waits for.
-    if (CancelFor(ctx)()) return cancelled("the caller cancelled or the deadline passed before classification");
-    auto result = options_.engine.classify(*loaded->model, *cloud, *method, CancelFor(ctx));
+    if (CancelFor(ctx)()) return CancelledBeforeClassification();
+    auto result = options_.engine.classify(*loaded->model, *cloud, ask->method, CancelFor(ctx));
     if (!result) return result.error();
-    if (*acceptance > 0 && options_.engine.set_known_acceptance)
-      if (Status s = options_.engine.set_known_acceptance(*loaded->model, *result, *acceptance); !s.ok()) return s;
+    if (ask->known_acceptance > 0 && options_.engine.set_known_acceptance)
+      if (Status s = options_.engine.set_known_acceptance(*loaded->model, *result, ask->known_acceptance); !s.ok())
+        return s;
     ToProto(*result, response);
-    FillRef(loaded->record, response->mutable_model());
+    ToProto(loaded->record, response->mutable_model());
     response->set_model_id(static_cast<uint64_t>(loaded->record.id));
     response->mutable_timings()->set_model_load_ms(loaded->load_ms);
     response->mutable_timings()->set_total_ms(MsSince(start, options_.clock()));
-    log.method = MethodText(result->method);
+    log.method = wire::MethodName(result->method);
     return {};
   });
 }
@@ -150,37 +138,32 @@ grpc::Status GlimpseService::ClassifyBatch(grpc::ServerContext* ctx, const v1::C
   RequestLog log;
   return Handle(ctx, "ClassifyBatch", Access::kOpen, log, [&]() -> Status {
     const auto start = options_.clock();
-    log.model = RefText(request->model().name(), request->model().version());
+    log.model = LogModelRef(request->model().name(), request->model().version());
     log.messages = static_cast<uint64_t>(request->clouds_size());
-    if (Status s = ValidateModelName(request->model().name()); !s.ok()) return s;
-    auto method = MethodFromProto(request->method());
-    if (!method) return method.error();
-    log.method = MethodText(*method);
-    auto acceptance = KnownAcceptanceFromProto(request->known_acceptance());
-    if (!acceptance) return acceptance.error();
+    auto ask = ClassifyAskFromProto(request->model(), request->method(), request->known_acceptance(), &log.method);
+    if (!ask) return ask.error();
     auto batch = UnpackBatch(*request, options_.limits);
     if (!batch) return batch.error();
     log.points = batch->points;
     auto loaded = cache_.Load(request->model().name(), request->model().version());
     if (!loaded) return loaded.error();
-    log.model = RefText(loaded->record.name, loaded->record.version);
+    log.model = LogModelRef(loaded->record.name, loaded->record.version);
     // What concerns every cloud fails the call, not each result.
-    const MethodId used = method->value_or(loaded->model->default_method);
+    const MethodId used = ask->method.value_or(loaded->model->default_method);
     if (Status s = check_trained_for(*loaded->model, used); !s.ok()) return s.error();
-    if (CancelFor(ctx)()) return cancelled("the caller cancelled or the deadline passed before classification");
-    std::vector<Expected<Classification>> results = options_.engine.classify_batch(*loaded->model, batch->clouds, *method, CancelFor(ctx));
-    for (const Expected<Classification>& r : results)
-      if (!r && (r.error().code == ErrorCode::kCancelled || r.error().code == ErrorCode::kFailedPrecondition))
-        return r.error();  // the call was stopped, or the model cannot classify at all (its feature version)
-    if (*acceptance > 0 && options_.engine.set_known_acceptance)
+    if (CancelFor(ctx)()) return CancelledBeforeClassification();
+    auto results = options_.engine.classify_batch(*loaded->model, batch->clouds, ask->method, CancelFor(ctx));
+    if (Status s = CheckBatchResults(results); !s.ok()) return s;
+    if (ask->known_acceptance > 0 && options_.engine.set_known_acceptance)
       for (Expected<Classification>& r : results)
         if (r)
-          if (Status s = options_.engine.set_known_acceptance(*loaded->model, *r, *acceptance); !s.ok()) return s;
+          if (Status s = options_.engine.set_known_acceptance(*loaded->model, *r, ask->known_acceptance); !s.ok())
+            return s;
     FillBatchResponse(*batch, results, loaded->record, loaded->load_ms, response);
-    FillRef(loaded->record, response->mutable_model());
-    response->set_method(MethodToProto(used));
+    ToProto(loaded->record, response->mutable_model());
+    response->set_method(wire::MethodToProto(used));
     response->set_total_ms(MsSince(start, options_.clock()));
-    log.method = MethodText(used);
+    log.method = wire::MethodName(used);
     return {};
   });
 }
@@ -192,96 +175,22 @@ grpc::Status GlimpseService::StreamClassify(grpc::ServerContext* ctx,
     auto ticket = OpenStream(ctx);
     if (!ticket) return ticket.error();
     const Metrics::ActiveStream active(options_.metrics, "StreamClassify");
-
-    std::unique_ptr<ScanSession> session;
-    LoadedModel model;
-    MethodId method = MethodId::kFusion;
-    double known_acceptance = 0;
-    v1::ScanChunk chunk;
+    ScanStream scan(cache_, options_.engine, options_.limits, options_.clock, log);
     bool caller_left = false;
-    while (stream->Read(&chunk)) {
-      const auto start = options_.clock();
+    for (v1::ScanChunk chunk; !caller_left && stream->Read(&chunk);) {
       ++log.messages;
       if (ticket->over_time()) return StreamTooLong(options_.limits);
-      if (!session) {
-        log.model = RefText(chunk.model().name(), chunk.model().version());
-        if (Status s = ValidateModelName(chunk.model().name()); !s.ok()) return s;
-        auto m = MethodFromProto(chunk.method());
-        if (!m) return m.error();
-        auto acceptance = KnownAcceptanceFromProto(chunk.known_acceptance());
-        if (!acceptance) return acceptance.error();
-        known_acceptance = *acceptance;
-        auto loaded = cache_.Load(chunk.model().name(), chunk.model().version());
-        if (!loaded) return loaded.error();
-        model = std::move(*loaded);
-        method = m->value_or(model.model->default_method);
-        log.model = RefText(model.record.name, model.record.version);
-        log.method = MethodText(method);
-        SessionParams params;
-        params.method = *m;
-        params.max_points = options_.limits.max_session_points;
-        params.max_chunks = options_.limits.max_session_chunks;
-        params.max_chunk_points = options_.limits.max_points_per_cloud;
-        params.known_acceptance = known_acceptance;
-        auto created = options_.engine.create_session(model.model, params);
-        if (!created) return created.error();
-        session = std::move(*created);
-      } else {
-        const v1::ModelRef& ref = chunk.model();
-        bool same_model = ref.name().empty() || (ref.name() == model.record.name &&
-                                                 (ref.version() == 0 || ref.version() == model.record.version));
-        auto m = MethodFromProto(chunk.method());
-        bool same_method = m.ok() && (!*m || **m == method);
-        const double a = chunk.known_acceptance();
-        if (!same_model || !same_method || (a != 0 && a != known_acceptance))
-          return invalid_argument("only the first chunk chooses the model, method and known acceptance; chunk " +
-                                  std::to_string(log.messages - 1) + " names others");
-      }
-      auto cloud = CloudFromProto(chunk.cloud(), options_.limits.max_points_per_cloud);
-      if (!cloud) return Error{cloud.error().code, "chunk " + std::to_string(log.messages - 1) + ": " + cloud.error().message};
-      log.points += cloud->points.size();
-      StreamDecision decision;
-      if (cloud->points.empty()) {
-        decision = session->last();  // nothing new to fuse (e.g. a first chunk that only names the model)
-      } else {
-        auto added = session->add(*cloud);
-        if (!added) return added.error();
-        decision = std::move(*added);
-      }
-      v1::Decision reply;
-      ToProto(decision, &reply);
-      reply.set_chunk_index(log.messages - 1);  // the message answered (the session counts only non-empty ones)
-      FillRef(model.record, reply.mutable_model());
-      reply.set_method(MethodToProto(method));
-      reply.set_latency_ms(MsSince(start, options_.clock()));
-      if (!stream->Write(reply)) {  // the caller went away
-        caller_left = true;
-        break;
-      }
+      auto reply = scan.Add(chunk, log.messages - 1);
+      if (!reply) return reply.error();
+      caller_left = !stream->Write(*reply);
     }
     if (ticket->expired()) return StreamTooLong(options_.limits);
     if (ctx->IsCancelled()) return cancelled("the caller cancelled the stream");
-    // A stream closed before its first chunk asked nothing: an error, not an OK with nothing decided.
-    if (!session && !caller_left) return invalid_argument("the stream ended before its first chunk: nothing to classify");
+    if (caller_left) return {};
     // The scanner is done (WritesDone): the final answer, every feature on the whole scan, is Classify's.
-    if (session && !caller_left) {
-      // A scan that never gave a decision ends in an error, as Classify's of too few points does, not
-      // in an OK with nothing decided.
-      if (session->last().raw_scores.empty())
-        return invalid_argument("the scan ended without a decision: its " + std::to_string(session->last().points) +
-                                (session->last().points == 1 ? " point" : " points") +
-                                " gave no surface to judge (too few, or all on a line)");
-      const auto start = options_.clock();
-      auto finished = session->finish();
-      if (!finished) return finished.error();
-      v1::Decision reply;
-      ToProto(*finished, &reply);
-      reply.set_chunk_index(log.messages - 1);
-      FillRef(model.record, reply.mutable_model());
-      reply.set_method(MethodToProto(method));
-      reply.set_latency_ms(MsSince(start, options_.clock()));
-      stream->Write(reply);
-    }
+    auto final_decision = scan.Finish(log.messages - 1);
+    if (!final_decision) return final_decision.error();
+    stream->Write(*final_decision);
     return {};
   });
 }
@@ -293,10 +202,8 @@ grpc::Status GlimpseService::Train(grpc::ServerContext* ctx,
     auto ticket = OpenStream(ctx);
     if (!ticket) return ticket.error();
     const Metrics::ActiveStream active(options_.metrics, "Train");
-
     TrainInput input;
-    v1::TrainRequest msg;
-    while (stream->Read(&msg)) {
+    for (v1::TrainRequest msg; stream->Read(&msg);) {
       ++log.messages;
       if (ticket->over_time()) return StreamTooLong(options_.limits);
       if (Status s = AddTrainRequest(msg, options_.limits, input); !s.ok()) return s;
@@ -309,40 +216,14 @@ grpc::Status GlimpseService::Train(grpc::ServerContext* ctx,
     if (ctx->IsCancelled() || DeadlinePassed(ctx)) return cancelled("the caller cancelled Train while sending");
     ticket->disarm();  // training itself is bounded by the caller's deadline
     if (Status s = CheckTrainInput(input); !s.ok()) return s;
-
-    // Core may report progress from worker threads: one writer at a time, and only when it moved.
-    std::mutex write_mutex;
-    v1::TrainProgress last;
-    last.set_stage("received");
-    last.set_clouds_received(input.clouds.size());
-    stream->Write(last);
-    auto progress = [&](const TrainingProgress& p) {
-      if (p.stage == "done") return;  // core's end; the call is done once the model is stored
-      std::lock_guard lock(write_mutex);
-      if (p.stage == "features") last.set_features_extracted(p.done);
-      if (p.stage == "codebooks") {
-        last.set_codebooks_fitted(p.done);
-        last.set_codebooks_total(p.total);
-      }
-      double percent = std::max(last.percent(), std::min(99.0, TrainPercent(p.stage, p.done, p.total)));
-      bool moved = p.stage != last.stage() || percent >= last.percent() + 1.0 || p.done == p.total;
-      last.set_stage(p.stage);
-      last.set_stage_done(p.done);
-      last.set_stage_total(p.total);
-      if (!moved) return;
-      last.set_percent(percent);
-      stream->Write(last);
-    };
-    auto record = TrainAndStore(input, options_.engine, *options_.store, progress, CancelFor(ctx));
+    TrainProgressWriter progress([stream](const v1::TrainProgress& p) { return stream->Write(p); });
+    progress.Received(input.clouds.size());
+    auto record = TrainAndStore(
+        input, options_.engine, *options_.store, [&](const TrainingProgress& p) { progress.Update(p); },
+        CancelFor(ctx));
     if (!record) return record.error();
-    log.model = RefText(record->name, record->version);
-    std::lock_guard lock(write_mutex);
-    last.set_stage("done");
-    last.set_stage_done(1);
-    last.set_stage_total(1);
-    last.set_percent(100);
-    ToProto(*record, last.mutable_model());
-    stream->Write(last);
+    log.model = LogModelRef(record->name, record->version);
+    progress.Done(*record);
     return {};
   });
 }
@@ -353,7 +234,7 @@ grpc::Status GlimpseService::ListModels(grpc::ServerContext* ctx, const v1::List
   return Handle(ctx, "ListModels", Access::kOpen, log, [&]() -> Status {
     log.model = request->name();
     if (!request->name().empty())
-      if (Status s = ValidateModelName(request->name()); !s.ok()) return s;
+      if (Status s = wire::ValidateModelName(request->name()); !s.ok()) return s;
     auto records = options_.store->List(request->name());
     if (!records) return records.error();
     for (const ModelRecord& r : *records) ToProto(r, response->add_models());
@@ -365,8 +246,8 @@ grpc::Status GlimpseService::GetModel(grpc::ServerContext* ctx, const v1::GetMod
                                       v1::ModelInfo* response) {
   RequestLog log;
   return Handle(ctx, "GetModel", Access::kOpen, log, [&]() -> Status {
-    log.model = RefText(request->model().name(), request->model().version());
-    if (Status s = ValidateModelName(request->model().name()); !s.ok()) return s;
+    log.model = LogModelRef(request->model().name(), request->model().version());
+    if (Status s = wire::ValidateModelName(request->model().name()); !s.ok()) return s;
     auto record = options_.store->Get(request->model().name(), request->model().version());
     if (!record) return record.error();
     ToProto(*record, response);
@@ -378,8 +259,8 @@ grpc::Status GlimpseService::DeleteModel(grpc::ServerContext* ctx, const v1::Del
                                          v1::DeleteModelResponse* response) {
   RequestLog log;
   return Handle(ctx, "DeleteModel", Access::kMutating, log, [&]() -> Status {
-    log.model = RefText(request->name(), request->version());
-    if (Status s = ValidateModelName(request->name()); !s.ok()) return s;
+    log.model = LogModelRef(request->name(), request->version());
+    if (Status s = wire::ValidateModelName(request->name()); !s.ok()) return s;
     auto deleted = options_.store->Delete(request->name(), request->version());
     if (!deleted) return deleted.error();
     cache_.Sweep();
@@ -392,8 +273,8 @@ grpc::Status GlimpseService::SetDefaultModel(grpc::ServerContext* ctx, const v1:
                                              v1::ModelInfo* response) {
   RequestLog log;
   return Handle(ctx, "SetDefaultModel", Access::kMutating, log, [&]() -> Status {
-    log.model = RefText(request->name(), request->version());
-    if (Status s = ValidateModelName(request->name()); !s.ok()) return s;
+    log.model = LogModelRef(request->name(), request->version());
+    if (Status s = wire::ValidateModelName(request->name()); !s.ok()) return s;
     auto record = options_.store->SetDefault(request->name(), request->version());
     if (!record) return record.error();
     ToProto(*record, response);

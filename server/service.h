@@ -1,6 +1,8 @@
 // GlimpseService: the glimpse.v1.Glimpse RPCs as a thin translation between messages and core calls.
 // Each RPC reads its deadline/cancellation, calls core (through Options::engine) and the store, maps
-// the result with ToGrpcStatus, then records metrics and one log line. No exception leaves an RPC.
+// the result with wire::ToGrpcStatus, then records metrics and one log line. No exception leaves an RPC.
+// The RPCs' domain logic is outside the class (batch.h, stream_classify.h, train.h), the conversions in
+// the wire library (proto/wire) and convert.h.
 #pragma once
 
 #include <chrono>

@@ -5,6 +5,7 @@
 #include <algorithm>
 
 #include "convert.h"
+#include "proto/wire/clouds.h"
 
 namespace glimpse::server {
 namespace {
@@ -16,7 +17,7 @@ Status AddTrainRequest(const v1::TrainRequest& msg, const Limits& limits, TrainI
   switch (msg.kind_case()) {
     case v1::TrainRequest::kHeader: {
       if (input.has_header) return invalid_argument("the Train header was sent twice");
-      auto spec = TrainSpecFromProto(msg.header());
+      auto spec = wire::TrainSpecFromProto(msg.header());
       if (!spec) return spec.error();
       input.has_header = true;
       input.name = msg.header().model_name();
@@ -35,7 +36,7 @@ Status AddTrainRequest(const v1::TrainRequest& msg, const Limits& limits, TrainI
         return invalid_argument("cloud " + std::to_string(index) + ": object_id is longer than 256 bytes");
       if (index >= limits.max_train_clouds)
         return resource_exhausted("more than " + std::to_string(limits.max_train_clouds) + " training clouds");
-      auto cloud = CloudFromProto(lc.cloud(), limits.max_points_per_cloud);
+      auto cloud = wire::CloudFromProto(lc.cloud(), limits.max_points_per_cloud);
       if (!cloud) return Error{cloud.error().code, "cloud " + std::to_string(index) + ": " + cloud.error().message};
       if (input.points + cloud->points.size() > limits.max_train_points)
         return resource_exhausted("training clouds exceed " + std::to_string(limits.max_train_points) + " points in total");
@@ -105,6 +106,41 @@ double TrainPercent(std::string_view stage, size_t done, size_t total) {
     return s.from + f * (s.to - s.from);
   }
   return -1;  // unknown stage: the caller keeps its last value
+}
+
+void TrainProgressWriter::Received(size_t clouds) {
+  std::lock_guard lock(mutex_);
+  last_.set_stage("received");
+  last_.set_clouds_received(clouds);
+  write_(last_);
+}
+
+void TrainProgressWriter::Update(const TrainingProgress& p) {
+  if (p.stage == "done") return;  // core's end; the call is done once the model is stored
+  std::lock_guard lock(mutex_);
+  if (p.stage == "features") last_.set_features_extracted(p.done);
+  if (p.stage == "codebooks") {
+    last_.set_codebooks_fitted(p.done);
+    last_.set_codebooks_total(p.total);
+  }
+  const double percent = std::max(last_.percent(), std::min(99.0, TrainPercent(p.stage, p.done, p.total)));
+  const bool moved = p.stage != last_.stage() || percent >= last_.percent() + 1.0 || p.done == p.total;
+  last_.set_stage(p.stage);
+  last_.set_stage_done(p.done);
+  last_.set_stage_total(p.total);
+  if (!moved) return;
+  last_.set_percent(percent);
+  write_(last_);
+}
+
+void TrainProgressWriter::Done(const ModelRecord& record) {
+  std::lock_guard lock(mutex_);
+  last_.set_stage("done");
+  last_.set_stage_done(1);
+  last_.set_stage_total(1);
+  last_.set_percent(100);
+  ToProto(record, last_.mutable_model());
+  write_(last_);
 }
 
 }  // namespace glimpse::server

@@ -1,8 +1,10 @@
 // The Train RPC's domain logic, outside the service class: collecting the request stream into a
 // training set (with its limits), training + storing a version, and turning core progress into
-// percentages.
+// percentages and progress messages.
 #pragma once
 
+#include <functional>
+#include <mutex>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -17,7 +19,7 @@ struct TrainInput {
   bool has_header = false;
   std::string name;
   std::string description;
-  TrainSpec spec;
+  wire::TrainSpec spec;
   std::vector<TrainingCloud> clouds;
   size_t points = 0;  // summed over clouds
 };
@@ -34,5 +36,23 @@ Expected<ModelRecord> TrainAndStore(const TrainInput& input, const Engine& engin
 // Share of the whole call done, 0-100, for a core stage ("features", "codebooks", ...) or one of the
 // server's ("received", "storing", "done").
 double TrainPercent(std::string_view stage, size_t done, size_t total);
+
+// The call's progress as TrainProgress messages: "received" once the clouds are in, core's stages while
+// they move (only when the stage changes or the share moves by a point; core may report from worker
+// threads, so one write at a time), and "done" with the stored model.
+class TrainProgressWriter {
+ public:
+  using Write = std::function<bool(const v1::TrainProgress&)>;
+  explicit TrainProgressWriter(Write write) : write_(std::move(write)) {}
+
+  void Received(size_t clouds);
+  void Update(const TrainingProgress& p);  // core's ProgressFn
+  void Done(const ModelRecord& record);
+
+ private:
+  std::mutex mutex_;
+  Write write_;
+  v1::TrainProgress last_;
+};
 
 }  // namespace glimpse::server

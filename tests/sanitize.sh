@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Sanitizer builds of the test suite (issue 10, item 3), each in its own build folder:
+# Sanitizer builds of the test suite, each in its own build folder:
 #   tests/sanitize.sh asan   ASan+UBSan (gcc), the whole test suite, in build-asan
 #   tests/sanitize.sh tsan   TSan (gcc), the server tests (ctest -L server) and the reliability
 #                            bad-input table, in build-tsan

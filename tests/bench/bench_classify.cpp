@@ -1,37 +1,30 @@
-// Classifying one 10k-point single view with a trained model (issue 4): every method's time beside
-// PCL's own VFH pipeline as a user writes it (NormalEstimation + VFHEstimation + nearest neighbour
-// among as many stored descriptors as the model has training vectors), measured in the same run.
-// Goal: BoK and BoG classify within 2x the PCL pipeline. Run with --benchmark_repetitions=5
-// --benchmark_report_aggregates_only=true and compare the medians; the ratio is printed as a counter
-// of each classify run against the PCL pipeline's median of the same process. PCL's pipeline is
-// single-threaded; OMP_NUM_THREADS=1 makes ours so too. Measured (2-core VM, medians of 5, after the
-// local-surface speedups of session 13): 2 threads BoK 0.32x, BoG 0.33x, fusion 1.34x; one thread
-// BoK 0.48x, BoG 0.46x, fusion 1.24x (PCL pipeline 38-41 ms). Issue 17 (fusion = USH + VFH computing no
-// keypoints; machine shared with a compile job): fusion 0.27x, USH 0.24x, VFH 0.30x, BoK 0.71x, BoG
+// Classifying one 10k-point single view with a trained model: every method's time beside PCL's own VFH
+// pipeline as a user writes it (NormalEstimation + VFHEstimation + nearest neighbour among as many stored
+// descriptors as the model has training vectors), measured in the same run. Goal: BoK and BoG within 2x
+// the PCL pipeline. Run with --benchmark_repetitions=5 --benchmark_report_aggregates_only=true and compare
+// the medians; the ratio is printed as a counter of each classify run against the PCL pipeline's median
+// of the same process. PCL's pipeline is single-threaded; OMP_NUM_THREADS=1 makes ours so too. Measured
+// (2-core VM shared with a compile job, medians of 5): fusion 0.27x, USH 0.24x, VFH 0.30x, BoK 0.71x, BoG
 // 0.27x (PCL pipeline 56.7 ms).
 //
-// Issue 16: a small dense object. A 10k-point view of a 17 cm machine part (the zoo's mechanic) must
-// cost at most 1.5x the same-size view of a 1.7 m human (the zoo's), with every method: every radius
-// follows the cloud's density, none is fixed in metres. BM_ClassifySize/<method>/<0 human, 1 part>;
-// after the table the ratio of the medians is printed per method. Measured (2-core VM, medians of 5,
-// session of issue 16): bok 0.85, bog 1.03, kgh 0.90, vfh 1.02, esf 1.04, ush 0.85, size 1.19,
-// fusion 0.98 (part 12-27 ms, human 12-26 ms).
+// A small dense object: a 10k-point view of a 17 cm machine part (the zoo's mechanic) costs at most 1.5x
+// the same-size view of a 1.7 m human (the zoo's), with every method: every radius follows the cloud's
+// density, none is fixed in metres. BM_ClassifySize/<method>/<0 human, 1 part>; after the table the ratio
+// of the medians is printed per method. Measured (2-core VM, medians of 5): bok 0.85, bog 1.03, kgh 0.90,
+// vfh 1.02, esf 1.04, ush 0.85, size 1.19, fusion 0.98 (part 12-27 ms, human 12-26 ms).
 //
-// Issue 20: "none of these". The default method's novelty (distances the decision already computes,
-// over scales calibrated in training) must cost at most 5 % more per Classify: BM_ClassifyNovelty/<0
-// without, 1 with> classifies the 10k-point view with fusion by the same model read back as format 3
-// (no novelty calibration) and as it is; the ratio of the medians is printed after the table, and each
-// run's median decision time (the stage the novelty adds to) as a counter. Both arms compute the nearest
-// distances and the PCA residual (decide_with_distances); the novelty adds their scaling and the
-// quantile lookup, and (model format 6) each category's distance over its nearest training objects.
-// Measured (2-core VM, idle, medians of 5): 18.38 ms with, 18.31 ms without, ratio 1.004 (the decision
-// stage 0.049 ms against 0.031). Arms 2 and 3 (stop 36): a model trained with augmented clouds, whose
-// novelty is its novelty model's (a second decision per component), against the same clouds unmarked
-// and read without novelty: 16.68 ms against 16.51, ratio 1.010 (decision 0.113 ms against 0.053).
-// Stop 44: the novelty joins that of the view's top-down prefix (TrainParams::novelty_prefix: USH and VFH
-// of its highest 55 % of at most 2000 of its points, and their decisions): 7.59 ms against 7.30, ratio
-// 1.040 (decision 0.057 ms against 0.022; 1.187 with the prefix's every point, 8.59 ms against 7.24).
-// Both arms are faster than above since VFH no longer lets PCL build a search tree it never uses.
+// "None of these": the default method's novelty (distances the decision already computes, over scales
+// calibrated in training) costs at most 5 % more per Classify. BM_ClassifyNovelty/<arm> classifies the
+// 10k-point view with fusion: arm 0 by the model read back as format 3 (no novelty calibration), arm 1 as
+// it is; arms 2 and 3 a model trained with augmented clouds (whose novelty is its novelty model's, a second
+// decision per component) against the same clouds unmarked and read without novelty. The ratio of the
+// medians is printed after the table, and each run's median decision time (the stage the novelty adds to)
+// as a counter. Both arms compute the nearest distances and the PCA residual (decide_with_distances); the
+// novelty adds their scaling, the quantile lookup, each category's distance over its nearest training
+// objects, and the view's top-down prefix (TrainParams::novelty_prefix: USH and VFH of its highest 55 %
+// of at most 2000 of its points, and their decisions). Measured (2-core VM, idle, medians of 5): 7.59 ms
+// against 7.30, ratio 1.040 (decision 0.057 ms against 0.022; 1.187 with the prefix's every point, 8.59 ms
+// against 7.24).
 #include <benchmark/benchmark.h>
 #include <unistd.h>
 
@@ -191,8 +184,8 @@ const Model* model_without_novelty() {
   return m.get();
 }
 
-// Issue 18: what the scan filters (isolated points, ground plane, voxel grid to the trained density) add
-// to Classify of a 10k-point view. BM_ScanFilters/<0 human 1.7 m, 1 part 0.17 m> times filter_scan alone
+// What the scan filters (isolated points, ground plane, voxel grid to the trained density) add to
+// Classify of a 10k-point view. BM_ScanFilters/<0 human 1.7 m, 1 part 0.17 m> times filter_scan alone
 // with the model's parameters; BM_ClassifyUnfiltered the same views through a model trained alike with
 // filter_scans off; after the table the ratio filters / unfiltered Classify is printed (goal <= 0.2),
 // and the whole filtered Classify (BM_ClassifySize, fusion) against the unfiltered one: a dense view is

@@ -1,12 +1,11 @@
 // The decision stage's training cost: fit_decision with every training vector a reference computes
 // each vector's distance to the nearest one of another object (its temperature), quadratic in the
 // training vectors. With training views from three elevations and their prefixes a SHREC fold holds
-// ~20k vectors, and the model's calibration fits four more stages. BM_NearestOtherObjectRowwise is
-// the row-at-a-time loop fit_decision used first, BM_NearestOtherObjectColumnPass the one-query
-// column-wise pass it used next (stop 37), run in the same process as the ratios' baselines.
-// BM_DecideRows: calibration's held-out decisions, a few queries per tiled pass, against
-// BM_DecideOneByOne, decide_with_distances per query as calibration did before. BM_FitPcaAndProject:
-// the stage's PCA on 1 and 2 threads.
+// ~20k vectors, and the model's calibration fits four more stages. BM_NearestOtherObjectRowwise is a
+// row-at-a-time loop and BM_NearestOtherObjectColumnPass a one-query column-wise pass, the baselines of
+// the tiled passes fit_decision makes, run in the same process. BM_DecideRows: calibration's held-out
+// decisions, 32 queries a tiled pass, against BM_DecideOneByOne, decide_with_distances per query.
+// BM_FitPcaAndProject: the stage's PCA on 1 and 2 threads.
 #include <benchmark/benchmark.h>
 
 #include <cmath>
@@ -92,8 +91,8 @@ void BM_NearestOtherObjectRowwise(benchmark::State& state) {
 }
 BENCHMARK(BM_NearestOtherObjectRowwise)->Arg(2000)->Arg(8000)->Unit(benchmark::kMillisecond);
 
-// The baseline of the tiled passes: each row's distances to every row in one column-wise pass (the
-// loop of stop 37), one row at a time, rows shared among threads.
+// The baseline of the tiled passes: each row's distances to every row in one column-wise pass, one row
+// at a time, rows shared among threads.
 void BM_NearestOtherObjectColumnPass(benchmark::State& state) {
   const Training t = training(static_cast<int>(state.range(0)));
   const Eigen::MatrixXd y = projected(t);

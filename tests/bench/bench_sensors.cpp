@@ -1,7 +1,7 @@
 // Cost of the simulated sensors' ray casting: a depth camera (640 x 480 rays) looking at a zoo chair
 // from 1.5 m, 15 deg up, as the training views are made, without and with the floor patch. The
-// baseline in the same process casts the same pixels one ray at a time (RayScene::cast), as the camera
-// did before it cast each row as packets of 8 (RayScene::cast_many); both find the same hits.
+// camera casts each row as packets of 8 (RayScene::cast_many); the baseline in the same process casts the
+// same pixels one ray at a time (RayScene::cast). Both find the same hits.
 #include <benchmark/benchmark.h>
 
 #include "glimpse/views/sensors.h"

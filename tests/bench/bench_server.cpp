@@ -1,20 +1,18 @@
-// Issue 7's speed goal: Classify over a real loopback gRPC port against glimpse::classify called in
+// The service's speed goal: Classify over a real loopback gRPC port against glimpse::classify called in
 // process, on the same trained model and the same 10,000-point single view; the gRPC overhead (wire
-// encoding, HTTP/2, the store lookup, the cache) should stay <= 10 % of the call. Also the Classify
+// encoding, HTTP/2, the store lookup, the cache) stays <= 10 % of the call. Also the Classify
 // throughput of one server with 2 client threads, in requests/s.
-// Issue 16: 32 views in one ClassifyBatch call against 32 Classify calls one after the other, over
-// loopback, same server (goal: the batch takes <= 0.8 of the singles' time). Measured (2-core VM,
-// medians of 5, issue 16): batch 85.8 ms, singles 142.7 ms, ratio 0.60 (a batch spreads its clouds
-// over the request's threads, one thread per cloud).
+// The batch goal: 32 views in one ClassifyBatch call against 32 Classify calls one after the other, over
+// loopback, same server (the batch takes <= 0.8 of the singles' time). On a 2-core VM, medians of 5:
+// batch 85.8 ms, singles 142.7 ms, ratio 0.60 (a batch spreads its clouds over the request's threads,
+// one thread per cloud).
 //   bench_server --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 // After the table it prints the overhead ratio and the batch ratio of the medians (or of single runs).
 #include <benchmark/benchmark.h>
 #include <grpcpp/grpcpp.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cstdio>
-#include <filesystem>
 #include <map>
 #include <numeric>
 #include <random>
@@ -23,9 +21,10 @@
 #include "glimpse/views/sampling.h"
 #include "glimpse/views/hidden_point_removal.h"
 #include "glimpse/views/zoo.h"
-#include "server/convert.h"
+#include "proto/wire/clouds.h"
 #include "server/server.h"
 #include "server/service.h"
+#include "tests/common/temp_dir.h"  // the project root is on the path through the server library
 
 namespace glimpse::server {
 namespace {
@@ -79,7 +78,7 @@ struct Fixture {
   v1::ClassifyRequest request;
   v1::ClassifyBatchRequest batch;           // kBatchViews clouds
   std::vector<v1::ClassifyRequest> singles; // the same clouds, one request each
-  std::filesystem::path dir;
+  glimpse::testing::TempDir dir{"bench-server"};  // the store's SQLite file
   std::unique_ptr<ModelStore> store;
   std::unique_ptr<GlimpseService> service;
   RunningServer running;
@@ -100,8 +99,7 @@ struct Fixture {
       return;
     }
 
-    dir = std::filesystem::temp_directory_path() / ("glimpse-bench-server-" + std::to_string(::getpid()));
-    auto opened = ModelStore::Open((dir / "glimpse.db").string());
+    auto opened = ModelStore::Open(dir.file("glimpse.db"));
     if (!opened) {
       error = "store: " + opened.error().message;
       return;
@@ -130,12 +128,12 @@ struct Fixture {
     channel = grpc::CreateChannel("127.0.0.1:" + std::to_string(running.port), grpc::InsecureChannelCredentials());
 
     request.mutable_model()->set_name(kModelName);
-    *request.mutable_cloud() = CloudToProto(view);
+    *request.mutable_cloud() = wire::CloudToProto(view);
     batch.mutable_model()->set_name(kModelName);
     for (const Cloud& c : BatchViews()) {
-      *batch.add_clouds() = CloudToProto(c);
+      *batch.add_clouds() = wire::CloudToProto(c);
       singles.push_back(request);
-      *singles.back().mutable_cloud() = CloudToProto(c);
+      *singles.back().mutable_cloud() = wire::CloudToProto(c);
     }
     error = CheckSameAnswer();  // also loads the model into the server's cache
   }
@@ -144,7 +142,6 @@ struct Fixture {
     if (running.server) ShutdownGrpcServer(*running.server, std::chrono::seconds(2));
     service.reset();
     store.reset();
-    if (!dir.empty()) std::filesystem::remove_all(dir);
   }
 
   // Both paths must compute the same thing, or the comparison means nothing.

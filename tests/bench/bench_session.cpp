@@ -1,10 +1,8 @@
-// Per-chunk latency of a ScanSession (issue 6): 1k-point chunks of one object revealed top-down, from
-// the 1st to the 50th chunk. The cost of a chunk must depend on the chunk, not on what was
-// accumulated. Goal: the 50th chunk <= 1.5x the 5th (compare the medians of one run).
-// Measured (2-core VM): BoK 50th / 5th = 10.0 / 8.74 ms = 1.14; fusion, the mean of chunks 41-50 over
-// that of chunks 5-14 = 132 / 111 ms = 1.18 (BM_SessionWindow). Issue 17 (one feature state; fusion
-// = USH + VFH, no keypoint work): BoK 50th / 5th = 22.6 / 34.7 ms = 0.65, fusion 24.2 / 20.9 = 1.16,
-// fusion window 41-50 / 5-14 = 24.9 / 18.9 ms = 1.32.
+// Per-chunk latency of a ScanSession: 1k-point chunks of one object revealed top-down, from the 1st to the
+// 50th chunk. The cost of a chunk depends on the chunk, not on what was accumulated. Goal: the 50th chunk
+// <= 1.5x the 5th (compare the medians of one run). Measured (2-core VM, shared with a compile job): BoK
+// 50th / 5th = 22.6 / 34.7 ms = 0.65, fusion 24.2 / 20.9 = 1.16, fusion window (BM_SessionWindow: the mean
+// of chunks 41-50 over that of chunks 5-14) 24.9 / 18.9 ms = 1.32.
 #include <benchmark/benchmark.h>
 
 #include "../core/synthetic.h"
@@ -44,12 +42,7 @@ const std::vector<Cloud>& chunks() {
 }
 
 std::shared_ptr<const Model> model(MethodId method) {
-  TrainParams p;
-  p.bok_clusters = 12;
-  p.bog_keypoint_clusters = 3;
-  p.bog_volume_clusters = 2;
-  p.kgh_clusters = 3;
-  p.kgh_distance_bins = 4;
+  TrainParams p = test::small_params();
   p.methods = {method};
   p.default_method = method;
   auto m = train(test::synthetic_views(4, 2, 3), p);

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Cross-language check (issue 8 item 5): a Python gRPC client against the real glimpse-server.
+"""Cross-language check: a Python gRPC client against the real glimpse-server.
 
 Stubs are generated from proto/ at test time (see generate_stubs); a tiny model is trained with
 the glimpse CLI; then Classify, StreamClassify, ListModels and grpc.health.v1 are called from Python.

@@ -1,18 +1,21 @@
+// The cloud codec as the client uses it (proto/wire/clouds.h): packed little-endian float32, chunks of a
+// scan packed into a reused message, decoding as it is; and the non-finite points a file may hold.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <limits>
 
-#include "client/cloud_convert.h"
+#include "client/inputs.h"
+#include "proto/wire/clouds.h"
 
 namespace glimpse::client {
 namespace {
 
 TEST(CloudConvert, EmptyCloudGivesEmptyBytesAndNoSensor) {
-  const v1::PointCloud proto = ToProto(Cloud{});
+  const v1::PointCloud proto = wire::CloudToProto(Cloud{});
   EXPECT_TRUE(proto.xyz().empty());
   EXPECT_FALSE(proto.has_sensor());
-  auto back = FromProto(proto);
+  auto back = wire::DecodeCloud(proto);
   ASSERT_TRUE(back.ok());
   EXPECT_TRUE(back->points.empty());
   EXPECT_FALSE(back->sensor.has_value());
@@ -21,7 +24,7 @@ TEST(CloudConvert, EmptyCloudGivesEmptyBytesAndNoSensor) {
 TEST(CloudConvert, PacksLittleEndianFloat32Triples) {
   Cloud cloud;
   cloud.points = {Vec3(1.0f, -2.0f, 0.5f)};
-  const std::string xyz = ToProto(cloud).xyz();
+  const std::string xyz = wire::CloudToProto(cloud).xyz();
   ASSERT_EQ(xyz.size(), 12u);
   // 1.0f = 0x3f800000, -2.0f = 0xc0000000, 0.5f = 0x3f000000, least significant byte first.
   const unsigned char expected[12] = {0, 0, 0x80, 0x3f, 0, 0, 0, 0xc0, 0, 0, 0, 0x3f};
@@ -32,7 +35,7 @@ TEST(CloudConvert, RoundTripIsBitExactWithSensor) {
   Cloud cloud;
   cloud.points = {Vec3(0.1f, 0.2f, 0.3f), Vec3(-1e-20f, 3.4e38f, -0.0f), Vec3(7, 8, 9)};
   cloud.sensor = Vec3(0.0f, -2.5f, 1.25f);
-  auto back = FromProto(ToProto(cloud));
+  auto back = wire::DecodeCloud(wire::CloudToProto(cloud));
   ASSERT_TRUE(back.ok());
   ASSERT_EQ(back->points.size(), cloud.points.size());
   for (size_t i = 0; i < cloud.points.size(); ++i)
@@ -47,15 +50,15 @@ TEST(CloudConvert, RangePacksOnlyThatChunkAndClampsBounds) {
   Cloud cloud;
   for (int i = 0; i < 10; ++i) cloud.points.push_back(Vec3(float(i), 0, 0));
   v1::PointCloud proto;
-  ToProto(cloud, 3, 6, &proto);
-  auto chunk = FromProto(proto);
+  wire::CloudToProto(cloud, 3, 6, &proto);
+  auto chunk = wire::DecodeCloud(proto);
   ASSERT_TRUE(chunk.ok());
   ASSERT_EQ(chunk->points.size(), 3u);
   EXPECT_EQ(chunk->points[0].x(), 3.0f);
   EXPECT_EQ(chunk->points[2].x(), 5.0f);
-  ToProto(cloud, 8, 100, &proto);  // reuse: the previous content is replaced
+  wire::CloudToProto(cloud, 8, 100, &proto);  // reuse: the previous content is replaced
   EXPECT_EQ(proto.xyz().size(), 24u);
-  ToProto(cloud, 20, 30, &proto);
+  wire::CloudToProto(cloud, 20, 30, &proto);
   EXPECT_TRUE(proto.xyz().empty());
 }
 
@@ -64,15 +67,15 @@ TEST(CloudConvert, ReusedMessageLosesAnOldSensor) {
   with.points = {Vec3(1, 2, 3)};
   with.sensor = Vec3(0, 0, 1);
   v1::PointCloud proto;
-  ToProto(with, &proto);
-  ToProto(Cloud{with.points, std::nullopt}, &proto);
+  wire::CloudToProto(with, &proto);
+  wire::CloudToProto(Cloud{with.points, std::nullopt}, &proto);
   EXPECT_FALSE(proto.has_sensor());
 }
 
 TEST(CloudConvert, RejectsBytesNotAMultipleOfTwelve) {
   v1::PointCloud proto;
   proto.set_xyz(std::string(13, '\0'));
-  auto cloud = FromProto(proto);
+  auto cloud = wire::DecodeCloud(proto);
   ASSERT_FALSE(cloud.ok());
   EXPECT_EQ(cloud.error().code, ErrorCode::kInvalidArgument);
   EXPECT_NE(cloud.error().message.find("13"), std::string::npos);

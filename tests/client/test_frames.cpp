@@ -1,13 +1,13 @@
 // glimpse stream --frames: a folder of frames, each with its sensor, in natural name order; poses.csv
 // places frames whose points are in the sensor's own frame; every bad input names the file.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 
 #include "client/frames.h"
+#include "common/temp_dir.h"
 #include "glimpse/io/files.h"
 
 namespace glimpse::client {
@@ -17,16 +17,10 @@ namespace fs = std::filesystem;
 
 class FramesTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("glimpse_client_frames_" + std::to_string(::getpid()) + "_" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
   void Write(const std::string& name, Cloud c) { ASSERT_TRUE(write_cloud((dir_ / name).string(), c).ok()); }
   void Text(const std::string& name, const std::string& text) { std::ofstream(dir_ / name) << text; }
-  fs::path dir_;
+  glimpse::testing::TempDir tmp_{"client-frames"};
+  fs::path dir_ = tmp_.path();
 };
 
 Cloud Points(std::initializer_list<Vec3> p, std::optional<Vec3> sensor) {

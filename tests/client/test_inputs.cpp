@@ -4,6 +4,8 @@
 #include <fstream>
 
 #include "client/inputs.h"
+#include "common/meshes.h"
+#include "common/temp_dir.h"
 #include "glimpse/io/files.h"
 
 namespace glimpse::client {
@@ -13,26 +15,8 @@ namespace fs = std::filesystem;
 
 class InputsTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("glimpse_client_inputs_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
   // A closed box of 12 triangles, 1 x 1 x 2 m, standing on the ground.
-  std::string WriteBox(const fs::path& path) {
-    fs::create_directories(path.parent_path());
-    std::ofstream out(path);
-    out << "OFF\n8 12 0\n";
-    for (int i = 0; i < 8; ++i) out << (i & 1) << " " << ((i >> 1) & 1) << " " << 2 * ((i >> 2) & 1) << "\n";
-    const int f[12][3] = {{0, 1, 3}, {0, 3, 2}, {4, 6, 7}, {4, 7, 5}, {0, 4, 5}, {0, 5, 1},
-                          {2, 3, 7}, {2, 7, 6}, {0, 2, 6}, {0, 6, 4}, {1, 5, 7}, {1, 7, 3}};
-    for (const auto& t : f) out << "3 " << t[0] << " " << t[1] << " " << t[2] << "\n";
-    return path.string();
-  }
+  std::string WriteBox(const fs::path& path) { return glimpse::testing::WriteOffBox(path, 1, 1, 2); }
 
   std::string WriteCloud(const fs::path& path, size_t n, bool sensor = false) {
     fs::create_directories(path.parent_path());
@@ -43,7 +27,8 @@ class InputsTest : public ::testing::Test {
     return path.string();
   }
 
-  fs::path dir_;
+  glimpse::testing::TempDir tmp_{"client-inputs"};
+  fs::path dir_ = tmp_.path();
 };
 
 TEST_F(InputsTest, IsInputFileByExtension) {

@@ -2,7 +2,6 @@
 // --unit / --height override, the protocol's views identical to the lab's, single mesh files, and the
 // view `glimpse stream` reveals (a cloud file as it is, sensor or not).
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <filesystem>
 #include <cmath>
@@ -10,6 +9,8 @@
 
 #include "client/commands.h"
 #include "client/objects.h"
+#include "common/meshes.h"
+#include "common/temp_dir.h"
 #include "glimpse/learning/object_views.h"
 #include "glimpse/io/files.h"
 #include "glimpse/views/sampling.h"
@@ -22,28 +23,14 @@ namespace fs = std::filesystem;
 
 class ObjectsTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("glimpse_client_objects_" + std::to_string(::getpid()) + "_" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
   // An OFF box sx x sy x sz (mesh units) with one corner at the origin.
   std::string WriteBox(const fs::path& path, float sx, float sy, float sz) {
-    fs::create_directories(path.parent_path());
-    std::ofstream out(path);
-    out << "OFF\n8 12 0\n";
-    for (int i = 0; i < 8; ++i) out << sx * (i & 1) << " " << sy * ((i >> 1) & 1) << " " << sz * ((i >> 2) & 1) << "\n";
-    const int f[12][3] = {{0, 1, 3}, {0, 3, 2}, {4, 6, 7}, {4, 7, 5}, {0, 4, 5}, {0, 5, 1},
-                          {2, 3, 7}, {2, 7, 6}, {0, 2, 6}, {0, 6, 4}, {1, 5, 7}, {1, 7, 3}};
-    for (const auto& t : f) out << "3 " << t[0] << " " << t[1] << " " << t[2] << "\n";
-    return path.string();
+    return glimpse::testing::WriteOffBox(path, sx, sy, sz);
   }
   void WriteText(const fs::path& path, const std::string& text) { std::ofstream(path) << text; }
 
-  fs::path dir_;
+  glimpse::testing::TempDir tmp_{"client-objects"};
+  fs::path dir_ = tmp_.path();
 };
 
 Bounds MeshBounds(const DatasetObject& o, const Sizing& s) {
@@ -150,8 +137,8 @@ TEST_F(ObjectsTest, TheManifestAppliesAsInTheLabAndFlagsOverrideIt) {
   EXPECT_NEAR(MeshBounds(h->dataset.objects[0], h->sizing).extent().z(), 2.0f, 1e-5f);
 }
 
-// sizes.csv alone says how big, not which way is up: the meshes stay +z up, as the client says (they
-// were stood on +y, the lab's default for meshes an up_axis.csv does not list, while it printed "+z").
+// sizes.csv alone says how big, not which way is up: the meshes stay +z up, as the client prints (not +y,
+// the lab's default for meshes an up_axis.csv does not list).
 TEST_F(ObjectsTest, ASizeTableAloneLeavesMeshesZUp) {
   WriteBox(dir_ / "thing" / "a.off", 0.5f, 0.5f, 2.0f);
   WriteBox(dir_ / "other" / "b.off", 0.5f, 0.5f, 2.0f);

@@ -1,6 +1,8 @@
 #include <gtest/gtest.h>
 
 #include "client/parse.h"
+#include "proto/wire/errors.h"
+#include "proto/wire/methods.h"
 
 namespace glimpse::client {
 namespace {
@@ -41,13 +43,13 @@ TEST(ParseModelRef, RejectsBadNamesAndVersions) {
 }
 
 TEST(ParseMethod, NamesAreCaseInsensitiveAndErrorsListValidOnes) {
-  EXPECT_EQ(*ParseMethod("bok"), v1::METHOD_BOK);
-  EXPECT_EQ(*ParseMethod(" FUSION "), v1::METHOD_FUSION);
-  auto bad = ParseMethod("svm");
+  EXPECT_EQ(*wire::ParseMethod("bok"), v1::METHOD_BOK);
+  EXPECT_EQ(*wire::ParseMethod(" FUSION "), v1::METHOD_FUSION);
+  auto bad = wire::ParseMethod("svm");
   ASSERT_FALSE(bad.ok());
   EXPECT_NE(bad.error().message.find("bok, bog, kgh, vfh, esf, ush, size, fusion"), std::string::npos);
-  for (const std::string& name : MethodNames()) EXPECT_EQ(MethodName(*ParseMethod(name)), name);
-  EXPECT_EQ(MethodName(v1::METHOD_UNSPECIFIED), "default");
+  for (const std::string& name : wire::MethodNames()) EXPECT_EQ(wire::MethodName(*wire::ParseMethod(name)), name);
+  EXPECT_EQ(wire::MethodName(v1::METHOD_UNSPECIFIED), "default");
 }
 
 TEST(ParseMethodList, CommaSeparatedWithoutDuplicates) {
@@ -73,10 +75,10 @@ TEST(ParseSensor, ThreeFiniteNumbers) {
 }
 
 TEST(StatusCodeName, MatchesGrpcNames) {
-  EXPECT_STREQ(StatusCodeName(grpc::StatusCode::NOT_FOUND), "NOT_FOUND");
-  EXPECT_STREQ(StatusCodeName(grpc::StatusCode::DEADLINE_EXCEEDED), "DEADLINE_EXCEEDED");
-  EXPECT_STREQ(StatusCodeName(grpc::StatusCode::UNAVAILABLE), "UNAVAILABLE");
-  EXPECT_STREQ(StatusCodeName(grpc::StatusCode::OK), "OK");
+  EXPECT_STREQ(wire::StatusCodeName(grpc::StatusCode::NOT_FOUND), "NOT_FOUND");
+  EXPECT_STREQ(wire::StatusCodeName(grpc::StatusCode::DEADLINE_EXCEEDED), "DEADLINE_EXCEEDED");
+  EXPECT_STREQ(wire::StatusCodeName(grpc::StatusCode::UNAVAILABLE), "UNAVAILABLE");
+  EXPECT_STREQ(wire::StatusCodeName(grpc::StatusCode::OK), "OK");
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 
 #include "glimpse/cloud.h"
 #include "glimpse/learning/model.h"
+#include "glimpse/learning/train_params.h"
 
 namespace glimpse::test {
 
@@ -126,6 +127,18 @@ inline std::vector<TrainingCloud> synthetic_views(int objects_per_category, int 
         out.push_back({cat, cat + "-" + std::to_string(seed) + "-" + std::to_string(o), view_of(shape, rng)});
     }
   return out;
+}
+
+// Training parameters for the synthetic problem's small models: small codebooks, trained in seconds.
+inline TrainParams small_params() {
+  TrainParams p;
+  p.bok_clusters = 12;
+  p.bog_keypoint_clusters = 3;
+  p.bog_volume_clusters = 2;
+  p.kgh_clusters = 3;
+  p.kgh_distance_bins = 4;
+  p.decision.neighbours = 3;
+  return p;
 }
 
 }  // namespace glimpse::test

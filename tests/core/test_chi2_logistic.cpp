@@ -206,7 +206,7 @@ const Pair& models() {
   return p;
 }
 
-// The head's block at the end of a format-7 payload (serialize.cpp): flag, steps, interval, weights
+// The head's block at the end of a format-7 payload (serialize_impl.cpp): flag, steps, interval, weights
 // (rows, cols, values), bias (size, values), share.
 size_t head_block_bytes(size_t categories) {
   const size_t features = 3 * static_cast<size_t>(kUprightHistogramSize + kVfhSize);

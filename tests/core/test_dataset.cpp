@@ -4,8 +4,8 @@
 #include <filesystem>
 #include <fstream>
 #include <set>
-#include <unistd.h>
 
+#include "common/temp_dir.h"
 #include "glimpse/views/dataset.h"
 #include "glimpse/views/placement.h"
 
@@ -22,17 +22,12 @@ const char* kTallAlongY =
 
 class DatasetTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    root_ = fs::temp_directory_path() / ("glimpse_ds_" + std::to_string(::getpid()) + "_" + info->name());
-    fs::create_directories(root_);
-  }
-  void TearDown() override { fs::remove_all(root_); }
   void file(const std::string& rel, const std::string& text) {
     fs::create_directories((root_ / rel).parent_path());
     std::ofstream(root_ / rel) << text;
   }
-  fs::path root_;
+  glimpse::testing::TempDir tmp_{"dataset"};
+  fs::path root_ = tmp_.path();
 };
 
 TEST_F(DatasetTest, ScanSortsByCategoryThenNumericIdAndReadsUpAxes) {
@@ -290,7 +285,7 @@ TEST(Psb, All150LoadUprightIncludingTiltedOnesAndBinaryStl) {
     }
   }
   EXPECT_EQ(parts, 6u);
-  EXPECT_GE(tilted, 3u);  // the README lists chairs and tables of the D series 10-40 degrees off
+  EXPECT_GE(tilted, 3u);  // psb/README lists chairs and tables of the D series 10-40 degrees off
 }
 
 }  // namespace

@@ -10,8 +10,8 @@
 #include <fstream>
 #include <random>
 #include <string>
-#include <unistd.h>
 
+#include "common/temp_dir.h"
 #include "glimpse/io/files.h"
 
 namespace glimpse {
@@ -21,16 +21,6 @@ namespace fs = std::filesystem;
 
 class IoTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    std::string name = std::string(info->test_suite_name()) + "_" + info->name();
-    for (char& c : name)
-      if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
-    dir_ = fs::temp_directory_path() / ("glimpse_io_" + std::to_string(::getpid()) + "_" + name);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
   std::string write(const std::string& name, const std::string& bytes) {
     const std::string path = (dir_ / name).string();
     std::ofstream(path, std::ios::binary) << bytes;
@@ -38,7 +28,8 @@ class IoTest : public ::testing::Test {
   }
   std::string path(const std::string& name) const { return (dir_ / name).string(); }
 
-  fs::path dir_;
+  glimpse::testing::TempDir tmp_{"io"};
+  fs::path dir_ = tmp_.path();
 };
 
 Cloud random_cloud(size_t n, uint64_t seed) {

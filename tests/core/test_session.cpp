@@ -1,29 +1,24 @@
 // ScanSession: streaming a view chunk by chunk ends where classifying the whole view does; duplicates
-// and empty chunks change nothing; the decision track counts changes and settles as specified.
+// and empty chunks change nothing; limits and bad input are refused (the decision track on its own:
+// test_session_track.cpp; the scan's features: test_scan_features.cpp).
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <numeric>
 
-#include "glimpse/features/local_features.h"
 #include "glimpse/session/session.h"
 #include "glimpse/learning/train_params.h"
-#include "glimpse/views/exploration.h"
+#include "chunks.h"
 #include "shapes.h"
 #include "synthetic.h"
+#include "trained_model.h"
 
 namespace glimpse {
 namespace {
 
 std::shared_ptr<const Model> trained_model(float support_radius_m) {
-  TrainParams p;
-  p.bok_clusters = 12;
-  p.bog_keypoint_clusters = 3;
-  p.bog_volume_clusters = 2;
-  p.kgh_clusters = 3;
-  p.kgh_distance_bins = 4;
-  p.decision.neighbours = 3;
+  TrainParams p = test::small_params();
   p.features.surface.support_radius_m = support_radius_m;
   auto m = train(test::synthetic_views(5, 2, 11), p);
   EXPECT_TRUE(m.ok()) << m.error().message;
@@ -40,137 +35,9 @@ const std::shared_ptr<const Model>& automatic_radius_model() {
   return m;
 }
 
-enum class Order { kTopDown, kRandom, kSweep };
-
-// The view's points in the given order, cut into chunks of random sizes (about `n` chunks, seeded).
-std::vector<Cloud> chunks_of(const Cloud& view, size_t n, Order order_kind, uint64_t seed, bool sensor = true) {
-  std::vector<uint32_t> order(view.points.size());
-  std::iota(order.begin(), order.end(), 0u);
-  std::mt19937_64 rng(seed);
-  if (order_kind == Order::kRandom) {
-    for (size_t i = order.size(); i > 1; --i) std::swap(order[i - 1], order[rng() % i]);
-  } else if (order_kind == Order::kTopDown) {
-    order = top_down_order(view.points);
-  } else {  // a sweep along x, as a scanner passing by
-    std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return view.points[a].x() < view.points[b].x(); });
-  }
-  std::vector<Cloud> out;
-  for (size_t i = 0; i < order.size();) {
-    const size_t mean = std::max<size_t>(1, order.size() / std::max<size_t>(1, n));
-    const size_t size = n == 1 ? order.size() : 1 + rng() % (2 * mean);
-    Cloud c;
-    if (sensor) c.sensor = view.sensor;
-    for (size_t k = 0; k < size && i < order.size(); ++k, ++i) c.points.push_back(view.points[order[i]]);
-    out.push_back(std::move(c));
-  }
-  return out;
-}
-
-Cloud concatenated(const std::vector<Cloud>& chunks) {
-  Cloud all;
-  for (const Cloud& c : chunks) {
-    all.points.insert(all.points.end(), c.points.begin(), c.points.end());
-    if (c.sensor) all.sensor = c.sensor;
-  }
-  return all;
-}
-
-void expect_same_state(const FeatureState& a, const FeatureState& b) {
-  ASSERT_EQ(a.cloud.points, b.cloud.points);
-  EXPECT_EQ(a.diagnostics.support_radius_m, b.diagnostics.support_radius_m);
-  EXPECT_EQ(a.diagnostics.density.knn_distance_m, b.diagnostics.density.knn_distance_m);
-  ASSERT_EQ(a.surfaces.size(), b.surfaces.size());
-  for (size_t i = 0; i < a.surfaces.size(); ++i) {
-    ASSERT_EQ(a.surfaces[i].valid, b.surfaces[i].valid) << "point " << i;
-    EXPECT_EQ(a.surfaces[i].normal, b.surfaces[i].normal) << "point " << i;
-    EXPECT_EQ(a.surfaces[i].k1, b.surfaces[i].k1) << "point " << i;
-    EXPECT_EQ(a.surfaces[i].k2, b.surfaces[i].k2) << "point " << i;
-    EXPECT_EQ(a.surfaces[i].lambda_min, b.surfaces[i].lambda_min) << "point " << i;
-    EXPECT_EQ(a.surfaces[i].harris_response, b.surfaces[i].harris_response) << "point " << i;
-  }
-  ASSERT_EQ(a.keypoints.size(), b.keypoints.size());
-  for (size_t k = 0; k < a.keypoints.size(); ++k) {
-    EXPECT_EQ(a.keypoints[k].index, b.keypoints[k].index) << "keypoint " << k;
-    EXPECT_EQ(a.descriptors[k], b.descriptors[k]) << "keypoint " << k;
-  }
-}
-
-// The invariant: however a cloud arrives — any chunking, top-down, random or sweep order, with or
-// without a sensor, automatic or fixed radius — a scan ends on the state extract() gives the
-// accumulated cloud, bit for bit (both visit neighbourhoods in index order).
-TEST(ScanFeatures, EndOnTheStateExtractGivesTheAccumulatedCloud) {
-  const std::vector<TrainingCloud> views = test::synthetic_views(1, 1, 71);
-  for (float radius : {0.f, 0.025f}) {
-    FeatureParams params;
-    params.surface.support_radius_m = radius;
-    params.surface.threads = 1;
-    for (const TrainingCloud& view : views)
-      for (bool sensor : {true, false})
-        for (Order order : {Order::kTopDown, Order::kRandom, Order::kSweep})
-          for (size_t n : {1u, 3u, 17u}) {
-            SCOPED_TRACE(view.category + (sensor ? " with" : " without") + " a sensor, order " +
-                         std::to_string(int(order)) + ", ~" + std::to_string(n) + " chunks, r " + std::to_string(radius));
-            const std::vector<Cloud> chunks = chunks_of(view.cloud, n, order, 7 * n + size_t(order), sensor);
-            ScanFeatures scan(params);
-            for (const Cloud& c : chunks) ASSERT_TRUE(scan.add(c).ok());
-            ASSERT_TRUE(scan.ready());
-            auto whole = extract(concatenated(chunks), params);
-            ASSERT_TRUE(whole.ok()) << whole.error().message;
-            expect_same_state(scan.state(), *whole);
-            EXPECT_FALSE(scan.state().keypoints.empty());
-          }
-  }
-}
-
-// The same with the keypoint options of the paper preset and its ablation (no rho1 cap, claims of rho1, a
-// boundary band of 0, 0.5 or 1.5 r, a boundary test over 2 r, the Harris response, descriptors at rho1): what a chunk changes
-// reaches every memo entry it must.
-TEST(ScanFeatures, KeypointOptionsEndOnTheStateExtractGives) {
-  // A box corner and a ball, seen from one side: corners, curved patches and a view boundary.
-  Cloud scene{test::jitter(test::cube(0.3f, 0.008f), 0.0005f, 5), Vec3(1.2f, 0.9f, 1.1f)};
-  for (const Vec3& p : test::sphere(0.1f, 3000, Vec3(0.5f, 0.15f, 0.1f))) scene.points.push_back(p);
-  struct Option {
-    const char* name;
-    float band, boundary_radius;
-    KeypointResponse response;
-    float descriptor_scale = 0;
-  };
-  for (const Option& o : {Option{"band 0", 0.f, 1.f, KeypointResponse::kLambdaMin},
-                          Option{"band 0.5, boundary over 2 r", 0.5f, 2.f, KeypointResponse::kLambdaMin},
-                          Option{"band 1.5", 1.5f, 1.f, KeypointResponse::kLambdaMin},
-                          Option{"band 0, boundary over 2 r, Harris", 0.f, 2.f, KeypointResponse::kHarris},
-                          Option{"band 0.5, described over rho1 up to 4 r", 0.5f, 1.f, KeypointResponse::kLambdaMin, 4.f}}) {
-    FeatureParams params;
-    params.surface.threads = 1;
-    params.surface.support_radius_m = 0.02f;  // fixed: every chunk takes the incremental path
-    params.keypoints.max_radius_supports = 0;
-    params.keypoints.claim_min_supports = 0;
-    params.keypoints.boundary_band_supports = o.band;
-    params.keypoints.boundary_radius_supports = o.boundary_radius;
-    params.keypoints.response = o.response;
-    params.descriptor.characteristic_scale_supports = o.descriptor_scale;
-    size_t keypoints = 0;
-    for (Order order : {Order::kRandom, Order::kTopDown})
-        for (size_t n : {17u}) {
-          SCOPED_TRACE(std::string(o.name) + ", order " + std::to_string(int(order)) + ", ~" + std::to_string(n) + " chunks");
-          const std::vector<Cloud> chunks = chunks_of(scene, n, order, 5 * n + size_t(order), true);
-          // After every chunk, not only the last: a stale memo entry shows as soon as it matters.
-          ScanFeatures scan(params);
-          std::vector<Cloud> so_far;
-          for (const Cloud& c : chunks) {
-            ASSERT_TRUE(scan.add(c).ok());
-            so_far.push_back(c);
-            if (!scan.ready()) continue;
-            auto whole = extract(concatenated(so_far), params);
-            ASSERT_TRUE(whole.ok()) << whole.error().message;
-            expect_same_state(scan.state(), *whole);
-            if (HasFailure()) return;
-            keypoints += whole->keypoints.size();
-          }
-        }
-    EXPECT_GT(keypoints, 0u) << o.name;
-  }
-}
+using test::chunks_of;
+using test::concatenated;
+using test::Order;
 
 StreamDecision stream(const std::shared_ptr<const Model>& model, const std::vector<Cloud>& chunks, MethodId method,
                 bool finish = false) {
@@ -241,7 +108,7 @@ TEST(ScanSession, AStrayPointCopiedManyTimesIsOneStrayPointStreamedOrWhole) {
   ASSERT_TRUE(whole.ok()) << whole.error().message;
   auto single = classify(*model, once, MethodId::kFusion);
   ASSERT_TRUE(single.ok()) << single.error().message;
-  EXPECT_GE(whole->filters.outliers, 1u);  // was 0: the copies were the stray point's neighbours
+  EXPECT_GE(whole->filters.outliers, 1u);  // not the copies' neighbour: the stray point is one point
   EXPECT_EQ(whole->filters.outliers, single->filters.outliers);
   EXPECT_EQ(whole->scores, single->scores);
   const StreamDecision d = stream(model, chunks, MethodId::kFusion, true);
@@ -278,7 +145,7 @@ TEST(ScanSession, AScanClassifyRefusesEndsInClassifysError) {
   EXPECT_NE(finished.error().message.find(whole.error().message), std::string::npos) << finished.error().message;
 }
 
-// A model that does not filter scans (one written before the filters) ends a stream as Classify does
+// A model that does not filter scans (one whose writer knew no filters) ends a stream as Classify does
 // too: a view in millimetres is unknown by its size, with Classify's reason.
 TEST(ScanSession, AnUnfilteredModelsStreamEndsUnknownBySizeAsClassifySays) {
   TrainParams p;
@@ -464,232 +331,6 @@ TEST(ScanSession, LimitsAndBadInput) {
   ASSERT_FALSE(third.ok());
   EXPECT_EQ(third.error().code, ErrorCode::kResourceExhausted);
   EXPECT_NE(third.error().message.find("chunks"), std::string::npos);
-}
-
-TEST(DecisionTrack, CountsChangesAndSettlesOnAStableMargin) {
-  SessionParams p;
-  p.smoothing = 1.0;  // no smoothing: the script reads directly
-  p.stability_window = 3;
-  p.full_margin = 0.4;
-  p.settle_confidence = 0.6;
-  p.min_keypoints = 5;
-  DecisionTrack t;
-  auto step = [&](std::vector<double> s, size_t kp = 20) {
-    track_decision(t, s, kp, true, p);
-    return t.decision;
-  };
-  StreamDecision d = step({0.5, 0.3, 0.2});
-  EXPECT_EQ(d.winner, 0);
-  EXPECT_EQ(d.category_changes, 0);
-  EXPECT_EQ(d.winner_held_chunks, 1);
-  EXPECT_FALSE(d.settled);  // margin 0.2 of 0.4, held 1 of 3
-  d = step({0.2, 0.6, 0.2});
-  EXPECT_EQ(d.winner, 1);
-  EXPECT_EQ(d.category_changes, 1);
-  EXPECT_EQ(d.winner_held_chunks, 1);
-  d = step({0.1, 0.8, 0.1});
-  d = step({0.1, 0.8, 0.1});
-  EXPECT_EQ(d.category_changes, 1);
-  EXPECT_EQ(d.winner_held_chunks, 3);
-  EXPECT_NEAR(d.confidence, 1.0, 1e-12);  // margin 0.7 >= 0.4, held 3 of 3
-  EXPECT_TRUE(d.settled);
-  d = step({0.1, 0.8, 0.1}, 3);
-  EXPECT_FALSE(d.settled) << "too few keypoints to settle";
-  d = step({0.45, 0.4, 0.15});
-  EXPECT_EQ(d.winner, 0);
-  EXPECT_EQ(d.category_changes, 2);
-  EXPECT_FALSE(d.settled) << "a change resets the stability";
-  EXPECT_NEAR(d.confidence, (0.05 / 0.4) * (1.0 / 3.0), 1e-9);
-}
-
-TEST(DecisionTrack, ASettledWinnerStaysSettledThroughASmallDip) {
-  SessionParams p;
-  p.smoothing = 1.0;
-  p.stability_window = 2;
-  p.full_margin = 0.4;
-  p.settle_confidence = 0.6;
-  p.unsettle_margin = 0.2;
-  DecisionTrack t;
-  auto step = [&](std::vector<double> s) {
-    track_decision(t, s, 0, false, p);
-    return t.decision;
-  };
-  EXPECT_FALSE(step({0.4, 0.6}).settled);                         // 0.5 x held 1 of 2
-  EXPECT_FALSE(step({0.9, 0.1}).settled);                         // a change: 1.0 x held 1 of 2
-  EXPECT_TRUE(step({0.9, 0.1}).settled);                          // 1.0
-  StreamDecision d = step({0.7, 0.3});                                  // 0.4 / 0.4 = 1.0
-  EXPECT_TRUE(d.settled);
-  d = step({0.6, 0.4});                                           // 0.5: below 0.6, above 0.6 - 0.2
-  EXPECT_NEAR(d.confidence, 0.5, 1e-12);
-  EXPECT_TRUE(d.settled) << "a small dip keeps a settled decision";
-  d = step({0.55, 0.45});                                         // 0.25: below 0.4
-  EXPECT_FALSE(d.settled) << "a collapse of the margin unsettles";
-  EXPECT_FALSE(step({0.6, 0.4}).settled) << "once unsettled, it must reach 0.6 again";
-  EXPECT_TRUE(step({0.75, 0.25}).settled);
-  // A new winner is never settled on the strength of the old one's history.
-  p.unsettle_margin = 1.0;
-  EXPECT_FALSE(step({0.2, 0.8}).settled);
-}
-
-// A decision track over two categories with a novelty threshold of 2: a window of 2 chunks, a full margin
-// of 0.4, settling at confidence 0.6, "unknown" fully confident at 1.5 x the threshold; "unknown" and
-// the categories settle alike (no longer window, no novelty share) unless a test says otherwise.
-struct NoveltyTrack {
-  SessionParams p;
-  DecisionTrack t;
-  static constexpr double kThreshold = 2.0;
-  explicit NoveltyTrack(double smoothing) {
-    p.smoothing = smoothing;
-    p.stability_window = 2;
-    p.full_margin = 0.4;
-    p.settle_confidence = 0.6;
-    p.unknown_full_excess = 0.5;
-    p.unknown_settle_window = 2;
-    p.unknown_settle_confidence = 0.6;
-    p.settle_novelty_share = 1.0;
-  }
-  StreamDecision step(std::vector<double> scores, std::vector<double> novelty, std::string cannot = {}) {
-    ChunkEvidence e;
-    e.scores = std::move(scores);
-    e.novelty = std::move(novelty);
-    e.keypoints = 20;
-    e.cannot_judge = std::move(cannot);
-    track_decision(t, e, false, kThreshold, p);
-    return t.decision;
-  }
-};
-
-// "Unknown" is one more category: it changes, holds and settles like one; the winner stays the nearest.
-TEST(DecisionTrack, UnknownSettlesLikeACategory) {
-  NoveltyTrack track(1.0);
-  const SessionParams& p = track.p;
-  auto step = [&](std::vector<double> s, std::vector<double> novelty, std::string cannot = {}) {
-    return track.step(std::move(s), std::move(novelty), std::move(cannot));
-  };
-  StreamDecision d = step({0.9, 0.1}, {1.0, 3.0});
-  EXPECT_FALSE(d.unknown);
-  EXPECT_DOUBLE_EQ(d.novelty, 1.0);  // the winner's
-  d = step({0.9, 0.1}, {1.0, 3.0});
-  EXPECT_TRUE(d.settled);
-  d = step({0.9, 0.1}, {2.5, 3.0});  // novelty 2.5 above 2: unknown, closest still category 0
-  EXPECT_TRUE(d.unknown);
-  EXPECT_EQ(d.winner, 0);
-  EXPECT_EQ(d.category_changes, 1);
-  EXPECT_EQ(d.winner_held_chunks, 1);
-  EXPECT_FALSE(d.settled) << "a change resets the stability";
-  EXPECT_NE(d.unknown_reason.find("novelty 2.50 above 2.00"), std::string::npos) << d.unknown_reason;
-  EXPECT_NEAR(d.confidence, 0.5 * 0.5, 1e-12);  // (2.5 / 2 - 1) / 0.5 = 0.5, held 1 of 2
-  d = step({0.9, 0.1}, {3.0, 3.0});
-  EXPECT_EQ(d.category_changes, 1);
-  EXPECT_EQ(d.winner_held_chunks, 2);
-  EXPECT_NEAR(d.confidence, 1.0, 1e-12);  // (3 / 2 - 1) / 0.5 = 1, held 2 of 2
-  EXPECT_TRUE(d.settled) << "unknown settles like a category";
-  d = step({0.9, 0.1}, {1.5, 3.0});
-  EXPECT_FALSE(d.unknown);
-  EXPECT_EQ(d.category_changes, 2);
-  EXPECT_FALSE(d.settled);
-  d = step({0.9, 0.1}, {1.5, 3.0}, "0 keypoints: bok cannot judge this cloud (an empty histogram)");
-  EXPECT_TRUE(d.unknown);
-  EXPECT_TRUE(std::isnan(d.novelty));
-  EXPECT_EQ(d.unknown_reason.rfind("0 keypoints", 0), 0u);
-  EXPECT_EQ(d.confidence, 0.0);  // cannot judge is never a settled answer
-  // Without a threshold (an uncalibrated method) nothing is unknown by novelty.
-  DecisionTrack plain;
-  ChunkEvidence e;
-  e.scores = {0.9, 0.1};
-  e.novelty = {100.0, 100.0};
-  track_decision(plain, e, false, std::nan(""), p);
-  EXPECT_FALSE(plain.decision.unknown);
-}
-
-// "Unknown" settles only when the newest chunk's own novelty agrees, as a category needs the newest
-// chunk's own scores to: a smoothed novelty the scan has left behind is not a settled "none of these".
-TEST(DecisionTrack, UnknownSettlesOnlyWhenTheNewestChunkIsNovelToo) {
-  NoveltyTrack track(0.5);
-  auto step = [&](std::vector<double> novelty) { return track.step({0.9, 0.1}, std::move(novelty)); };
-  StreamDecision d = step({6.0, 6.0});  // smoothed 6: unknown, held 1 of 2
-  EXPECT_TRUE(d.unknown);
-  EXPECT_FALSE(d.settled);
-  d = step({1.0, 6.0});  // smoothed 0.5 * 1 + 0.5 * 6 = 3.5: still unknown, held 2 of 2, confidence 1
-  EXPECT_TRUE(d.unknown);
-  EXPECT_DOUBLE_EQ(d.novelty, 3.5);
-  EXPECT_NEAR(d.confidence, 1.0, 1e-12);  // (3.5 / 2 - 1) / 0.5 = 1.5, clamped
-  EXPECT_FALSE(d.settled) << "the newest chunk (novelty 1) looks like category 0";
-  d = step({6.0, 6.0});  // smoothed 4.75, the newest chunk novel too
-  EXPECT_TRUE(d.unknown);
-  EXPECT_TRUE(d.settled);
-}
-
-// Cautious both ways: "unknown" settles after its own longer window at its own confidence, and a
-// category only while its novelty is well inside the threshold.
-TEST(DecisionTrack, UnknownNeedsItsLongerWindowAndACategoryANoveltyWellInside) {
-  NoveltyTrack track(1.0);
-  track.p.unknown_settle_window = 3;
-  track.p.unknown_settle_confidence = 1.0;
-  track.p.settle_novelty_share = 0.8;  // a category settles at novelty <= 1.6
-  auto step = [&](double novelty) { return track.step({0.9, 0.1}, {novelty, 3.0}); };
-  StreamDecision d = step(1.8);
-  EXPECT_FALSE(d.unknown);
-  d = step(1.8);
-  EXPECT_NEAR(d.confidence, 1.0, 1e-12);
-  EXPECT_FALSE(d.settled) << "novelty 1.8: known, but not well inside the threshold 2";
-  d = step(1.5);
-  EXPECT_TRUE(d.settled) << "novelty 1.5 <= 0.8 x 2";
-  d = step(1.8);
-  EXPECT_TRUE(d.settled) << "the share gates settling, not staying settled";
-  // Unknown at confidence 0.5 (novelty 2.5) never settles at 1.0, however long it holds.
-  for (int i = 0; i < 5; ++i) {
-    d = step(2.5);
-    EXPECT_TRUE(d.unknown);
-    EXPECT_FALSE(d.settled) << i;
-  }
-  // At novelty 3 (confidence 1), it needs each of the last 3 decisions unknown at that confidence...
-  d = step(1.0);
-  EXPECT_FALSE(d.unknown);
-  d = step(3.0);
-  d = step(3.0);
-  EXPECT_NEAR(d.confidence, 1.0, 1e-12);
-  EXPECT_FALSE(d.settled) << "held 2 of the 3 chunks unknown needs";
-  d = step(3.0);
-  EXPECT_TRUE(d.settled);
-  // ... and stays settled within unsettle_margin of its own confidence.
-  d = step(2.9);  // (2.9 / 2 - 1) / 0.5 = 0.9 >= 1.0 - 0.2
-  EXPECT_TRUE(d.settled);
-  d = step(2.5);  // 0.5 < 0.8
-  EXPECT_FALSE(d.settled);
-}
-
-TEST(DecisionTrack, SettlingNeedsTheWholeWindowAndTheNewestChunkToAgree) {
-  SessionParams p;
-  p.smoothing = 0.5;
-  p.stability_window = 4;
-  p.full_margin = 0.1;
-  p.settle_confidence = 0.5;
-  DecisionTrack t;
-  auto step = [&](std::vector<double> s) {
-    track_decision(t, s, 0, false, p);
-    return t.decision;
-  };
-  EXPECT_FALSE(step({0.9, 0.1}).settled);
-  StreamDecision d = step({0.9, 0.1});
-  EXPECT_NEAR(d.confidence, 0.5, 1e-12);  // full margin x held 2 of 4: confident enough, not steady enough
-  EXPECT_FALSE(d.settled);
-  EXPECT_FALSE(step({0.9, 0.1}).settled);
-  d = step({0.4, 0.6});  // the newest chunk alone prefers 1; the smoothed winner is still 0
-  EXPECT_EQ(d.winner, 0);
-  EXPECT_GE(d.confidence, 0.5);
-  EXPECT_FALSE(d.settled) << "the newest chunk disagrees";
-  EXPECT_TRUE(step({0.9, 0.1}).settled);
-}
-
-TEST(DecisionTrack, SmoothingDampsASingleOutlier) {
-  SessionParams p;
-  p.smoothing = 0.3;
-  DecisionTrack t;
-  for (int i = 0; i < 5; ++i) track_decision(t, {0.7, 0.3}, 20, false, p);
-  track_decision(t, {0.2, 0.8}, 20, false, p);
-  EXPECT_EQ(t.decision.winner, 0);
-  EXPECT_EQ(t.decision.category_changes, 0);
 }
 
 }  // namespace

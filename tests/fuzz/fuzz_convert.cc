@@ -1,4 +1,4 @@
-// libFuzzer target: request -> core conversion of the service (server/convert.h, server/train.h).
+// libFuzzer target: request -> core conversion of the service (proto/wire, server/train.h).
 // The first byte picks the message (ClassifyRequest, ScanChunk, TrainRequest after a header, or a
 // TrainHeader); the rest is its protobuf encoding. Checks: no crash; an accepted cloud has only
 // finite points and packs back to exactly the bytes it came from.
@@ -6,7 +6,10 @@
 #include <cstdint>
 
 #include "glimpse/learning/train_params.h"
-#include "server/convert.h"
+#include "proto/wire/clouds.h"
+#include "proto/wire/methods.h"
+#include "proto/wire/model_names.h"
+#include "proto/wire/train_params.h"
 #include "server/train.h"
 
 namespace {
@@ -18,13 +21,14 @@ void CheckCloud(const glimpse::Expected<glimpse::Cloud>& cloud, const glimpse::v
   }
   for (const auto& p : cloud->points)
     if (!p.allFinite()) __builtin_trap();
-  if (glimpse::server::PackPoints(cloud->points) != msg.xyz()) __builtin_trap();
+  if (glimpse::wire::PackPoints(cloud->points) != msg.xyz()) __builtin_trap();
 }
 
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace glimpse::server;
+  namespace wire = glimpse::wire;
   namespace v1 = glimpse::v1;
   if (size < 1) return 0;
   const int kind = data[0] % 4;
@@ -35,16 +39,16 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     case 0: {
       v1::ClassifyRequest req;
       if (!req.ParseFromArray(bytes, n)) return 0;
-      (void)ValidateModelName(req.model().name());
-      (void)MethodFromProto(req.method());
-      CheckCloud(CloudFromProto(req.cloud(), kMaxPoints), req.cloud());
+      (void)wire::ValidateModelName(req.model().name());
+      (void)wire::MethodFromProto(req.method());
+      CheckCloud(wire::CloudFromProto(req.cloud(), kMaxPoints), req.cloud());
       break;
     }
     case 1: {
       v1::ScanChunk chunk;
       if (!chunk.ParseFromArray(bytes, n)) return 0;
-      (void)MethodFromProto(chunk.method());
-      CheckCloud(CloudFromProto(chunk.cloud(), kMaxPoints), chunk.cloud());
+      (void)wire::MethodFromProto(chunk.method());
+      CheckCloud(wire::CloudFromProto(chunk.cloud(), kMaxPoints), chunk.cloud());
       break;
     }
     case 2: {
@@ -67,8 +71,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     case 3: {
       v1::TrainHeader header;
       if (!header.ParseFromArray(bytes, n)) return 0;
-      auto spec = TrainSpecFromProto(header);
-      if (spec) (void)ToTrainParams(*spec);
+      auto spec = wire::TrainSpecFromProto(header);
+      if (spec) (void)wire::ToTrainParams(*spec);
       break;
     }
   }

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Fault tests (issue 10, item 4) against the real glimpse-server executable on loopback.
+"""Fault tests against the real glimpse-server executable on loopback.
 
   * kill -9 of the server while it trains leaves a database that passes PRAGMA integrity_check, with
     every earlier version intact (same sha256) and loadable (Classify answers exactly as before);

@@ -5,39 +5,28 @@
 
 #include <grpcpp/generic/generic_stub.h>
 #include <grpcpp/grpcpp.h>
-#include <unistd.h>
 
-#include <filesystem>
 #include <future>
 #include <mutex>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "common/fast_training.h"
+#include "common/temp_dir.h"
 #include "glimpse/views/sampling.h"
 #include "glimpse/views/hidden_point_removal.h"
 #include "glimpse/views/zoo.h"
-#include "server/convert.h"
+#include "proto/wire/clouds.h"
+#include "proto/wire/errors.h"
 #include "server/server.h"
 #include "server/service.h"
 
 namespace glimpse::reliability {
 
+using glimpse::testing::FastTrainHeader;
+using glimpse::testing::TempDir;
 using server::Limits;
-
-class TempDir {
- public:
-  explicit TempDir(const std::string& tag) {
-    path_ = std::filesystem::temp_directory_path() / ("glimpse-rel-" + tag + "-" + std::to_string(::getpid()));
-    std::filesystem::remove_all(path_);
-    std::filesystem::create_directories(path_);
-  }
-  ~TempDir() { std::filesystem::remove_all(path_); }
-  std::string file(const std::string& name) const { return (path_ / name).string(); }
-
- private:
-  std::filesystem::path path_;
-};
 
 struct RealServer {
   RealServer(const std::string& db, Limits limits) {
@@ -103,23 +92,11 @@ inline std::vector<TrainingCloud> ZooViews(size_t per_category, uint64_t seed, i
   return out;
 }
 
-inline v1::TrainHeader SmallHeader(const std::string& name) {
-  v1::TrainHeader h;
-  h.set_model_name(name);
-  h.mutable_parameters()->set_bok_codebook_size(6);
-  h.mutable_parameters()->set_bog_keypoint_clusters(3);
-  h.mutable_parameters()->set_bog_volume_clusters(2);
-  h.mutable_parameters()->set_bog_pca_dims(8);
-  h.mutable_parameters()->set_kgh_keypoint_clusters(3);
-  h.mutable_parameters()->set_seed(11);
-  return h;
-}
-
 inline v1::TrainRequest CloudMessage(const TrainingCloud& lc) {
   v1::TrainRequest req;
   req.mutable_cloud()->set_category(lc.category);
   req.mutable_cloud()->set_object_id(lc.object_id);
-  *req.mutable_cloud()->mutable_cloud() = server::CloudToProto(lc.cloud);
+  *req.mutable_cloud()->mutable_cloud() = wire::CloudToProto(lc.cloud);
   return req;
 }
 

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# One command per part of issue 10 (reliability and security):
+# One command per part of the reliability and security checks:
 #   tests/reliability/run.sh bad-input   the bad-input table over the real recogniser (~10 s)
 #   tests/reliability/run.sh faults      kill -9 during Train, bad DB files, vanished clients, deadlines (~1 min)
 #   tests/reliability/run.sh security    TLS, mutual TLS, bearer token with the real CLI (~30 s)

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Security end to end (issue 10, item 6): the real glimpse-server with TLS, mutual TLS and a bearer
+# Security end to end: the real glimpse-server with TLS, mutual TLS and a bearer
 # token, driven by the real glimpse CLI. A throwaway CA, server and client certificates are made with
 # openssl in a temporary folder at test time (no key is ever committed).
 #   security_test.sh GLIMPSE_BINARY SERVER_BINARY

@@ -1,4 +1,4 @@
-// The bad-input table (issue 10, item 1): every malformed, degenerate or over-limit request a client
+// The bad-input table: every malformed, degenerate or over-limit request a client
 // can send, against a real loopback server with the real recogniser trained on zoo shapes. Each row
 // names the call, the status code it must get and a piece of the message that says why; after every
 // row the server must still report SERVING and classify a good view exactly as before, and no failed
@@ -19,7 +19,7 @@ namespace glimpse::reliability {
 namespace {
 
 using grpc::StatusCode;
-using server::CloudToProto;
+using wire::CloudToProto;
 
 // Small limits, so that every "over the limit" row is cheap.
 Limits TableLimits() {
@@ -68,9 +68,9 @@ class BadInput : public ::testing::Test {
     dir_ = new TempDir("bad-input");
     server_ = new RealServer(dir_->file("models.db"), TableLimits());
     train_ = new std::vector<TrainingCloud>(ZooViews(2, 7, 2));
-    grpc::Status s = TrainStream(*server_->stub, TrainMessages(SmallHeader("zoo"), *train_));
+    grpc::Status s = TrainStream(*server_->stub, TrainMessages(FastTrainHeader("zoo"), *train_));
     ASSERT_TRUE(s.ok()) << s.error_message();
-    v1::TrainHeader esf = SmallHeader("zoo-esf");
+    v1::TrainHeader esf = FastTrainHeader("zoo-esf");
     esf.add_methods(v1::METHOD_ESF);
     s = TrainStream(*server_->stub, TrainMessages(esf, *train_));
     ASSERT_TRUE(s.ok()) << s.error_message();
@@ -97,7 +97,7 @@ class BadInput : public ::testing::Test {
   static v1::ClassifyRequest Request(const Cloud& cloud, const std::string& model = "zoo") {
     v1::ClassifyRequest req;
     req.mutable_model()->set_name(model);
-    *req.mutable_cloud() = CloudToProto(cloud);
+    *req.mutable_cloud() = wire::CloudToProto(cloud);
     return req;
   }
   static grpc::Status Classify(const Cloud& cloud, const std::string& model = "zoo",
@@ -122,7 +122,7 @@ class BadInput : public ::testing::Test {
   static v1::ScanChunk Chunk(const Cloud& cloud, const std::string& model = "") {
     v1::ScanChunk c;
     if (!model.empty()) c.mutable_model()->set_name(model);
-    *c.mutable_cloud() = CloudToProto(cloud);
+    *c.mutable_cloud() = wire::CloudToProto(cloud);
     return c;
   }
   static std::vector<v1::ScanChunk> Chunks(const Cloud& cloud, size_t n, const std::string& model = "zoo") {
@@ -138,7 +138,7 @@ class BadInput : public ::testing::Test {
 
   static v1::TrainRequest HeaderMsg(const std::function<void(v1::TrainHeader&)>& tweak = {}) {
     v1::TrainRequest r;
-    *r.mutable_header() = SmallHeader("zoo-bad");
+    *r.mutable_header() = FastTrainHeader("zoo-bad");
     if (tweak) tweak(*r.mutable_header());
     return r;
   }
@@ -176,7 +176,7 @@ struct Row {
   std::string message;  // a piece of the status message
 };
 
-const char* CodeName(StatusCode c) { return server::StatusCodeName(c); }
+const char* CodeName(StatusCode c) { return wire::StatusCodeName(c); }
 
 TEST_F(BadInput, EveryCaseGetsItsStatusAndTheServerKeepsServing) {
   ASSERT_NE(server_, nullptr);
@@ -227,7 +227,7 @@ TEST_F(BadInput, EveryCaseGetsItsStatusAndTheServerKeepsServing) {
       {"classify NaN normal",
        [&] {
          auto r = B::Request(good);
-         r.mutable_cloud()->set_normals(server::PackPoints(With(good, 2, Vec3(kNaN, 0, 0)).points));
+         r.mutable_cloud()->set_normals(wire::PackPoints(With(good, 2, Vec3(kNaN, 0, 0)).points));
          return B::Classify(r);
        },
        StatusCode::INVALID_ARGUMENT, "normals: point 2 is not finite"},

@@ -13,6 +13,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "proto/wire/clouds.h"
 #include "server/convert.h"
 #include "server/engine.h"
 #include "server/metrics.h"
@@ -137,7 +138,7 @@ class FakeSession final : public ScanSession {
 
 inline Engine FakeEngine(FakeBehaviour* b) {
   Engine e;
-  e.train = [b](const std::vector<TrainingCloud>& data, const TrainSpec& spec, const ProgressFn& progress,
+  e.train = [b](const std::vector<TrainingCloud>& data, const wire::TrainSpec& spec, const ProgressFn& progress,
                 const CancelFn& cancel) -> Expected<Model> {
     ++b->train_calls;
     if (b->train_error) return *b->train_error;
@@ -262,7 +263,7 @@ struct Harness {
         v1::TrainRequest req;
         req.mutable_cloud()->set_category(categories[c]);
         req.mutable_cloud()->set_object_id(categories[c] + std::to_string(i));
-        *req.mutable_cloud()->mutable_cloud() = CloudToProto(SpiralCloud(50 + 10 * c + i, float(c)));
+        *req.mutable_cloud()->mutable_cloud() = wire::CloudToProto(SpiralCloud(50 + 10 * c + i, float(c)));
         stream->Write(req);
       }
     stream->WritesDone();

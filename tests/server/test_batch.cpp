@@ -16,7 +16,7 @@ using testing::SpiralCloud;
 v1::ClassifyBatchRequest BatchReq(const std::string& model, const std::vector<size_t>& points) {
   v1::ClassifyBatchRequest req;
   req.mutable_model()->set_name(model);
-  for (size_t n : points) *req.add_clouds() = CloudToProto(SpiralCloud(n));
+  for (size_t n : points) *req.add_clouds() = wire::CloudToProto(SpiralCloud(n));
   return req;
 }
 
@@ -49,7 +49,7 @@ TEST_F(BatchTest, EveryCloudIsAnsweredInOrderAsClassifyAnswersIt) {
     EXPECT_EQ(r.message(), "");
     v1::ClassifyRequest single;
     single.mutable_model()->set_name("m");
-    *single.mutable_cloud() = CloudToProto(SpiralCloud(sizes[i]));
+    *single.mutable_cloud() = wire::CloudToProto(SpiralCloud(sizes[i]));
     v1::ClassifyResponse alone;
     grpc::ClientContext ctx;
     ASSERT_TRUE(h_.stub->Classify(&ctx, single, &alone).ok());
@@ -68,7 +68,7 @@ TEST_F(BatchTest, EachBadCloudFailsAloneWithItsOwnCode) {
   req.mutable_clouds(2)->mutable_xyz()->push_back('x');  // not a multiple of 12 bytes
   Cloud nan = SpiralCloud(10);
   nan.points[4].y() = std::nanf("");
-  *req.mutable_clouds(3) = CloudToProto(nan);
+  *req.mutable_clouds(3) = wire::CloudToProto(nan);
   v1::ClassifyBatchResponse resp;
   ASSERT_TRUE(Batch(h_, req, &resp).ok());
   ASSERT_EQ(resp.results_size(), 4);

@@ -4,6 +4,11 @@
 #include <cmath>
 #include <limits>
 
+#include "proto/wire/clouds.h"
+#include "proto/wire/errors.h"
+#include "proto/wire/methods.h"
+#include "proto/wire/model_names.h"
+#include "proto/wire/train_params.h"
 #include "server/config.h"
 #include "server/convert.h"
 #include "server/log.h"
@@ -14,12 +19,12 @@ namespace {
 
 v1::PointCloud Packed(const Points& points) {
   v1::PointCloud msg;
-  msg.set_xyz(PackPoints(points));
+  msg.set_xyz(wire::PackPoints(points));
   return msg;
 }
 
 TEST(CloudFromProto, EmptyCloudIsValidAndEmpty) {
-  auto cloud = CloudFromProto(v1::PointCloud(), 10);
+  auto cloud = wire::CloudFromProto(v1::PointCloud(), 10);
   ASSERT_TRUE(cloud.ok());
   EXPECT_TRUE(cloud->points.empty());
   EXPECT_FALSE(cloud->sensor);
@@ -29,7 +34,7 @@ TEST(CloudFromProto, RoundTripsPointsAndSensorExactly) {
   Cloud in;
   in.points = {Vec3(1, 2, 3), Vec3(-0.5f, 1e-7f, 1e6f), Vec3(0, -0.0f, -123.456f)};  // 1e6 m: the largest allowed
   in.sensor = Vec3(0.1f, 0.2f, -3);
-  auto out = CloudFromProto(CloudToProto(in), 10);
+  auto out = wire::CloudFromProto(wire::CloudToProto(in), 10);
   ASSERT_TRUE(out.ok());
   ASSERT_EQ(out->points.size(), 3u);
   for (size_t i = 0; i < 3; ++i) EXPECT_EQ(out->points[i], in.points[i]);
@@ -41,17 +46,17 @@ TEST(CloudFromProto, BytesAreLittleEndianFloat32Triples) {
   v1::PointCloud msg;
   const unsigned char one_two_three[] = {0, 0, 0x80, 0x3f, 0, 0, 0, 0x40, 0, 0, 0x40, 0x40};  // 1.f, 2.f, 3.f
   msg.set_xyz(std::string(reinterpret_cast<const char*>(one_two_three), 12));
-  auto cloud = CloudFromProto(msg, 10);
+  auto cloud = wire::CloudFromProto(msg, 10);
   ASSERT_TRUE(cloud.ok());
   EXPECT_EQ(cloud->points.at(0), Vec3(1, 2, 3));
-  EXPECT_EQ(PackPoints({Vec3(1, 2, 3)}), msg.xyz());
+  EXPECT_EQ(wire::PackPoints({Vec3(1, 2, 3)}), msg.xyz());
 }
 
 TEST(CloudFromProto, LengthNotAMultipleOf12IsInvalid) {
   for (size_t bytes : {1u, 11u, 13u, 25u}) {
     v1::PointCloud msg;
     msg.set_xyz(std::string(bytes, '\0'));
-    auto cloud = CloudFromProto(msg, 100);
+    auto cloud = wire::CloudFromProto(msg, 100);
     ASSERT_FALSE(cloud.ok());
     EXPECT_EQ(cloud.error().code, ErrorCode::kInvalidArgument);
     EXPECT_NE(cloud.error().message.find("multiple of 12"), std::string::npos);
@@ -64,77 +69,77 @@ TEST(CloudFromProto, NanOrInfNamesTheFirstBadPoint) {
     Points points(10, Vec3(1, 1, 1));
     points[7] = Vec3(0, bad, 0);
     points[9] = Vec3(bad, 0, 0);
-    auto cloud = CloudFromProto(Packed(points), 100);
+    auto cloud = wire::CloudFromProto(Packed(points), 100);
     ASSERT_FALSE(cloud.ok());
     EXPECT_EQ(cloud.error().code, ErrorCode::kInvalidArgument);
     EXPECT_NE(cloud.error().message.find("point 7 "), std::string::npos) << cloud.error().message;
   }
 }
 
-// Regression: a cloud at 3e38 m aborted glimpse-server in PCL's kd-tree (flann middleSplit assertion),
-// and core's voxel keys overflow long before that; the service refuses such coordinates.
+// PCL's kd-tree asserts (flann middleSplit) on a cloud at 3e38 m, and core's voxel keys overflow long
+// before that: the service refuses such coordinates.
 TEST(CloudFromProto, CoordinatesBeyondAMillionMetresAreInvalid) {
   for (float huge : {3e38f, -1e30f, 1.0001e6f}) {
     Points points(10, Vec3(1, 1, 1));
     points[3] = Vec3(0, 0, huge);
-    auto cloud = CloudFromProto(Packed(points), 100);
+    auto cloud = wire::CloudFromProto(Packed(points), 100);
     ASSERT_FALSE(cloud.ok());
     EXPECT_EQ(cloud.error().code, ErrorCode::kInvalidArgument);
     EXPECT_NE(cloud.error().message.find("point 3 has a coordinate beyond"), std::string::npos) << cloud.error().message;
   }
   Points edge(10, Vec3(1e6f, -1e6f, 0));
-  EXPECT_TRUE(CloudFromProto(Packed(edge), 100).ok());
+  EXPECT_TRUE(wire::CloudFromProto(Packed(edge), 100).ok());
   v1::PointCloud far = Packed(edge);
   far.mutable_sensor()->set_x(2e6f);
-  EXPECT_EQ(CloudFromProto(far, 100).error().code, ErrorCode::kInvalidArgument);
+  EXPECT_EQ(wire::CloudFromProto(far, 100).error().code, ErrorCode::kInvalidArgument);
 }
 
 TEST(CloudFromProto, TooManyPointsIsResourceExhausted) {
-  EXPECT_TRUE(CloudFromProto(Packed(Points(5, Vec3::Zero())), 5).ok());
-  auto cloud = CloudFromProto(Packed(Points(6, Vec3::Zero())), 5);
+  EXPECT_TRUE(wire::CloudFromProto(Packed(Points(5, Vec3::Zero())), 5).ok());
+  auto cloud = wire::CloudFromProto(Packed(Points(6, Vec3::Zero())), 5);
   ASSERT_FALSE(cloud.ok());
   EXPECT_EQ(cloud.error().code, ErrorCode::kResourceExhausted);
 }
 
 TEST(CloudFromProto, NormalsMustMatchAndBeFinite) {
   v1::PointCloud msg = Packed({Vec3(1, 0, 0), Vec3(0, 1, 0)});
-  msg.set_normals(PackPoints({Vec3(0, 0, 1)}));
-  EXPECT_EQ(CloudFromProto(msg, 10).error().code, ErrorCode::kInvalidArgument);
-  msg.set_normals(PackPoints({Vec3(0, 0, 1), Vec3(0, std::nanf(""), 1)}));
-  auto bad = CloudFromProto(msg, 10);
+  msg.set_normals(wire::PackPoints({Vec3(0, 0, 1)}));
+  EXPECT_EQ(wire::CloudFromProto(msg, 10).error().code, ErrorCode::kInvalidArgument);
+  msg.set_normals(wire::PackPoints({Vec3(0, 0, 1), Vec3(0, std::nanf(""), 1)}));
+  auto bad = wire::CloudFromProto(msg, 10);
   ASSERT_FALSE(bad.ok());
   EXPECT_NE(bad.error().message.find("normals: point 1"), std::string::npos) << bad.error().message;
-  msg.set_normals(PackPoints({Vec3(0, 0, 1), Vec3(0, 0, 1)}));
-  EXPECT_TRUE(CloudFromProto(msg, 10).ok());
+  msg.set_normals(wire::PackPoints({Vec3(0, 0, 1), Vec3(0, 0, 1)}));
+  EXPECT_TRUE(wire::CloudFromProto(msg, 10).ok());
 }
 
 TEST(CloudFromProto, NonFiniteSensorIsInvalid) {
   v1::PointCloud msg = Packed({Vec3(1, 0, 0)});
   msg.mutable_sensor()->set_x(std::numeric_limits<float>::infinity());
-  EXPECT_EQ(CloudFromProto(msg, 10).error().code, ErrorCode::kInvalidArgument);
+  EXPECT_EQ(wire::CloudFromProto(msg, 10).error().code, ErrorCode::kInvalidArgument);
 }
 
 TEST(MethodFromProto, MapsEveryMethodAndRejectsUnknownValues) {
-  EXPECT_FALSE(MethodFromProto(v1::METHOD_UNSPECIFIED)->has_value());
+  EXPECT_FALSE(wire::MethodFromProto(v1::METHOD_UNSPECIFIED)->has_value());
   for (MethodId m : kAllMethods) {
-    auto back = MethodFromProto(MethodToProto(m));
+    auto back = wire::MethodFromProto(wire::MethodToProto(m));
     ASSERT_TRUE(back.ok());
     EXPECT_EQ(**back, m);
   }
-  EXPECT_EQ(MethodToProto(MethodId::kBoK), v1::METHOD_BOK);
-  EXPECT_EQ(MethodToProto(MethodId::kFusion), v1::METHOD_FUSION);
-  EXPECT_EQ(MethodFromProto(42).error().code, ErrorCode::kInvalidArgument);
-  EXPECT_EQ(MethodFromProto(-1).error().code, ErrorCode::kInvalidArgument);
+  EXPECT_EQ(wire::MethodToProto(MethodId::kBoK), v1::METHOD_BOK);
+  EXPECT_EQ(wire::MethodToProto(MethodId::kFusion), v1::METHOD_FUSION);
+  EXPECT_EQ(wire::MethodFromProto(42).error().code, ErrorCode::kInvalidArgument);
+  EXPECT_EQ(wire::MethodFromProto(-1).error().code, ErrorCode::kInvalidArgument);
 }
 
 TEST(ValidateModelName, AcceptsTheDocumentedAlphabetOnly) {
-  EXPECT_TRUE(ValidateModelName("chairs-v2.final_1").ok());
-  EXPECT_TRUE(ValidateModelName(std::string(128, 'a')).ok());
-  EXPECT_FALSE(ValidateModelName("").ok());
-  EXPECT_FALSE(ValidateModelName(std::string(129, 'a')).ok());
-  EXPECT_FALSE(ValidateModelName("a b").ok());
-  EXPECT_FALSE(ValidateModelName("a/b").ok());
-  EXPECT_FALSE(ValidateModelName("a@1").ok());
+  EXPECT_TRUE(wire::ValidateModelName("chairs-v2.final_1").ok());
+  EXPECT_TRUE(wire::ValidateModelName(std::string(128, 'a')).ok());
+  EXPECT_FALSE(wire::ValidateModelName("").ok());
+  EXPECT_FALSE(wire::ValidateModelName(std::string(129, 'a')).ok());
+  EXPECT_FALSE(wire::ValidateModelName("a b").ok());
+  EXPECT_FALSE(wire::ValidateModelName("a/b").ok());
+  EXPECT_FALSE(wire::ValidateModelName("a@1").ok());
 }
 
 TEST(TrainSpecFromProto, ChecksMethodsAndParameterRanges) {
@@ -146,7 +151,7 @@ TEST(TrainSpecFromProto, ChecksMethodsAndParameterRanges) {
   h.mutable_parameters()->set_support_radius_m(0.05);
   h.mutable_parameters()->set_bok_codebook_size(30);
   h.mutable_parameters()->set_decision(v1::DECISION_KIND_NEAREST_CENTRE);
-  auto spec = TrainSpecFromProto(h);
+  auto spec = wire::TrainSpecFromProto(h);
   ASSERT_TRUE(spec.ok()) << spec.error().message;
   EXPECT_EQ(spec->methods, (std::vector<MethodId>{MethodId::kBoK, MethodId::kVFH}));
   EXPECT_EQ(spec->default_method, MethodId::kVFH);
@@ -155,7 +160,7 @@ TEST(TrainSpecFromProto, ChecksMethodsAndParameterRanges) {
   auto bad = [&](auto&& edit) {
     v1::TrainHeader copy = h;
     edit(copy);
-    auto r = TrainSpecFromProto(copy);
+    auto r = wire::TrainSpecFromProto(copy);
     return !r.ok() && r.error().code == ErrorCode::kInvalidArgument;
   };
   EXPECT_TRUE(bad([](v1::TrainHeader& c) { c.set_model_name(""); }));
@@ -170,6 +175,37 @@ TEST(TrainSpecFromProto, ChecksMethodsAndParameterRanges) {
   EXPECT_TRUE(bad([](v1::TrainHeader& c) { c.set_description(std::string(5000, 'd')); }));
 }
 
+TEST(TrainParams, EveryFieldGoesToCoreAndBack) {
+  wire::TrainSpec spec;
+  v1::TrainParameters& p = spec.parameters;
+  p.set_support_radius_m(0.25);
+  p.set_bok_codebook_size(11);
+  p.set_bog_keypoint_clusters(12);
+  p.set_bog_volume_clusters(13);
+  p.set_bog_pca_dims(14);
+  p.set_kgh_keypoint_clusters(15);
+  p.set_kgh_distance_bins(16);
+  p.set_decision(v1::DECISION_KIND_CENTRES);
+  p.set_seed(19);
+  p.set_centres_per_category(17);
+  p.set_neighbours(18);
+  p.set_normalise_histograms(false);
+  p.set_filter_scans(false);
+  auto params = wire::ToTrainParams(spec);
+  ASSERT_TRUE(params.ok()) << params.error().message;
+  EXPECT_EQ(params->bok_clusters, 11);
+  EXPECT_EQ(params->kgh_distance_bins, 16);
+  EXPECT_EQ(params->decision.centres_per_category, 17);
+  EXPECT_EQ(params->decision.neighbours, 18);
+  EXPECT_EQ(params->decision.kind, DecisionRule::kCentres);
+  EXPECT_EQ(wire::FromTrainParams(*params).DebugString(), p.DebugString());
+
+  p.set_neighbours(3'000'000'000u);  // beyond int
+  auto large = wire::ToTrainParams(spec);
+  ASSERT_FALSE(large.ok());
+  EXPECT_EQ(large.error().message, "neighbours is too large");
+}
+
 TEST(ToGrpcStatus, MapsEveryErrorCode) {
   using grpc::StatusCode;
   const std::pair<ErrorCode, StatusCode> table[] = {
@@ -182,12 +218,12 @@ TEST(ToGrpcStatus, MapsEveryErrorCode) {
       {ErrorCode::kInternal, StatusCode::INTERNAL},
   };
   for (auto [code, expected] : table) {
-    grpc::Status s = ToGrpcStatus(Error{code, "why"});
+    grpc::Status s = wire::ToGrpcStatus(Error{code, "why"});
     EXPECT_EQ(s.error_code(), expected);
     EXPECT_EQ(s.error_message(), "why");
   }
-  EXPECT_EQ(ToGrpcStatus(cancelled("late"), true).error_code(), StatusCode::DEADLINE_EXCEEDED);
-  EXPECT_EQ(ToGrpcStatus(invalid_argument("x"), true).error_code(), StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(wire::ToGrpcStatus(cancelled("late"), true).error_code(), StatusCode::DEADLINE_EXCEEDED);
+  EXPECT_EQ(wire::ToGrpcStatus(invalid_argument("x"), true).error_code(), StatusCode::INVALID_ARGUMENT);
 }
 
 TEST(TrainPercent, IsMonotonicOverTheStagesInOrder) {

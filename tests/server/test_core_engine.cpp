@@ -8,11 +8,16 @@
 
 #include <random>
 
+#include "common/fast_training.h"
 #include "fakes.h"
 #include "glimpse/learning/train_params.h"
+#include "proto/wire/methods.h"
+#include "proto/wire/train_params.h"
 
 namespace glimpse::server {
 namespace {
+
+using glimpse::testing::FastTrainHeader;
 
 // Surface samples (point, outward normal) of a shape centred at the origin.
 struct Surfel {
@@ -97,25 +102,13 @@ std::vector<TrainingCloud> Dataset() {
   return data;
 }
 
-v1::TrainHeader Header() {
-  v1::TrainHeader h;
-  h.set_model_name("shapes");
-  h.mutable_parameters()->set_bok_codebook_size(6);
-  h.mutable_parameters()->set_bog_keypoint_clusters(3);
-  h.mutable_parameters()->set_bog_volume_clusters(2);
-  h.mutable_parameters()->set_bog_pca_dims(8);
-  h.mutable_parameters()->set_kgh_keypoint_clusters(3);
-  h.mutable_parameters()->set_seed(11);
-  return h;
-}
-
 class CoreEngineTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     data_ = new std::vector<TrainingCloud>(Dataset());
-    auto spec = TrainSpecFromProto(Header());
+    auto spec = wire::TrainSpecFromProto(FastTrainHeader("shapes"));
     ASSERT_TRUE(spec.ok()) << spec.error().message;
-    auto params = ToTrainParams(*spec);
+    auto params = wire::ToTrainParams(*spec);
     ASSERT_TRUE(params.ok());
     auto model = glimpse::train(*data_, *params);
     ASSERT_TRUE(model.ok()) << model.error().message;
@@ -132,13 +125,13 @@ class CoreEngineTest : public ::testing::Test {
     grpc::ClientContext ctx;
     auto stream = harness_->stub->Train(&ctx);
     v1::TrainRequest header;
-    *header.mutable_header() = Header();
+    *header.mutable_header() = FastTrainHeader("shapes");
     ASSERT_TRUE(stream->Write(header));
     for (const TrainingCloud& lc : *data_) {
       v1::TrainRequest req;
       req.mutable_cloud()->set_category(lc.category);
       req.mutable_cloud()->set_object_id(lc.object_id);
-      *req.mutable_cloud()->mutable_cloud() = CloudToProto(lc.cloud);
+      *req.mutable_cloud()->mutable_cloud() = wire::CloudToProto(lc.cloud);
       ASSERT_TRUE(stream->Write(req));
     }
     stream->WritesDone();
@@ -168,7 +161,7 @@ TEST_F(CoreEngineTest, TrainOverGrpcStoresWhatCoreTrains) {
   EXPECT_THAT(m.categories(), ::testing::ElementsAre("box", "cylinder", "sphere"));
   EXPECT_EQ(m.categories_size(), int(direct.categories.size()));
   EXPECT_EQ(m.methods_size(), int(direct.methods.size()));
-  EXPECT_EQ(m.default_method(), MethodToProto(direct.default_method));
+  EXPECT_EQ(m.default_method(), wire::MethodToProto(direct.default_method));
   EXPECT_EQ(m.stats().clouds(), 18u);
   EXPECT_EQ(m.stats().objects(), 9u);
   EXPECT_EQ(m.stats().keypoints(), direct.stats.keypoints);
@@ -194,8 +187,8 @@ TEST_F(CoreEngineTest, ClassifyOverGrpcGivesExactlyCoresScores) {
       grpc::ClientContext ctx;
       v1::ClassifyRequest req;
       req.mutable_model()->set_name("shapes");
-      req.set_method(MethodToProto(method));
-      *req.mutable_cloud() = CloudToProto(test.cloud);
+      req.set_method(wire::MethodToProto(method));
+      *req.mutable_cloud() = wire::CloudToProto(test.cloud);
       v1::ClassifyResponse resp;
       grpc::Status s = harness_->stub->Classify(&ctx, req, &resp);
       ASSERT_TRUE(s.ok()) << s.error_message();
@@ -205,7 +198,7 @@ TEST_F(CoreEngineTest, ClassifyOverGrpcGivesExactlyCoresScores) {
         EXPECT_EQ(resp.scores(int(i)).score(), direct->scores[i]) << category << " " << method_name(method);
       }
       EXPECT_EQ(resp.winner_index(), direct->winner);
-      EXPECT_EQ(resp.method(), MethodToProto(method));
+      EXPECT_EQ(resp.method(), wire::MethodToProto(method));
       EXPECT_EQ(resp.points(), direct->points);
       EXPECT_EQ(resp.keypoints(), direct->keypoints);
       EXPECT_EQ(resp.unknown(), direct->unknown);
@@ -235,7 +228,7 @@ TEST_F(CoreEngineTest, KnownAcceptanceOverGrpcIsCoresOperatingPoint) {
       v1::ClassifyRequest req;
       req.mutable_model()->set_name("shapes");
       req.set_known_acceptance(acceptance);
-      *req.mutable_cloud() = CloudToProto(*cloud);
+      *req.mutable_cloud() = wire::CloudToProto(*cloud);
       v1::ClassifyResponse resp;
       grpc::Status s = harness_->stub->Classify(&ctx, req, &resp);
       ASSERT_TRUE(s.ok()) << s.error_message();
@@ -264,7 +257,7 @@ TEST_F(CoreEngineTest, StreamClassifyOverGrpcGivesExactlyTheSessionsDecisions) {
     auto direct = (*session)->add(chunk);
     v1::ScanChunk msg;
     if (c == 0) msg.mutable_model()->set_name("shapes");
-    *msg.mutable_cloud() = CloudToProto(chunk);
+    *msg.mutable_cloud() = wire::CloudToProto(chunk);
     ASSERT_TRUE(stream->Write(msg));
     ASSERT_TRUE(direct.ok()) << direct.error().message;
     v1::Decision d;
@@ -299,7 +292,7 @@ TEST_F(CoreEngineTest, StreamClassifyOverGrpcGivesExactlyTheSessionsDecisions) {
   whole.mutable_model()->set_name("shapes");
   Cloud streamed;  // the points the chunks carried (no sensor)
   streamed.points = scan.cloud.points;
-  *whole.mutable_cloud() = CloudToProto(streamed);
+  *whole.mutable_cloud() = wire::CloudToProto(streamed);
   v1::ClassifyResponse classified;
   ASSERT_TRUE(harness_->stub->Classify(&cctx, whole, &classified).ok());
   EXPECT_EQ(final.winner(), classified.winner());
@@ -363,7 +356,7 @@ TEST_F(CoreEngineTest, ClassifyBatchGivesExactlyClassifysAnswers) {
   std::vector<Cloud> clouds;
   for (const char* category : {"box", "cylinder", "sphere", "box"}) clouds.push_back(Sample(category, 9, 4).cloud);
   clouds.push_back(Cloud{{Vec3(0, 0, 0), Vec3(1, 0, 0)}, std::nullopt});  // too few points: fails alone
-  for (const Cloud& c : clouds) *batch.add_clouds() = CloudToProto(c);
+  for (const Cloud& c : clouds) *batch.add_clouds() = wire::CloudToProto(c);
   grpc::ClientContext ctx;
   v1::ClassifyBatchResponse resp;
   ASSERT_TRUE(harness_->stub->ClassifyBatch(&ctx, batch, &resp).ok());
@@ -418,7 +411,7 @@ TEST(CoreEngine, AModelOfAnotherFeatureVersionIsRefusedWithFailedPrecondition) {
   grpc::ClientContext c1;
   v1::ClassifyRequest req;
   req.mutable_model()->set_name("old");
-  *req.mutable_cloud() = CloudToProto(cloud);
+  *req.mutable_cloud() = wire::CloudToProto(cloud);
   v1::ClassifyResponse resp;
   grpc::Status s = h.stub->Classify(&c1, req, &resp);
   EXPECT_EQ(s.error_code(), grpc::StatusCode::FAILED_PRECONDITION);
@@ -428,8 +421,8 @@ TEST(CoreEngine, AModelOfAnotherFeatureVersionIsRefusedWithFailedPrecondition) {
   grpc::ClientContext c2;
   v1::ClassifyBatchRequest batch;
   batch.mutable_model()->set_name("old");
-  *batch.add_clouds() = CloudToProto(cloud);
-  *batch.add_clouds() = CloudToProto(cloud);
+  *batch.add_clouds() = wire::CloudToProto(cloud);
+  *batch.add_clouds() = wire::CloudToProto(cloud);
   v1::ClassifyBatchResponse batch_resp;
   s = h.stub->ClassifyBatch(&c2, batch, &batch_resp);
   EXPECT_EQ(s.error_code(), grpc::StatusCode::FAILED_PRECONDITION);
@@ -439,7 +432,7 @@ TEST(CoreEngine, AModelOfAnotherFeatureVersionIsRefusedWithFailedPrecondition) {
   auto stream = h.stub->StreamClassify(&c3);
   v1::ScanChunk chunk;
   chunk.mutable_model()->set_name("old");
-  *chunk.mutable_cloud() = CloudToProto(cloud);
+  *chunk.mutable_cloud() = wire::CloudToProto(cloud);
   stream->Write(chunk);
   v1::Decision d;
   EXPECT_FALSE(stream->Read(&d));
@@ -461,7 +454,7 @@ TEST_F(CoreEngineTest, CoreRejectionsComeBackAsInvalidArgument) {
   req.mutable_model()->set_name("shapes");
   Cloud few;
   few.points = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};  // below core's min_points
-  *req.mutable_cloud() = CloudToProto(few);
+  *req.mutable_cloud() = wire::CloudToProto(few);
   v1::ClassifyResponse resp;
   EXPECT_EQ(harness_->stub->Classify(&ctx, req, &resp).error_code(), grpc::StatusCode::INVALID_ARGUMENT);
 }
@@ -471,13 +464,13 @@ TEST(CoreEngine, SingleCategoryTrainingIsRejected) {
   grpc::ClientContext ctx;
   auto stream = h.stub->Train(&ctx);
   v1::TrainRequest header;
-  *header.mutable_header() = Header();
+  *header.mutable_header() = FastTrainHeader("shapes");
   stream->Write(header);
   for (int i = 0; i < 2; ++i) {
     TrainingCloud lc = Sample("box", i, 0);
     v1::TrainRequest req;
     req.mutable_cloud()->set_category(lc.category);
-    *req.mutable_cloud()->mutable_cloud() = CloudToProto(lc.cloud);
+    *req.mutable_cloud()->mutable_cloud() = wire::CloudToProto(lc.cloud);
     stream->Write(req);
   }
   stream->WritesDone();
@@ -490,7 +483,7 @@ TEST(CoreEngine, SingleCategoryTrainingIsRejected) {
 }
 
 TEST(CoreEngine, ParametersReachCoresTrainParams) {
-  v1::TrainHeader h = Header();
+  v1::TrainHeader h = FastTrainHeader("shapes");
   h.add_methods(v1::METHOD_BOK);
   h.add_methods(v1::METHOD_VFH);
   h.mutable_parameters()->set_support_radius_m(0.04);
@@ -499,9 +492,9 @@ TEST(CoreEngine, ParametersReachCoresTrainParams) {
   h.mutable_parameters()->set_neighbours(3);
   h.mutable_parameters()->set_kgh_distance_bins(9);
   h.mutable_parameters()->set_normalise_histograms(false);
-  auto spec = TrainSpecFromProto(h);
+  auto spec = wire::TrainSpecFromProto(h);
   ASSERT_TRUE(spec.ok());
-  auto p = ToTrainParams(*spec);
+  auto p = wire::ToTrainParams(*spec);
   ASSERT_TRUE(p.ok());
   EXPECT_EQ(p->methods, (std::vector<MethodId>{MethodId::kBoK, MethodId::kVFH}));
   EXPECT_EQ(p->default_method, MethodId::kBoK);  // fusion was not asked for
@@ -518,7 +511,7 @@ TEST(CoreEngine, ParametersReachCoresTrainParams) {
   EXPECT_FALSE(p->normalise_histograms);
   EXPECT_EQ(p->seed, 11u);
 
-  auto defaults = ToTrainParams(TrainSpec{});
+  auto defaults = wire::ToTrainParams(wire::TrainSpec{});
   ASSERT_TRUE(defaults.ok());
   const TrainParams core_defaults;
   EXPECT_EQ(defaults->methods, core_defaults.methods);

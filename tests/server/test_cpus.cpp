@@ -2,11 +2,10 @@
 // quota on an ancestor, and the bound the affinity mask and the quota put together.
 #include <gtest/gtest.h>
 #include <sched.h>
-#include <unistd.h>
 
 #include <filesystem>
-#include <fstream>
 
+#include "common/temp_dir.h"
 #include "server/cpus.h"
 
 namespace glimpse::server {
@@ -50,18 +49,9 @@ TEST(Cpus, UsableCpusIsTheTighterOfAffinityAndQuota) {
 
 class FakeCgroup : public ::testing::Test {
  protected:
-  void SetUp() override {
-    root_ = fs::temp_directory_path() / ("glimpse-cpus-" + std::to_string(::getpid()) + "-" +
-                                         ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(root_);
-    fs::create_directories(root_);
-  }
-  void TearDown() override { fs::remove_all(root_); }
-  void Write(const fs::path& relative, const std::string& text) {
-    fs::create_directories((root_ / relative).parent_path());
-    std::ofstream(root_ / relative) << text;
-  }
-  fs::path root_;
+  void Write(const fs::path& relative, const std::string& text) { dir_.Write(relative.string(), text); }
+  glimpse::testing::TempDir dir_{"cpus"};
+  fs::path root_ = dir_.path();
 };
 
 TEST_F(FakeCgroup, V2QuotaOnAnAncestorBoundsTheProcess) {

@@ -6,11 +6,10 @@
 #include <google/protobuf/unknown_field_set.h>
 #include <grpcpp/generic/generic_stub.h>
 #include <gtest/gtest.h>
-#include <unistd.h>
 
-#include <filesystem>
 #include <future>
 
+#include "common/temp_dir.h"
 #include "fakes.h"
 #include "server/server.h"
 
@@ -19,6 +18,7 @@ namespace {
 
 using ::testing::HasSubstr;
 using testing::SpiralCloud;
+using glimpse::testing::TempDir;
 
 // ---- protobuf wire helpers ------------------------------------------------------------------
 std::string StringField(int field, const std::string& value) {
@@ -95,21 +95,6 @@ struct LoopbackServer {
   std::unique_ptr<v1::Glimpse::Stub> stub;
 };
 
-class TempDb {
- public:
-  TempDb() {
-    dir_ = std::filesystem::temp_directory_path() /
-           ("glimpse-e2e-" + std::to_string(::getpid()) + "-" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    std::filesystem::remove_all(dir_);
-  }
-  ~TempDb() { std::filesystem::remove_all(dir_); }
-  std::string path() const { return (dir_ / "glimpse.db").string(); }
-
- private:
-  std::filesystem::path dir_;
-};
-
 grpc::Status Train(v1::Glimpse::Stub& stub, const std::string& name, v1::TrainProgress* last) {
   grpc::ClientContext ctx;
   auto stream = stub.Train(&ctx);
@@ -120,7 +105,7 @@ grpc::Status Train(v1::Glimpse::Stub& stub, const std::string& name, v1::TrainPr
     for (int i = 0; i < 2; ++i) {
       v1::TrainRequest req;
       req.mutable_cloud()->set_category(category);
-      *req.mutable_cloud()->mutable_cloud() = CloudToProto(SpiralCloud(40 + i));
+      *req.mutable_cloud()->mutable_cloud() = wire::CloudToProto(SpiralCloud(40 + i));
       stream->Write(req);
     }
   }
@@ -147,8 +132,8 @@ grpc::Status HealthCheck(grpc::Channel& channel, const std::string& service, int
 }
 
 TEST(E2E, HealthReportsServingForTheServerAndTheService) {
-  TempDb db;
-  LoopbackServer server(db.path());
+  TempDir db("e2e");
+  LoopbackServer server(db.file("glimpse.db"));
   int status = -1;
   ASSERT_TRUE(HealthCheck(*server.channel, "", &status).ok());
   EXPECT_EQ(status, 1);
@@ -158,8 +143,8 @@ TEST(E2E, HealthReportsServingForTheServerAndTheService) {
 }
 
 TEST(E2E, ReflectionListsTheGlimpseService) {
-  TempDb db;
-  LoopbackServer server(db.path());
+  TempDir db("e2e");
+  LoopbackServer server(db.file("glimpse.db"));
   grpc::GenericStub stub(server.channel);
   grpc::CompletionQueue cq;
   grpc::ClientContext ctx;
@@ -198,8 +183,8 @@ TEST(E2E, ReflectionListsTheGlimpseService) {
 }
 
 TEST(E2E, TrainClassifyAndStreamOverLoopback) {
-  TempDb db;
-  LoopbackServer server(db.path());
+  TempDir db("e2e");
+  LoopbackServer server(db.file("glimpse.db"));
   v1::TrainProgress last;
   ASSERT_TRUE(Train(*server.stub, "shapes", &last).ok());
   EXPECT_EQ(last.model().version(), 1u);
@@ -207,7 +192,7 @@ TEST(E2E, TrainClassifyAndStreamOverLoopback) {
   grpc::ClientContext ctx;
   v1::ClassifyRequest req;
   req.mutable_model()->set_name("shapes");
-  *req.mutable_cloud() = CloudToProto(SpiralCloud(31));
+  *req.mutable_cloud() = wire::CloudToProto(SpiralCloud(31));
   v1::ClassifyResponse resp;
   ASSERT_TRUE(server.stub->Classify(&ctx, req, &resp).ok());
   EXPECT_EQ(resp.scores_size(), 3);
@@ -217,7 +202,7 @@ TEST(E2E, TrainClassifyAndStreamOverLoopback) {
   auto stream = server.stub->StreamClassify(&sctx);
   v1::ScanChunk chunk;
   chunk.mutable_model()->set_name("shapes");
-  *chunk.mutable_cloud() = CloudToProto(SpiralCloud(10));
+  *chunk.mutable_cloud() = wire::CloudToProto(SpiralCloud(10));
   v1::Decision d;
   ASSERT_TRUE(stream->Write(chunk));
   ASSERT_TRUE(stream->Read(&d));
@@ -230,29 +215,29 @@ TEST(E2E, TrainClassifyAndStreamOverLoopback) {
 }
 
 TEST(E2E, OversizedMessageIsResourceExhausted) {
-  TempDb db;
+  TempDir db("e2e");
   Limits limits;
   limits.max_message_bytes = 64 * 1024;
-  LoopbackServer server(db.path(), limits);
+  LoopbackServer server(db.file("glimpse.db"), limits);
   grpc::ClientContext ctx;
   v1::ClassifyRequest req;
   req.mutable_model()->set_name("m");
-  *req.mutable_cloud() = CloudToProto(SpiralCloud(10'000));  // 120 kB
+  *req.mutable_cloud() = wire::CloudToProto(SpiralCloud(10'000));  // 120 kB
   v1::ClassifyResponse resp;
   EXPECT_EQ(server.stub->Classify(&ctx, req, &resp).error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
 }
 
 TEST(E2E, TwoServersOnOneDatabaseServeEachOthersModels) {
-  TempDb db;
-  LoopbackServer a(db.path());
-  LoopbackServer b(db.path());
+  TempDir db("e2e");
+  LoopbackServer a(db.file("glimpse.db"));
+  LoopbackServer b(db.file("glimpse.db"));
   v1::TrainProgress last;
   ASSERT_TRUE(Train(*a.stub, "shared", &last).ok());
   {
     grpc::ClientContext ctx;
     v1::ClassifyRequest req;
     req.mutable_model()->set_name("shared");
-    *req.mutable_cloud() = CloudToProto(SpiralCloud(30));
+    *req.mutable_cloud() = wire::CloudToProto(SpiralCloud(30));
     v1::ClassifyResponse resp;
     ASSERT_TRUE(b.stub->Classify(&ctx, req, &resp).ok());  // b never saw the Train call
     EXPECT_EQ(resp.model().version(), 1u);
@@ -280,22 +265,22 @@ TEST(E2E, TwoServersOnOneDatabaseServeEachOthersModels) {
     v1::ClassifyRequest req;
     req.mutable_model()->set_name("shared");
     req.mutable_model()->set_version(1);
-    *req.mutable_cloud() = CloudToProto(SpiralCloud(30));
+    *req.mutable_cloud() = wire::CloudToProto(SpiralCloud(30));
     v1::ClassifyResponse resp;
     EXPECT_EQ(a.stub->Classify(&ctx, req, &resp).error_code(), grpc::StatusCode::NOT_FOUND);
   }
 }
 
 TEST(E2E, ShutdownLetsAnInFlightStreamFinish) {
-  TempDb db;
-  LoopbackServer server(db.path());
+  TempDir db("e2e");
+  LoopbackServer server(db.file("glimpse.db"));
   v1::TrainProgress last;
   ASSERT_TRUE(Train(*server.stub, "m", &last).ok());
   grpc::ClientContext ctx;
   auto stream = server.stub->StreamClassify(&ctx);
   v1::ScanChunk chunk;
   chunk.mutable_model()->set_name("m");
-  *chunk.mutable_cloud() = CloudToProto(SpiralCloud(10));
+  *chunk.mutable_cloud() = wire::CloudToProto(SpiralCloud(10));
   v1::Decision d;
   ASSERT_TRUE(stream->Write(chunk));
   ASSERT_TRUE(stream->Read(&d));

@@ -3,11 +3,9 @@
 // test time, is checked end to end with the glimpse CLI in tests/reliability/security_test.sh.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-#include <unistd.h>
 
-#include <filesystem>
-#include <fstream>
 
+#include "common/temp_dir.h"
 #include "fakes.h"
 #include "server/config.h"
 #include "server/security.h"
@@ -19,6 +17,7 @@ using ::testing::HasSubstr;
 using ::testing::Not;
 using testing::Harness;
 using testing::SpiralCloud;
+using glimpse::testing::TempDir;
 
 constexpr const char* kToken = "tok-3f9a1c77e2";
 
@@ -28,26 +27,6 @@ EnvFn Env(std::map<std::string, std::string> vars) {
     return it == vars.end() ? std::nullopt : std::optional<std::string>(it->second);
   };
 }
-
-class TempDir {
- public:
-  TempDir() {
-    path_ = std::filesystem::temp_directory_path() /
-            ("glimpse-sec-" + std::to_string(::getpid()) + "-" +
-             ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    std::filesystem::remove_all(path_);
-    std::filesystem::create_directories(path_);
-  }
-  ~TempDir() { std::filesystem::remove_all(path_); }
-  std::string Write(const std::string& name, const std::string& text) const {
-    const std::string p = (path_ / name).string();
-    std::ofstream(p, std::ios::binary) << text;
-    return p;
-  }
-
- private:
-  std::filesystem::path path_;
-};
 
 // ---------------------------------------------------------------------------------------------
 // Flags
@@ -170,7 +149,7 @@ struct Calls {
     for (const char* category : {"a", "b"}) {
       v1::TrainRequest req;
       req.mutable_cloud()->set_category(category);
-      *req.mutable_cloud()->mutable_cloud() = CloudToProto(SpiralCloud(40));
+      *req.mutable_cloud()->mutable_cloud() = wire::CloudToProto(SpiralCloud(40));
       stream->Write(req);
     }
     stream->WritesDone();
@@ -183,7 +162,7 @@ struct Calls {
     Prepare(ctx);
     v1::ClassifyRequest req;
     req.mutable_model()->set_name("m");
-    *req.mutable_cloud() = CloudToProto(SpiralCloud(30));
+    *req.mutable_cloud() = wire::CloudToProto(SpiralCloud(30));
     v1::ClassifyResponse resp;
     return h.stub->Classify(&ctx, req, &resp);
   }
@@ -193,7 +172,7 @@ struct Calls {
     auto stream = h.stub->StreamClassify(&ctx);
     v1::ScanChunk chunk;
     chunk.mutable_model()->set_name("m");
-    *chunk.mutable_cloud() = CloudToProto(SpiralCloud(30));
+    *chunk.mutable_cloud() = wire::CloudToProto(SpiralCloud(30));
     stream->Write(chunk);
     v1::Decision d;
     stream->Read(&d);

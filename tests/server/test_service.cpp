@@ -16,7 +16,7 @@ v1::ClassifyRequest ClassifyReq(const std::string& model, size_t points, uint32_
   v1::ClassifyRequest req;
   req.mutable_model()->set_name(model);
   req.mutable_model()->set_version(version);
-  *req.mutable_cloud() = CloudToProto(SpiralCloud(points));
+  *req.mutable_cloud() = wire::CloudToProto(SpiralCloud(points));
   return req;
 }
 
@@ -64,7 +64,7 @@ TEST(Train, StreamsProgressAndEndsWithTheStoredModel) {
     req.mutable_cloud()->set_category(i % 3 == 0 ? "box" : "sphere");
     req.mutable_cloud()->set_object_id("obj" + std::to_string(i % 10));
     req.mutable_cloud()->set_augmented(i % 5 == 4);  // a simulated sensor's view: reaches the engine marked
-    *req.mutable_cloud()->mutable_cloud() = CloudToProto(SpiralCloud(20));
+    *req.mutable_cloud()->mutable_cloud() = wire::CloudToProto(SpiralCloud(20));
     ASSERT_TRUE(stream->Write(req));
   }
   stream->WritesDone();
@@ -124,13 +124,13 @@ TEST(Train, RejectsBadStreamsWithInvalidArgumentAndStoresNothing) {
   v1::TrainRequest header, cloud, unlabelled, nan;
   header.mutable_header()->set_model_name("m");
   cloud.mutable_cloud()->set_category("box");
-  *cloud.mutable_cloud()->mutable_cloud() = CloudToProto(SpiralCloud(10));
+  *cloud.mutable_cloud()->mutable_cloud() = wire::CloudToProto(SpiralCloud(10));
   unlabelled = cloud;
   unlabelled.mutable_cloud()->clear_category();
   nan = cloud;
   Cloud bad = SpiralCloud(10);
   bad.points[4].x() = std::nanf("");
-  *nan.mutable_cloud()->mutable_cloud() = CloudToProto(bad);
+  *nan.mutable_cloud()->mutable_cloud() = wire::CloudToProto(bad);
   v1::TrainRequest bad_name = header;
   bad_name.mutable_header()->set_model_name("no spaces");
 
@@ -208,7 +208,7 @@ TEST(Train, DeadlineStopsTrainingAndStoresNothing) {
   stream->Write(header);
   v1::TrainRequest cloud;
   cloud.mutable_cloud()->set_category("a");
-  *cloud.mutable_cloud()->mutable_cloud() = CloudToProto(SpiralCloud(10));
+  *cloud.mutable_cloud()->mutable_cloud() = wire::CloudToProto(SpiralCloud(10));
   stream->Write(cloud);
   stream->WritesDone();
   for (v1::TrainProgress p; stream->Read(&p);) {
@@ -231,7 +231,7 @@ TEST(Train, ClientCancelStopsTrainingAndStoresNothing) {
   stream->Write(header);
   v1::TrainRequest cloud;
   cloud.mutable_cloud()->set_category("a");
-  *cloud.mutable_cloud()->mutable_cloud() = CloudToProto(SpiralCloud(10));
+  *cloud.mutable_cloud()->mutable_cloud() = wire::CloudToProto(SpiralCloud(10));
   stream->Write(cloud);
   stream->WritesDone();
   WaitUntil([&] { return h.behaviour.train_calls > 0; });
@@ -315,7 +315,7 @@ TEST(Classify, InvalidArgument) {
   Cloud bad = SpiralCloud(10);
   bad.points[6].z() = std::numeric_limits<float>::infinity();
   req = ClassifyReq("m", 10);
-  *req.mutable_cloud() = CloudToProto(bad);
+  *req.mutable_cloud() = wire::CloudToProto(bad);
   grpc::Status s = Classify(h, req);
   EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
   EXPECT_THAT(s.error_message(), HasSubstr("point 6"));
@@ -443,7 +443,7 @@ v1::ScanChunk Chunk(size_t points, const std::string& model = "", uint32_t versi
     c.mutable_model()->set_name(model);
     c.mutable_model()->set_version(version);
   }
-  if (points) *c.mutable_cloud() = CloudToProto(SpiralCloud(points));
+  if (points) *c.mutable_cloud() = wire::CloudToProto(SpiralCloud(points));
   return c;
 }
 

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "common/temp_dir.h"
 #include "fakes.h"
 #include "server/model_cache.h"
 #include "server/store.h"
@@ -16,6 +17,7 @@ namespace glimpse::server {
 namespace {
 
 namespace fs = std::filesystem;
+using glimpse::testing::TempDir;
 
 NewModel Sample(const std::string& name, const std::string& tag = "a") {
   NewModel m;
@@ -37,26 +39,6 @@ NewModel Sample(const std::string& name, const std::string& tag = "a") {
   m.blob.push_back(static_cast<uint8_t>(tag[0]));  // distinct bytes per tag (not deserializable: fine here)
   return m;
 }
-
-// A fresh folder per test, removed afterwards.
-class TempDir {
- public:
-  TempDir() {
-    path_ = fs::temp_directory_path() / ("glimpse-store-" + std::to_string(::getpid()) + "-" +
-                                         ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::permissions(path_, fs::perms::owner_all, fs::perm_options::add, ec);
-    fs::remove_all(path_, ec);
-  }
-  std::string file(const std::string& name) const { return (path_ / name).string(); }
-
- private:
-  fs::path path_;
-};
 
 std::unique_ptr<ModelStore> OpenOk(const std::string& path, StoreOptions options = {}) {
   auto s = ModelStore::Open(path, std::move(options));

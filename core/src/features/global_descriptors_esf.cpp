@@ -144,6 +144,102 @@ size_t uniform_index(std::mt19937_64& rng, size_t n) {
   return static_cast<size_t>((static_cast<unsigned __int128>(rng()) * n) >> 64);
 }
 
+// What the triplets give: the A3 sub-histograms and the mixed lines' ratios as they are drawn, and each
+// triplet's D2 (three sides) and D3 with their in / out / mixed classes, binned once their largest is known.
+struct EsfSamples {
+  std::array<float, kBins> h_mix_ratio{}, h_a3_in{}, h_a3_out{}, h_a3_mix{};
+  std::vector<float> d2v, d3v, wt_d3;
+  std::vector<int> wt_d2;
+};
+
+// One triplet's A3, D2 and D3 into `s` (PCL's ESFEstimation); false for a degenerate one (drawn again).
+bool add_triplet(const VoxelGrid& grid, const Eigen::Vector3f& p1, const Eigen::Vector3f& p2, const Eigen::Vector3f& p3,
+                 EsfSamples& s) {
+  const float pih = std::numbers::pi_v<float> / 2.0f;
+  // A3: angles of the triangle; D3: square root of its area; D2: side lengths (all from PCL).
+  Eigen::Vector3f v21 = p2 - p1, v31 = p3 - p1, v23 = p2 - p3;
+  const float a = v21.norm(), b = v31.norm(), cc = v23.norm();
+  // Squared area: Heron's s(s-a)(s-b)(s-c) in PCL; the cross product is the same quantity without
+  // Heron's cancellation, which lets float-rounded collinear triplets through.
+  const float area2 = 0.25f * v21.cross(v31).squaredNorm();
+  if (area2 <= 0.001f) return false;
+  v21.normalize();
+  v31.normalize();
+  v23.normalize();
+  const float cos1 = std::abs(v21.dot(v31)), cos2 = std::abs(v23.dot(v31)), cos3 = std::abs(v23.dot(v21));
+  if (!(cos1 <= 1.0f && cos2 <= 1.0f && cos3 <= 1.0f)) return false;  // acos would be NaN: PCL drops these
+  const int th1 = static_cast<int>(pcl_round(std::acos(cos1) / pih * (kBins - 1)));
+  const int th2 = static_cast<int>(pcl_round(std::acos(cos2) / pih * (kBins - 1)));
+  const int th3 = static_cast<int>(pcl_round(std::acos(cos3) / pih * (kBins - 1)));
+
+  // D2 and the in / out / mixed classification of each side by line tracing in the voxel grid.
+  s.d2v.push_back(a);
+  s.d2v.push_back(b);
+  s.d2v.push_back(cc);
+  const Eigen::Vector3f* ends[3][2] = {{&p1, &p2}, {&p1, &p3}, {&p2, &p3}};
+  int pcnt[3];
+  int vxlcnt_sum = 0, p_cnt = 0;
+  for (int e = 0; e < 3; ++e) {
+    const Eigen::Vector3f &from = *ends[e][0], &to = *ends[e][1];
+    float ratio = 0;
+    int vxlcnt = 0;
+    s.wt_d2.push_back(line_class(grid, grid_coord(from.x()), grid_coord(from.y()), grid_coord(from.z()),
+                                 grid_coord(to.x()), grid_coord(to.y()), grid_coord(to.z()), ratio, vxlcnt, pcnt[e]));
+    if (s.wt_d2.back() == 2) s.h_mix_ratio[static_cast<int>(pcl_round(ratio * (kBins - 1)))]++;
+    vxlcnt_sum += vxlcnt;
+    p_cnt += pcnt[e];
+  }
+
+  s.d3v.push_back(std::sqrt(std::sqrt(area2)));
+  std::array<float, kBins>* a3 = nullptr;
+  if (vxlcnt_sum <= 21) {
+    a3 = &s.h_a3_out;
+    s.wt_d3.push_back(0);
+  } else if (p_cnt - vxlcnt_sum < 4) {
+    a3 = &s.h_a3_in;
+    s.wt_d3.push_back(1);
+  } else {
+    a3 = &s.h_a3_mix;
+    s.wt_d3.push_back(static_cast<float>(vxlcnt_sum) / static_cast<float>(p_cnt));
+  }
+  (*a3)[th1] += static_cast<float>(pcnt[2]) / 32.0f;
+  (*a3)[th2] += static_cast<float>(pcnt[0]) / 32.0f;
+  (*a3)[th3] += static_cast<float>(pcnt[1]) / 32.0f;
+  return true;
+}
+
+// The ten sub-histograms from the samples (D2 and D3 binned against their largest), weighted as PCL
+// weighs them and normalised to sum 1.
+Expected<Eigen::VectorXf> esf_histogram(const EsfSamples& s) {
+  std::array<float, kBins> h_in{}, h_out{}, h_mix{}, h_d3_in{}, h_d3_out{}, h_d3_mix{};
+  const float maxd2 = *std::max_element(s.d2v.begin(), s.d2v.end());
+  const float maxd3 = *std::max_element(s.d3v.begin(), s.d3v.end());
+  auto bin = [](float v, float max) { return std::clamp(static_cast<int>(pcl_round(v / max * (kBins - 1))), 0, kBins - 1); };
+  for (size_t i = 0; i < s.d3v.size(); ++i) {
+    const int index = bin(s.d3v[i], maxd3);
+    if (s.wt_d3[i] >= 0.999f) h_d3_in[index]++;
+    else if (s.wt_d3[i] <= 0.001f) h_d3_out[index]++;
+    else h_d3_mix[index]++;
+  }
+  for (size_t i = 0; i < s.d2v.size(); ++i) {
+    const int index = bin(s.d2v[i], maxd2);
+    if (s.wt_d2[i] == 0) h_in[index]++;
+    if (s.wt_d2[i] == 1) h_out[index]++;
+    if (s.wt_d2[i] == 2) h_mix[index]++;
+  }
+  const std::array<const std::array<float, kBins>*, 10> parts = {&s.h_a3_in, &s.h_a3_out, &s.h_a3_mix, &h_d3_in, &h_d3_out,
+                                                                 &h_d3_mix,   &h_in,       &h_out,       &h_mix,   &s.h_mix_ratio};
+  const std::array<float, 10> weights = {0.5f, 0.5f, 0.5f, 0.5f, 0.5f, 1.0f, 1.0f * 0.5f, 2.0f, 2.0f, 2.0f * 0.5f};
+  Eigen::VectorXf h(kEsfSize);
+  for (int part = 0; part < 10; ++part)
+    for (int i = 0; i < kBins; ++i) h[part * kBins + i] = (*parts[part])[i] * weights[part];
+  float sum = 0;
+  for (int i = 0; i < kEsfSize; ++i) sum += h[i];  // fixed order, as PCL
+  if (!(sum > 0)) return internal_error("esf: empty histogram");
+  h /= sum;
+  return h;
+}
+
 }  // namespace
 
 Expected<Eigen::VectorXf> esf(const Cloud& cloud, uint64_t seed) {
@@ -162,109 +258,21 @@ Expected<Eigen::VectorXf> esf(const Cloud& cloud, uint64_t seed) {
   VoxelGrid grid;
   voxelize9(pts, grid);
 
-  const float pih = std::numbers::pi_v<float> / 2.0f;
-  std::array<float, kBins> h_in{}, h_out{}, h_mix{}, h_mix_ratio{}, h_a3_in{}, h_a3_out{}, h_a3_mix{},
-      h_d3_in{}, h_d3_out{}, h_d3_mix{};
-  std::vector<float> d2v, d3v, wt_d3;
-  std::vector<int> wt_d2;
-  d2v.reserve(3 * kSamples);
-  wt_d2.reserve(3 * kSamples);
-  d3v.reserve(kSamples);
-  wt_d3.reserve(kSamples);
-
+  EsfSamples samples;
+  samples.d2v.reserve(3 * kSamples);
+  samples.wt_d2.reserve(3 * kSamples);
+  samples.d3v.reserve(kSamples);
+  samples.wt_d3.reserve(kSamples);
   std::mt19937_64 rng(seed);
   const size_t n = pts.size();
   long draws = 0;
   for (int sample = 0; sample < kSamples;) {
-    if (++draws > kMaxDraws)
-      return invalid_argument("esf: degenerate cloud, too few non-collinear point triplets");
+    if (++draws > kMaxDraws) return invalid_argument("esf: degenerate cloud, too few non-collinear point triplets");
     const size_t i1 = uniform_index(rng, n), i2 = uniform_index(rng, n), i3 = uniform_index(rng, n);
     if (i1 == i2 || i1 == i3 || i2 == i3) continue;
-    const Eigen::Vector3f &p1 = pts[i1], &p2 = pts[i2], &p3 = pts[i3];
-
-    // A3: angles of the triangle; D3: square root of its area; D2: side lengths (all from PCL).
-    Eigen::Vector3f v21 = p2 - p1, v31 = p3 - p1, v23 = p2 - p3;
-    const float a = v21.norm(), b = v31.norm(), cc = v23.norm();
-    // Squared area: Heron's s(s-a)(s-b)(s-c) in PCL; the cross product is the same quantity without
-    // Heron's cancellation, which lets float-rounded collinear triplets through.
-    const float area2 = 0.25f * v21.cross(v31).squaredNorm();
-    if (area2 <= 0.001f) continue;
-    v21.normalize();
-    v31.normalize();
-    v23.normalize();
-    const float cos1 = std::abs(v21.dot(v31)), cos2 = std::abs(v23.dot(v31)), cos3 = std::abs(v23.dot(v21));
-    if (!(cos1 <= 1.0f && cos2 <= 1.0f && cos3 <= 1.0f)) continue;  // acos would be NaN: PCL drops these
-    const int th1 = static_cast<int>(pcl_round(std::acos(cos1) / pih * (kBins - 1)));
-    const int th2 = static_cast<int>(pcl_round(std::acos(cos2) / pih * (kBins - 1)));
-    const int th3 = static_cast<int>(pcl_round(std::acos(cos3) / pih * (kBins - 1)));
-
-    // D2 and the in / out / mixed classification of each side by line tracing in the voxel grid.
-    d2v.push_back(a);
-    d2v.push_back(b);
-    d2v.push_back(cc);
-    const Eigen::Vector3f* ends[3][2] = {{&p1, &p2}, {&p1, &p3}, {&p2, &p3}};
-    int pcnt[3];
-    int vxlcnt_sum = 0, p_cnt = 0;
-    for (int e = 0; e < 3; ++e) {
-      const Eigen::Vector3f &from = *ends[e][0], &to = *ends[e][1];
-      float ratio = 0;
-      int vxlcnt = 0;
-      wt_d2.push_back(line_class(grid, grid_coord(from.x()), grid_coord(from.y()), grid_coord(from.z()),
-                                 grid_coord(to.x()), grid_coord(to.y()), grid_coord(to.z()), ratio, vxlcnt,
-                                 pcnt[e]));
-      if (wt_d2.back() == 2) h_mix_ratio[static_cast<int>(pcl_round(ratio * (kBins - 1)))]++;
-      vxlcnt_sum += vxlcnt;
-      p_cnt += pcnt[e];
-    }
-
-    d3v.push_back(std::sqrt(std::sqrt(area2)));
-    if (vxlcnt_sum <= 21) {
-      wt_d3.push_back(0);
-      h_a3_out[th1] += static_cast<float>(pcnt[2]) / 32.0f;
-      h_a3_out[th2] += static_cast<float>(pcnt[0]) / 32.0f;
-      h_a3_out[th3] += static_cast<float>(pcnt[1]) / 32.0f;
-    } else if (p_cnt - vxlcnt_sum < 4) {
-      h_a3_in[th1] += static_cast<float>(pcnt[2]) / 32.0f;
-      h_a3_in[th2] += static_cast<float>(pcnt[0]) / 32.0f;
-      h_a3_in[th3] += static_cast<float>(pcnt[1]) / 32.0f;
-      wt_d3.push_back(1);
-    } else {
-      h_a3_mix[th1] += static_cast<float>(pcnt[2]) / 32.0f;
-      h_a3_mix[th2] += static_cast<float>(pcnt[0]) / 32.0f;
-      h_a3_mix[th3] += static_cast<float>(pcnt[1]) / 32.0f;
-      wt_d3.push_back(static_cast<float>(vxlcnt_sum) / static_cast<float>(p_cnt));
-    }
-    ++sample;
+    if (add_triplet(grid, pts[i1], pts[i2], pts[i3], samples)) ++sample;
   }
-
-  const float maxd2 = *std::max_element(d2v.begin(), d2v.end());
-  const float maxd3 = *std::max_element(d3v.begin(), d3v.end());
-  auto bin = [](float v, float max) { return std::clamp(static_cast<int>(pcl_round(v / max * (kBins - 1))), 0, kBins - 1); };
-  for (size_t i = 0; i < d3v.size(); ++i) {
-    const int index = bin(d3v[i], maxd3);
-    if (wt_d3[i] >= 0.999f) h_d3_in[index]++;
-    else if (wt_d3[i] <= 0.001f) h_d3_out[index]++;
-    else h_d3_mix[index]++;
-  }
-  for (size_t i = 0; i < d2v.size(); ++i) {
-    const int index = bin(d2v[i], maxd2);
-    if (wt_d2[i] == 0) h_in[index]++;
-    if (wt_d2[i] == 1) h_out[index]++;
-    if (wt_d2[i] == 2) h_mix[index]++;
-  }
-
-  // PCL's weights of the ten sub-histograms, then normalised to sum 1.
-  const std::array<const std::array<float, kBins>*, 10> parts = {&h_a3_in, &h_a3_out, &h_a3_mix, &h_d3_in, &h_d3_out,
-                                                                 &h_d3_mix, &h_in,     &h_out,    &h_mix,   &h_mix_ratio};
-  const std::array<float, 10> weights = {0.5f, 0.5f, 0.5f, 0.5f, 0.5f, 1.0f, 1.0f * 0.5f, 2.0f, 2.0f, 2.0f * 0.5f};
-  Eigen::VectorXf h(kEsfSize);
-  for (int part = 0; part < 10; ++part)
-    for (int i = 0; i < kBins; ++i) h[part * kBins + i] = (*parts[part])[i] * weights[part];
-  float sum = 0;
-  for (int i = 0; i < kEsfSize; ++i) sum += h[i];  // fixed order, as PCL
-  if (!(sum > 0)) return internal_error("esf: empty histogram");
-  h /= sum;
-  return h;
+  return esf_histogram(samples);
 }
 
 }  // namespace glimpse

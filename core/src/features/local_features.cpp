@@ -1,5 +1,5 @@
-// The feature state of a cloud (features.h): validation, cleaning, density, surfaces, orientation,
-// keypoints and descriptors in one place, for extract() and for a growing scan (features_scan.cpp).
+// The feature state of a cloud (local_features.h): validation, cleaning, density, surfaces, orientation,
+// keypoints and descriptors in one place, for extract() and for a growing scan (scan_features.cpp).
 #include "glimpse/features/local_features.h"
 
 #include <chrono>

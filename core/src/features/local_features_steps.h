@@ -1,4 +1,4 @@
-// Private: the steps extract() and ScanFeatures share (features.cpp).
+// Private: the steps extract() and ScanFeatures share (local_features.cpp).
 #pragma once
 
 #include <chrono>

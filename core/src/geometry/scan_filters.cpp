@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <unordered_map>
 #include <unordered_set>
 #include <utility>
@@ -39,29 +40,31 @@ std::vector<uint32_t> finite_indices(const Points& points) {
   return idx;
 }
 
-}  // namespace
-
-Cloud remove_ground_plane(const Cloud& cloud, const ScanFilterParams& params, size_t* removed) {
-  if (removed) *removed = 0;
-  const std::vector<uint32_t> finite = finite_indices(cloud.points);
-  if (finite.size() < 10) return cloud;
-  // The lowest band starts at the 0.5 % height quantile: a stray point under the floor must not define it.
+// The lowest points of the cloud, among which a floor would lie: within ground_band_m of its 0.5 % height
+// quantile (a stray point under the floor must not define it). Empty when they are fewer than
+// min_inliers, or span less than a floor does (the feet of a human, a small part): RANSAC need not look.
+std::vector<uint32_t> lowest_band(const Cloud& cloud, const std::vector<uint32_t>& finite, const ScanFilterParams& params,
+                                  size_t min_inliers) {
   std::vector<float> z;
   z.reserve(finite.size());
   for (uint32_t i : finite) z.push_back(cloud.points[i].z());
   std::nth_element(z.begin(), z.begin() + std::ptrdiff_t(z.size() / 200), z.end());
   const float zmin = z[z.size() / 200];
-  std::vector<uint32_t> band;  // the floor, if any, is among the lowest points
+  std::vector<uint32_t> band;
   for (uint32_t i : finite)
     if (cloud.points[i].z() <= zmin + params.ground_band_m) band.push_back(i);
-  const size_t min_inliers = std::max<size_t>(10, size_t(std::ceil(params.min_ground_fraction * double(finite.size()))));
-  if (band.size() < min_inliers) return cloud;
-  // A plane among the band's points spans at most the band: a band narrower than a floor (the feet of a
-  // human, a small part) holds none, and RANSAC need not look.
+  if (band.size() < min_inliers) return {};
   Eigen::Vector2f blo(INFINITY, INFINITY), bhi(-INFINITY, -INFINITY);
   for (uint32_t i : band) blo = blo.cwiseMin(cloud.points[i].head<2>()), bhi = bhi.cwiseMax(cloud.points[i].head<2>());
-  if ((bhi - blo).maxCoeff() < params.min_ground_extent_m) return cloud;
+  if ((bhi - blo).maxCoeff() < params.min_ground_extent_m) return {};
+  return band;
+}
 
+// The largest plane within max_tilt_deg of horizontal among the band's points (PCL's RANSAC, its fixed
+// seed: deterministic), as a unit normal facing up and an offset; none when it holds fewer than
+// min_inliers.
+std::optional<Eigen::Vector4f> band_plane(const Cloud& cloud, const std::vector<uint32_t>& band,
+                                          const ScanFilterParams& params, size_t min_inliers) {
   // PCL reports "no model found" (a normal outcome here) on stderr; a service's log is no place for it.
   static const bool quiet = [] {
     pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
@@ -80,58 +83,82 @@ Cloud remove_ground_plane(const Cloud& cloud, const ScanFilterParams& params, si
   pcl::PointIndices inliers;
   pcl::ModelCoefficients plane;
   seg.segment(inliers, plane);
-  if (inliers.indices.size() < min_inliers || plane.values.size() != 4) return cloud;
-
-  // Every point of the cloud within the inlier distance of the plane goes (or below it: under the floor
-  // there is nothing but noise), not only the band's.
+  if (inliers.indices.size() < min_inliers || plane.values.size() != 4) return std::nullopt;
   Eigen::Vector4f abcd(plane.values[0], plane.values[1], plane.values[2], plane.values[3]);
   abcd /= abcd.head<3>().norm();
   if (abcd.z() < 0) abcd = -abcd;  // normal up
+  return abcd;
+}
+
+float height_above(const Eigen::Vector4f& plane, const Vec3& p) { return plane.head<3>().dot(p) + plane.w(); }
+
+// Something stands on the plane and next to nothing lies under it (else it is part of the object: a
+// table top seen alone).
+bool stood_on(const Cloud& cloud, const std::vector<uint32_t>& finite, const Eigen::Vector4f& plane,
+              const ScanFilterParams& params) {
   size_t above = 0, below = 0;
   for (uint32_t i : finite) {
-    const float d = abcd.head<3>().dot(cloud.points[i]) + abcd.w();
+    const float d = height_above(plane, cloud.points[i]);
     above += d > params.ground_distance_m, below += d < -3 * params.ground_distance_m;
   }
-  if (double(above) < std::max(30.0, 0.002 * double(finite.size())) || double(below) > 0.01 * double(finite.size()))
-    return cloud;  // nothing stands on it, or something is under it: part of the object
-  // A floor reaches out beyond what stands on it (in front and to both sides, seen from a sensor); a base
-  // plate or a flange of the object does not, or on fewer sides.
+  return double(above) >= std::max(30.0, 0.002 * double(finite.size())) && double(below) <= 0.01 * double(finite.size());
+}
+
+// A floor reaches out beyond what stands on it (in front and to both sides, seen from a sensor); a base
+// plate or a flange of the object does not, or on fewer sides; and it is a surface, its points filling
+// much of their bounding rectangle (what the object hides and the field of view's trapezoid aside),
+// where a star base or a sled's runners are a few bars.
+bool spreads_like_a_floor(const Cloud& cloud, const std::vector<uint32_t>& finite, const Eigen::Vector4f& plane,
+                          const ScanFilterParams& params) {
   // The footprint is that of what rises clearly above the plane (2.5 inlier distances): the floor's own
   // noisy points just above the inlier distance would otherwise spread it over the whole floor.
   Eigen::Vector2f glo(INFINITY, INFINITY), ghi(-INFINITY, -INFINITY), olo = glo, ohi = ghi;
   for (uint32_t i : finite) {
     const Vec3& p = cloud.points[i];
-    const float d = abcd.head<3>().dot(p) + abcd.w();
+    const float d = height_above(plane, p);
     if (d <= params.ground_distance_m) glo = glo.cwiseMin(p.head<2>()), ghi = ghi.cwiseMax(p.head<2>());
     else if (d > 2.5f * params.ground_distance_m) olo = olo.cwiseMin(p.head<2>()), ohi = ohi.cwiseMax(p.head<2>());
   }
   // A floor in a scan spans more than any small object's face: a part lying flat has a plane at its
   // bottom too, and no floor.
-  if ((ghi - glo).maxCoeff() < params.min_ground_extent_m) return cloud;
+  if ((ghi - glo).maxCoeff() < params.min_ground_extent_m) return false;
   if (olo.allFinite()) {  // else only something low lies on it (a small part): nothing to compare
     const float margin = std::max(0.05f, 0.1f * (ohi - olo).maxCoeff());
     const int sides = (glo.x() < olo.x() - margin) + (glo.y() < olo.y() - margin) + (ghi.x() > ohi.x() + margin) +
                       (ghi.y() > ohi.y() + margin);
-    if (sides < params.ground_min_sides) return cloud;
+    if (sides < params.ground_min_sides) return false;
   }
-  // A floor is a surface: its points fill much of their bounding rectangle (what the object hides and the
-  // field of view's trapezoid aside), where a star base or a sled's runners are a few bars.
   const float cell = std::max(0.02f, (ghi - glo).maxCoeff() / 50.f);
   std::unordered_set<int64_t> occupied;
   for (uint32_t i : finite) {
     const Vec3& p = cloud.points[i];
-    if (abcd.head<3>().dot(p) + abcd.w() > params.ground_distance_m) continue;
+    if (height_above(plane, p) > params.ground_distance_m) continue;
     const int64_t cx = int64_t((p.x() - glo.x()) / cell), cy = int64_t((p.y() - glo.y()) / cell);
     occupied.insert(cx * 1000003 + cy);
   }
   const double cells = std::ceil((ghi.x() - glo.x()) / cell + 1e-6) * std::ceil((ghi.y() - glo.y()) / cell + 1e-6);
-  if (double(occupied.size()) < params.min_ground_fill * cells) return cloud;
+  return double(occupied.size()) >= params.min_ground_fill * cells;
+}
+
+}  // namespace
+
+Cloud remove_ground_plane(const Cloud& cloud, const ScanFilterParams& params, size_t* removed) {
+  if (removed) *removed = 0;
+  const std::vector<uint32_t> finite = finite_indices(cloud.points);
+  if (finite.size() < 10) return cloud;
+  const size_t min_inliers = std::max<size_t>(10, size_t(std::ceil(params.min_ground_fraction * double(finite.size()))));
+  const std::vector<uint32_t> band = lowest_band(cloud, finite, params, min_inliers);
+  if (band.empty()) return cloud;
+  const std::optional<Eigen::Vector4f> plane = band_plane(cloud, band, params, min_inliers);
+  if (!plane || !stood_on(cloud, finite, *plane, params) || !spreads_like_a_floor(cloud, finite, *plane, params))
+    return cloud;
+  // Every point of the cloud within the inlier distance of the plane goes (or below it: under the floor
+  // there is nothing but noise), not only the band's.
   Cloud out;
   out.sensor = cloud.sensor;
   out.points.reserve(cloud.points.size());
   for (const Vec3& p : cloud.points) {
-    const float d = abcd.head<3>().dot(p) + abcd.w();
-    if (p.allFinite() && d <= params.ground_distance_m) continue;
+    if (p.allFinite() && height_above(*plane, p) <= params.ground_distance_m) continue;
     out.points.push_back(p);
   }
   if (removed) *removed = cloud.points.size() - out.points.size();

@@ -147,85 +147,88 @@ Vec3 pca_normal(const NeighbourIndex& tree, const Vec3& centre, float radius, st
   return normal.cast<float>();
 }
 
-LocalSurface local_surface(const NeighbourIndex& tree, uint32_t index, float r,
-                           const std::optional<Vec3>& viewpoint, int min_neighbours,
-                           std::vector<Neighbour>& nb) {
-  LocalSurface s;
-  const Points& pts = tree.points();
-  const Vec3& p = pts[index];
-  tree.radius(p, r, nb);
-  s.neighbours = static_cast<uint16_t>(std::min<size_t>(nb.size(), 65535));
-  if (static_cast<int>(nb.size()) < std::max(min_neighbours, 6)) return s;
+namespace {
 
-  // Coordinates relative to the point, divided by r: every value lies in [-1, 1], so single
-  // precision sums lose nothing the fit can resolve, and the normal equations stay well conditioned.
-  // Structure of arrays (x, y, z, weight), so the moment loops below vectorise; one buffer per
-  // thread, grown when needed and reused from point to point.
-  // Arrays are padded to a multiple of 4 with zero points of zero weight, which add nothing to any
-  // sum, so the vector loops need no scalar remainder.
+// A neighbourhood as the fit reads it: coordinates relative to the point, divided by r, so every value
+// lies in [-1, 1], single-precision sums lose nothing the fit can resolve, and the normal equations stay
+// well conditioned. Structure of arrays (x, y, z, weight), so the moment loops vectorise; one buffer per
+// thread, grown when needed and reused from point to point. Arrays are padded to a multiple of 4 with
+// zero points of zero weight, which add nothing to any sum, so the vector loops need no scalar remainder.
+struct ScaledNeighbourhood {
+  float *X, *Y, *Z, *W;
+  int m = 0, padded = 0;
+};
+ScaledNeighbourhood scaled_neighbourhood(const Points& pts, const Vec3& p, const std::vector<Neighbour>& nb, float inv_r) {
   thread_local std::vector<float> buffer;
-  const int m = static_cast<int>(nb.size());
-  const int padded = (m + 3) & ~3;
-  if (buffer.size() < 4 * static_cast<size_t>(padded)) buffer.resize(4 * static_cast<size_t>(padded));
-  float* X = buffer.data();
-  float* Y = X + padded;
-  float* Z = Y + padded;
-  float* W = Z + padded;
-  const float inv_r = 1.f / r;
-  for (int i = 0; i < m; ++i) {
+  ScaledNeighbourhood h;
+  h.m = static_cast<int>(nb.size());
+  h.padded = (h.m + 3) & ~3;
+  if (buffer.size() < 4 * static_cast<size_t>(h.padded)) buffer.resize(4 * static_cast<size_t>(h.padded));
+  h.X = buffer.data();
+  h.Y = h.X + h.padded;
+  h.Z = h.Y + h.padded;
+  h.W = h.Z + h.padded;
+  for (int i = 0; i < h.m; ++i) {
     const Vec3 d = (pts[nb[i].index] - p) * inv_r;
-    X[i] = d.x(), Y[i] = d.y(), Z[i] = d.z();
+    h.X[i] = d.x(), h.Y[i] = d.y(), h.Z[i] = d.z();
   }
-  for (int i = m; i < padded; ++i) X[i] = Y[i] = Z[i] = 0;
+  for (int i = h.m; i < h.padded; ++i) h.X[i] = h.Y[i] = h.Z[i] = 0;
+  return h;
+}
 
-  // PCA: first and second moments in one pass, covariance = E[dd^T] - E[d]E[d]^T.
+// PCA's normal of the neighbourhood (first and second moments in one pass, covariance = E[dd^T] -
+// E[d]E[d]^T); false when the points do not spread in two directions: the sum of the principal 2x2
+// minors is l1 l2 + l1 l3 + l2 l3, about l1 l2 on a surface and ~0 when the points lie on a line
+// (l2/l1 < 1e-6, a spread across the line under 1/1000 of the spread along it), where no quadric is
+// determined.
+bool pca_normal(const ScaledNeighbourhood& h, Eigen::Vector3d& n) {
+  const float *X = h.X, *Y = h.Y, *Z = h.Z;
   float sx = 0, sy = 0, sz = 0, sxx = 0, sxy = 0, sxz = 0, syy = 0, syz = 0, szz = 0;
 #pragma omp simd reduction(+ : sx, sy, sz, sxx, sxy, sxz, syy, syz, szz)
-  for (int i = 0; i < padded; ++i) {
+  for (int i = 0; i < h.padded; ++i) {
     sx += X[i], sy += Y[i], sz += Z[i];
     sxx += X[i] * X[i], sxy += X[i] * Y[i], sxz += X[i] * Z[i];
     syy += Y[i] * Y[i], syz += Y[i] * Z[i], szz += Z[i] * Z[i];
   }
-  const double inv_m = 1.0 / m;
+  const double inv_m = 1.0 / h.m;
   const Eigen::Vector3d mean = Eigen::Vector3d(sx, sy, sz) * inv_m;
   Eigen::Matrix3d cov;
   cov << sxx, sxy, sxz, sxy, syy, syz, sxz, syz, szz;
   cov = cov * inv_m - mean * mean.transpose();
-  // A surface needs neighbours spread in two directions: the sum of the principal 2x2 minors is
-  // l1 l2 + l1 l3 + l2 l3, about l1 l2 on a surface and ~0 when the points lie on a line (l2/l1 < 1e-6,
-  // a spread across the line under 1/1000 of the spread along it), where no quadric is determined.
   const double minors = cov(0, 0) * cov(1, 1) + cov(0, 0) * cov(2, 2) + cov(1, 1) * cov(2, 2) -
                         cov(0, 1) * cov(0, 1) - cov(0, 2) * cov(0, 2) - cov(1, 2) * cov(1, 2);
-  if (!(minors > 1e-6 * cov.trace() * cov.trace())) return s;
-  Eigen::Vector3d n;
-  if (!smallest_eigenvector(cov, n)) return s;
-  if (viewpoint && n.dot((*viewpoint - p).cast<double>()) < 0) n = -n;
+  if (!(minors > 1e-6 * cov.trace() * cov.trace())) return false;
+  return smallest_eigenvector(cov, n);
+}
+
+// Eq. 1: least squares for z = 1/2 p1 x^2 + p2 xy + 1/2 p3 y^2 + p4 x + p5 y + p6 in the frame (e1, e2, n)
+// centred on the point (coefficients c in units of r). Gaussian weights (sigma = r/2) favour the centre,
+// so a crease at the edge of the neighbourhood bends the fit less (fewer false corners next to sharp
+// edges). The normal equations need only the weighted moments sum w x^a y^b (a + b <= 4) and
+// sum w z x^a y^b (a + b <= 2). Rewrites the neighbourhood in place: X, Y, Z become the frame
+// coordinates, W the weights. False when the fit is not finite.
+bool quadric_fit(ScaledNeighbourhood& h, const Eigen::Vector3d& n, double (&c)[6]) {
   // Any tangent frame will do: the curvatures and Harris eigenvalues of the fit do not depend on
   // how the frame is turned about the normal (the quadric basis is complete in x, y).
   const Eigen::Vector3d e1 = n.unitOrthogonal();
   const Eigen::Vector3d e2 = n.cross(e1);
-
-  // Least squares for z = 1/2 p1 x^2 + p2 xy + 1/2 p3 y^2 + p4 x + p5 y + p6 in the frame (e1, e2, n)
-  // centred on the point. Gaussian weights (sigma = r/2) favour the centre, so a crease at the edge
-  // of the neighbourhood bends the fit less (fewer false corners next to sharp edges). The normal
-  // equations need only the weighted moments sum w x^a y^b (a + b <= 4) and sum w z x^a y^b (a + b <= 2).
   const float e1x = float(e1.x()), e1y = float(e1.y()), e1z = float(e1.z());
   const float e2x = float(e2.x()), e2y = float(e2.y()), e2z = float(e2.z());
   const float nx = float(n.x()), ny = float(n.y()), nz = float(n.z());
-  // In place: X, Y, Z become the frame coordinates; W the weights.
+  float *X = h.X, *Y = h.Y, *Z = h.Z, *W = h.W;
 #pragma omp simd
-  for (int i = 0; i < padded; ++i) {
+  for (int i = 0; i < h.padded; ++i) {
     const float x = X[i] * e1x + Y[i] * e1y + Z[i] * e1z;
     const float y = X[i] * e2x + Y[i] * e2y + Z[i] * e2z;
     const float z = X[i] * nx + Y[i] * ny + Z[i] * nz;
     W[i] = gaussian_weight(X[i] * X[i] + Y[i] * Y[i] + Z[i] * Z[i]);
     X[i] = x, Y[i] = y, Z[i] = z;
   }
-  for (int i = m; i < padded; ++i) W[i] = 0;
+  for (int i = h.m; i < h.padded; ++i) W[i] = 0;
   float m00 = 0, m10 = 0, m01 = 0, m20 = 0, m11 = 0, m02 = 0, m30 = 0, m21 = 0, m12 = 0, m03 = 0;
   float m40 = 0, m31 = 0, m22 = 0, m13 = 0, m04 = 0;
 #pragma omp simd reduction(+ : m00, m10, m01, m20, m11, m02, m30, m21, m12, m03, m40, m31, m22, m13, m04)
-  for (int i = 0; i < padded; ++i) {
+  for (int i = 0; i < h.padded; ++i) {
     const float x = X[i], y = Y[i], w = W[i];
     const float wx = w * x, wy = w * y, wxx = wx * x, wxy = wx * y, wyy = wy * y;
     m00 += w, m10 += wx, m01 += wy, m20 += wxx, m11 += wxy, m02 += wyy;
@@ -234,7 +237,7 @@ LocalSurface local_surface(const NeighbourIndex& tree, uint32_t index, float r,
   }
   float z00 = 0, z10 = 0, z01 = 0, z20 = 0, z11 = 0, z02 = 0;
 #pragma omp simd reduction(+ : z00, z10, z01, z20, z11, z02)
-  for (int i = 0; i < padded; ++i) {
+  for (int i = 0; i < h.padded; ++i) {
     const float x = X[i], y = Y[i], wz = W[i] * Z[i];
     z00 += wz, z10 += wz * x, z01 += wz * y, z20 += wz * x * x, z11 += wz * x * y, z02 += wz * y * y;
   }
@@ -246,7 +249,6 @@ LocalSurface local_surface(const NeighbourIndex& tree, uint32_t index, float r,
                             m21 / 2.0, m12, m03 / 2.0, m11, m02,
                             m20 / 2.0, m11, m02 / 2.0, m10, m01, m00};
   const double atz[6] = {z20 / 2.0, z11, z02 / 2.0, z10, z01, z00};
-  double c[6];
   if (!solve_normal_equations6(lower, atz, c)) {
     // Degenerate (e.g. nearly collinear) neighbourhood, a block not clearly invertible: Eigen's
     // pivoting LDLT copes with it.
@@ -259,14 +261,35 @@ LocalSurface local_surface(const NeighbourIndex& tree, uint32_t index, float r,
     const Eigen::Matrix<double, 6, 1> sol = AtA.ldlt().solve(Atz);
     for (int a = 0; a < 6; ++a) c[a] = sol[a];
   }
-  for (double v : c)
-    if (!std::isfinite(v)) return s;
+  for (int a = 0; a < 6; ++a)
+    if (!std::isfinite(c[a])) return false;
+  return true;
+}
+
+}  // namespace
+
+LocalSurface local_surface(const NeighbourIndex& tree, uint32_t index, float r,
+                           const std::optional<Vec3>& viewpoint, int min_neighbours,
+                           std::vector<Neighbour>& nb) {
+  LocalSurface s;
+  const Points& pts = tree.points();
+  const Vec3& p = pts[index];
+  tree.radius(p, r, nb);
+  s.neighbours = static_cast<uint16_t>(std::min<size_t>(nb.size(), 65535));
+  if (static_cast<int>(nb.size()) < std::max(min_neighbours, 6)) return s;
+  const float inv_r = 1.f / r;
+  ScaledNeighbourhood h = scaled_neighbourhood(pts, p, nb, inv_r);
+  Eigen::Vector3d n;
+  if (!pca_normal(h, n)) return s;
+  if (viewpoint && n.dot((*viewpoint - p).cast<double>()) < 0) n = -n;
+  double c[6];
+  if (!quadric_fit(h, n, c)) return s;
   // Undo the 1/r scaling: second-order terms scale with 1/r, slopes are unitless.
   const float p1 = static_cast<float>(c[0] * inv_r), p2 = static_cast<float>(c[1] * inv_r),
               p3 = static_cast<float>(c[2] * inv_r), p4 = static_cast<float>(c[3]),
               p5 = static_cast<float>(c[4]);
   const Eigen::Vector2f k = principal_curvatures(p1, p2, p3, p4, p5);
-  const Eigen::Vector2f lambda = harris_eigenvalues(p1, p2, p3, p4, p5);
+  const Eigen::Vector2f lambda = harris_eigenvalues(p1, p2, p3, p4, p5);  // eq. 2
   // The Harris response over the fit's own window (sigma = r/2): in units of r, sigma = 1/2.
   const Eigen::Vector2f e = harris_matrix_eigenvalues(c[0], c[1], c[2], c[3], c[4], 0.5);
   s.harris_response = static_cast<float>(harris_response(e[0], e[1]));

@@ -44,150 +44,202 @@ bool decode(const char* p, const Field& f, double& out) {
   return false;
 }
 
-}  // namespace
-
-Expected<Cloud> read_pcd(const std::string& path, std::string_view text) {
-  LineCursor lines(text);
-  std::string_view line;
-  std::vector<std::string_view> tok;
+// What a PCD header declares.
+struct PcdHeader {
   std::vector<Field> fields;
   uint64_t width = 0, height = 1, points = 0;
-  bool have_points = false, have_width = false, have_data = false, binary = false;
-  Cloud cloud;
+  bool have_points = false, have_width = false, binary = false;
+  std::optional<Vec3> sensor;            // VIEWPOINT, when not the identity
   std::optional<Vec3> commented_sensor;  // "# glimpse_sensor x y z": says "at the origin" too
-  auto per_field = [&](size_t ln, auto&& set) -> Status {
-    if (tok.size() != fields.size() + 1)
-      return text_error(path, ln, std::string(tok[0]) + " needs one value per field");
-    for (size_t k = 0; k < fields.size(); ++k)
-      if (!set(fields[k], tok[k + 1])) return text_error(path, ln, "bad " + std::string(tok[0]) + " value");
+};
+
+// One header line (its tokens `tok`, of line `ln`) into `h`; `data` is set on the DATA line.
+Status read_header_line(const std::string& path, size_t ln, const std::vector<std::string_view>& tok, PcdHeader& h,
+                        bool& data) {
+  auto per_field = [&](auto&& set) -> Status {
+    if (tok.size() != h.fields.size() + 1) return text_error(path, ln, std::string(tok[0]) + " needs one value per field");
+    for (size_t k = 0; k < h.fields.size(); ++k)
+      if (!set(h.fields[k], tok[k + 1])) return text_error(path, ln, "bad " + std::string(tok[0]) + " value");
     return {};
   };
-  while (!have_data && lines.next(line)) {
+  const std::string key = lower(tok[0]);
+  if (key == "version") return {};
+  if (key == "fields") {
+    h.fields.clear();
+    for (size_t k = 1; k < tok.size(); ++k) h.fields.push_back(Field{std::string(tok[k])});
+    return {};
+  }
+  if (key == "size") return per_field([](Field& f, std::string_view t) { return parse_u64(t, f.size); });
+  if (key == "type")
+    return per_field([](Field& f, std::string_view t) {
+      f.type = t.size() == 1 ? t[0] : '?';
+      return f.type == 'F' || f.type == 'I' || f.type == 'U';
+    });
+  if (key == "count") return per_field([](Field& f, std::string_view t) { return parse_u64(t, f.count) && f.count > 0; });
+  if (key == "width") {
+    if (tok.size() != 2 || !parse_u64(tok[1], h.width)) return text_error(path, ln, "bad WIDTH");
+    h.have_width = true;
+    return {};
+  }
+  if (key == "height") {
+    if (tok.size() != 2 || !parse_u64(tok[1], h.height) || h.height == 0)
+      return text_error(path, ln, "bad HEIGHT (1 for an unorganised cloud)");
+    return {};
+  }
+  if (key == "points") {
+    if (tok.size() != 2 || !parse_u64(tok[1], h.points)) return text_error(path, ln, "bad POINTS");
+    h.have_points = true;
+    return {};
+  }
+  if (key == "viewpoint") {
+    double v[7];
+    if (tok.size() != 8) return text_error(path, ln, "VIEWPOINT needs 7 numbers");
+    for (int i = 0; i < 7; ++i)
+      if (!parse_double(tok[1 + i], v[i])) return text_error(path, ln, "bad VIEWPOINT value");
+    const bool identity = v[0] == 0 && v[1] == 0 && v[2] == 0 && v[3] == 1 && v[4] == 0 && v[5] == 0 && v[6] == 0;
+    if (!identity) h.sensor = Vec3(float(v[0]), float(v[1]), float(v[2]));
+    return {};
+  }
+  if (key == "data") {
+    if (tok.size() != 2) return text_error(path, ln, "bad DATA line");
+    const std::string kind = lower(tok[1]);
+    if (kind == "binary_compressed")
+      return invalid_argument(path + ":" + std::to_string(ln) +
+                              ": DATA binary_compressed is not supported; save as ascii or binary");
+    if (kind != "ascii" && kind != "binary") return text_error(path, ln, "unknown DATA '" + kind + "'");
+    h.binary = kind == "binary";
+    data = true;
+    return {};
+  }
+  return text_error(path, ln, "unknown header line '" + std::string(tok[0]) + "'");
+}
+
+// The header, up to and including its DATA line; POINTS checked against WIDTH x HEIGHT.
+Expected<PcdHeader> read_header(const std::string& path, LineCursor& lines) {
+  PcdHeader h;
+  std::string_view line;
+  std::vector<std::string_view> tok;
+  bool data = false;
+  while (!data && lines.next(line)) {
     if (const std::string_view raw = trim(line); !raw.empty() && raw.front() == '#') {
       Vec3 s;
-      if (parse_sensor_comment(raw.substr(1), s)) commented_sensor = s;
+      if (parse_sensor_comment(raw.substr(1), s)) h.commented_sensor = s;
       continue;
     }
     split(strip_comment(line), tok);
     if (tok.empty()) continue;
-    const size_t ln = lines.line_no();
-    const std::string key = lower(tok[0]);
-    Status st;
-    if (key == "version") {
-    } else if (key == "fields") {
-      fields.clear();
-      for (size_t k = 1; k < tok.size(); ++k) fields.push_back(Field{std::string(tok[k])});
-    } else if (key == "size") {
-      st = per_field(ln, [](Field& f, std::string_view t) { return parse_u64(t, f.size); });
-    } else if (key == "type") {
-      st = per_field(ln, [](Field& f, std::string_view t) {
-        f.type = t.size() == 1 ? t[0] : '?';
-        return f.type == 'F' || f.type == 'I' || f.type == 'U';
-      });
-    } else if (key == "count") {
-      st = per_field(ln, [](Field& f, std::string_view t) { return parse_u64(t, f.count) && f.count > 0; });
-    } else if (key == "width") {
-      if (tok.size() != 2 || !parse_u64(tok[1], width)) return text_error(path, ln, "bad WIDTH");
-      have_width = true;
-    } else if (key == "height") {
-      if (tok.size() != 2 || !parse_u64(tok[1], height) || height == 0)
-        return text_error(path, ln, "bad HEIGHT (1 for an unorganised cloud)");
-    } else if (key == "points") {
-      if (tok.size() != 2 || !parse_u64(tok[1], points)) return text_error(path, ln, "bad POINTS");
-      have_points = true;
-    } else if (key == "viewpoint") {
-      double v[7];
-      if (tok.size() != 8) return text_error(path, ln, "VIEWPOINT needs 7 numbers");
-      for (int i = 0; i < 7; ++i)
-        if (!parse_double(tok[1 + i], v[i])) return text_error(path, ln, "bad VIEWPOINT value");
-      const bool identity = v[0] == 0 && v[1] == 0 && v[2] == 0 && v[3] == 1 && v[4] == 0 && v[5] == 0 && v[6] == 0;
-      if (!identity) cloud.sensor = Vec3(float(v[0]), float(v[1]), float(v[2]));
-    } else if (key == "data") {
-      if (tok.size() != 2) return text_error(path, ln, "bad DATA line");
-      const std::string kind = lower(tok[1]);
-      if (kind == "binary_compressed")
-        return invalid_argument(path + ":" + std::to_string(ln) +
-                                ": DATA binary_compressed is not supported; save as ascii or binary");
-      if (kind != "ascii" && kind != "binary") return text_error(path, ln, "unknown DATA '" + kind + "'");
-      binary = kind == "binary";
-      have_data = true;
-    } else {
-      return text_error(path, ln, "unknown header line '" + std::string(tok[0]) + "'");
-    }
-    if (!st) return st.error();
+    if (Status st = read_header_line(path, lines.line_no(), tok, h, data); !st) return st.error();
   }
-  if (!have_data) return text_error(path, lines.line_no(), "missing DATA line (not a PCD file?)");
-  if (have_width && width > kMaxPoints / height) return text_error(path, lines.line_no(), "WIDTH*HEIGHT too large");
-  if (!have_points) {
-    points = width * height;
-  } else if (have_width && points != width * height) {
+  if (!data) return text_error(path, lines.line_no(), "missing DATA line (not a PCD file?)");
+  if (h.have_width && h.width > kMaxPoints / h.height) return text_error(path, lines.line_no(), "WIDTH*HEIGHT too large");
+  if (!h.have_points) {
+    h.points = h.width * h.height;
+  } else if (h.have_width && h.points != h.width * h.height) {
     // Which one is the cloud? PCL refuses the file too; reading either would silently cut or pad it.
-    return text_error(path, lines.line_no(), "POINTS " + std::to_string(points) + " but WIDTH x HEIGHT is " +
-                                                 std::to_string(width * height));
+    return text_error(path, lines.line_no(), "POINTS " + std::to_string(h.points) + " but WIDTH x HEIGHT is " +
+                                                 std::to_string(h.width * h.height));
   }
-  if (commented_sensor) cloud.sensor = commented_sensor;
+  return h;
+}
+
+// Where each field lies in a binary record (offset) and an ascii line (column), and which fields are
+// x, y, z; the record's bytes and the line's values.
+struct Layout {
   int xyz[3] = {-1, -1, -1};
-  uint64_t offset = 0, column = 0;
+  uint64_t record_bytes = 0, columns = 0;
+};
+Expected<Layout> field_layout(const std::string& path, size_t ln, std::vector<Field>& fields) {
+  Layout l;
   for (size_t k = 0; k < fields.size(); ++k) {
     Field& f = fields[k];
     if (f.size == 0 || f.size > 8 || f.count > 1'000'000)
-      return text_error(path, lines.line_no(), "bad SIZE or COUNT for field '" + f.name + "'");
-    f.offset = offset;
-    f.column = column;
-    offset += f.size * f.count;
-    column += f.count;
+      return text_error(path, ln, "bad SIZE or COUNT for field '" + f.name + "'");
+    f.offset = l.record_bytes;
+    f.column = l.columns;
+    l.record_bytes += f.size * f.count;
+    l.columns += f.count;
     for (int a = 0; a < 3; ++a)
-      if (f.name == std::string(1, char('x' + a))) xyz[a] = int(k);
+      if (f.name == std::string(1, char('x' + a))) l.xyz[a] = int(k);
   }
-  if (xyz[0] < 0 || xyz[1] < 0 || xyz[2] < 0)
-    return text_error(path, lines.line_no(), "FIELDS lacks x, y or z");
-  const size_t data_line = lines.line_no();
-  const uint64_t min_bytes = binary ? offset : 2 * column;
-  // Ascii: the last line may lack its newline. Binary: every record is whole (no +1, or the last one
-  // would be read a byte past the end).
-  if (points > kMaxPoints || points > (lines.remaining() + (binary ? 0 : 1)) / min_bytes)
-    return text_error(path, data_line, "POINTS " + std::to_string(points) + " exceeds what the file can hold");
-  cloud.points.reserve(points);
-  if (binary) {
-    const size_t start = lines.offset();
-    // A header that says binary over a text body would read its digits as floats, silently: the first
-    // records all digits, signs, points and blanks are text (no float32 triple is made of those alone).
-    const uint64_t probe = std::min<uint64_t>(points, 4) * offset;
-    const bool text_body = probe > 0 && std::all_of(text.begin() + std::ptrdiff_t(start),
-                                                    text.begin() + std::ptrdiff_t(start + probe), [](char ch) {
-                                                      return (ch >= '0' && ch <= '9') || ch == ' ' || ch == '.' || ch == '-' ||
-                                                             ch == '+' || ch == 'e' || ch == 'E' || ch == '\n' ||
-                                                             ch == '\r' || ch == '\t';
-                                                    });
-    if (text_body) return byte_error(path, start, "DATA binary, but the body is text: is it DATA ascii?");
-    for (uint64_t i = 0; i < points; ++i) {
-      const char* rec = text.data() + start + i * offset;
-      double v[3];
-      for (int a = 0; a < 3; ++a)
-        if (!decode(rec + fields[xyz[a]].offset, fields[xyz[a]], v[a]))
-          return byte_error(path, start + i * offset, "unsupported SIZE/TYPE for field '" + fields[xyz[a]].name + "'");
-      cloud.points.emplace_back(float(v[0]), float(v[1]), float(v[2]));
+  if (l.xyz[0] < 0 || l.xyz[1] < 0 || l.xyz[2] < 0) return text_error(path, ln, "FIELDS lacks x, y or z");
+  return l;
+}
+
+// A binary body from byte `start`: `points` records of layout.record_bytes.
+Status read_binary_body(const std::string& path, std::string_view text, size_t start, const PcdHeader& h,
+                        const Layout& layout, Cloud& cloud) {
+  const uint64_t record = layout.record_bytes;
+  // A header that says binary over a text body would read its digits as floats, silently: the first
+  // records all digits, signs, points and blanks are text (no float32 triple is made of those alone).
+  const uint64_t probe = std::min<uint64_t>(h.points, 4) * record;
+  const bool text_body = probe > 0 && std::all_of(text.begin() + std::ptrdiff_t(start),
+                                                  text.begin() + std::ptrdiff_t(start + probe), [](char ch) {
+                                                    return (ch >= '0' && ch <= '9') || ch == ' ' || ch == '.' || ch == '-' ||
+                                                           ch == '+' || ch == 'e' || ch == 'E' || ch == '\n' ||
+                                                           ch == '\r' || ch == '\t';
+                                                  });
+  if (text_body) return byte_error(path, start, "DATA binary, but the body is text: is it DATA ascii?");
+  for (uint64_t i = 0; i < h.points; ++i) {
+    const char* rec = text.data() + start + i * record;
+    double v[3];
+    for (int a = 0; a < 3; ++a) {
+      const Field& f = h.fields[size_t(layout.xyz[a])];
+      if (!decode(rec + f.offset, f, v[a]))
+        return byte_error(path, start + i * record, "unsupported SIZE/TYPE for field '" + f.name + "'");
     }
-    return cloud;
+    cloud.points.emplace_back(float(v[0]), float(v[1]), float(v[2]));
   }
-  while (cloud.points.size() < points) {
+  return {};
+}
+
+// An ascii body: one line of exactly layout.columns values per point, nothing after the last point.
+Status read_ascii_body(const std::string& path, LineCursor& lines, const PcdHeader& h, const Layout& layout,
+                       Cloud& cloud) {
+  std::string_view line;
+  std::vector<std::string_view> tok;
+  while (cloud.points.size() < h.points) {
     if (!lines.next(line))
-      return text_error(path, lines.line_no(), "truncated: expected " + std::to_string(points) +
+      return text_error(path, lines.line_no(), "truncated: expected " + std::to_string(h.points) +
                                                    " points, found " + std::to_string(cloud.points.size()));
     split(line, tok);
     if (tok.empty()) continue;
-    if (tok.size() != column)
-      return text_error(path, lines.line_no(), "expected " + std::to_string(column) + " values (FIELDS and COUNT), found " +
-                                                   std::to_string(tok.size()));
+    if (tok.size() != layout.columns)
+      return text_error(path, lines.line_no(), "expected " + std::to_string(layout.columns) +
+                                                   " values (FIELDS and COUNT), found " + std::to_string(tok.size()));
     double v[3];
-    for (int a = 0; a < 3; ++a)
-      if (!parse_double(tok[fields[xyz[a]].column], v[a]))
-        return text_error(path, lines.line_no(), "not a number: '" + std::string(tok[fields[xyz[a]].column]) + "'");
+    for (int a = 0; a < 3; ++a) {
+      const std::string_view t = tok[h.fields[size_t(layout.xyz[a])].column];
+      if (!parse_double(t, v[a])) return text_error(path, lines.line_no(), "not a number: '" + std::string(t) + "'");
+    }
     cloud.points.emplace_back(float(v[0]), float(v[1]), float(v[2]));
   }
   while (lines.next(line))  // more points than the header says: which count is the cloud's?
     if (split(line, tok); !tok.empty())
-      return text_error(path, lines.line_no(), "data after the " + std::to_string(points) + " points the header declares");
+      return text_error(path, lines.line_no(), "data after the " + std::to_string(h.points) + " points the header declares");
+  return {};
+}
+
+}  // namespace
+
+Expected<Cloud> read_pcd(const std::string& path, std::string_view text) {
+  LineCursor lines(text);
+  auto header = read_header(path, lines);
+  if (!header) return header.error();
+  PcdHeader& h = *header;
+  auto layout = field_layout(path, lines.line_no(), h.fields);
+  if (!layout) return layout.error();
+  Cloud cloud;
+  cloud.sensor = h.commented_sensor ? h.commented_sensor : h.sensor;
+  const size_t data_line = lines.line_no();
+  const uint64_t min_bytes = h.binary ? layout->record_bytes : 2 * layout->columns;
+  // Ascii: the last line may lack its newline. Binary: every record is whole (no +1, or the last one
+  // would be read a byte past the end).
+  if (h.points > kMaxPoints || h.points > (lines.remaining() + (h.binary ? 0 : 1)) / min_bytes)
+    return text_error(path, data_line, "POINTS " + std::to_string(h.points) + " exceeds what the file can hold");
+  cloud.points.reserve(h.points);
+  const Status body = h.binary ? read_binary_body(path, text, lines.offset(), h, *layout, cloud)
+                               : read_ascii_body(path, lines, h, *layout, cloud);
+  if (!body) return body.error();
   return cloud;
 }
 

@@ -155,17 +155,39 @@ bool is_index_list(const Property& p) {
   return p.is_list && (p.name == "vertex_indices" || p.name == "vertex_index");
 }
 
-}  // namespace
+// What a PLY header declares.
+struct PlyHeader {
+  Format format = Format::kAscii;
+  std::vector<Element> elements;
+};
 
-Expected<Mesh> read_ply(const std::string& path, std::string_view text, bool vertices_only,
-                        std::optional<Vec3>* sensor) {
-  LineCursor lines(text);
+// A "property" line (its tokens `tok`, of line `ln`): a scalar or a list.
+Expected<Property> read_property(const std::string& path, size_t ln, const std::vector<std::string_view>& tok) {
+  Property p;
+  if (tok.size() == 5 && tok[1] == "list") {
+    p.is_list = true;
+    p.count_type = parse_type(tok[2]);
+    p.type = parse_type(tok[3]);
+    p.name = tok[4];
+    if (p.count_type == Type::kBad || p.count_type == Type::kFloat32 || p.count_type == Type::kFloat64)
+      return text_error(path, ln, "bad list count type '" + std::string(tok[2]) + "'");
+  } else if (tok.size() == 3) {
+    p.type = parse_type(tok[1]);
+    p.name = tok[2];
+  } else {
+    return text_error(path, ln, "expected 'property <type> <name>' or a list property");
+  }
+  if (p.type == Type::kBad) return text_error(path, ln, "unknown property type");
+  return p;
+}
+
+// The header, up to end_header; a "comment glimpse_sensor x y z" line sets *sensor.
+Expected<PlyHeader> read_header(const std::string& path, LineCursor& lines, std::optional<Vec3>* sensor) {
   std::string_view line;
   std::vector<std::string_view> tok;
   if (!lines.next(line) || trim(line) != "ply") return text_error(path, 1, "missing 'ply' header");
-  Format format = Format::kAscii;
+  PlyHeader h;
   bool have_format = false, ended = false;
-  std::vector<Element> elements;
   while (!ended && lines.next(line)) {
     split(line, tok);
     if (tok.empty()) continue;
@@ -175,36 +197,22 @@ Expected<Mesh> read_ply(const std::string& path, std::string_view text, bool ver
       if (sensor && tok[0] == "comment" && parse_sensor_comment(trim(line).substr(7), s)) *sensor = s;
     } else if (tok[0] == "format") {
       if (tok.size() < 2) return text_error(path, ln, "incomplete format line");
-      if (tok[1] == "ascii") format = Format::kAscii;
-      else if (tok[1] == "binary_little_endian") format = Format::kLittle;
-      else if (tok[1] == "binary_big_endian") format = Format::kBig;
+      if (tok[1] == "ascii") h.format = Format::kAscii;
+      else if (tok[1] == "binary_little_endian") h.format = Format::kLittle;
+      else if (tok[1] == "binary_big_endian") h.format = Format::kBig;
       else return text_error(path, ln, "unknown format '" + std::string(tok[1]) + "'");
       have_format = true;
     } else if (tok[0] == "element") {
       Element e;
-      if (tok.size() != 3 || !parse_u64(tok[2], e.count))
-        return text_error(path, ln, "expected 'element <name> <count>'");
+      if (tok.size() != 3 || !parse_u64(tok[2], e.count)) return text_error(path, ln, "expected 'element <name> <count>'");
       e.name = tok[1];
       e.header_line = ln;
-      elements.push_back(std::move(e));
+      h.elements.push_back(std::move(e));
     } else if (tok[0] == "property") {
-      if (elements.empty()) return text_error(path, ln, "property before any element");
-      Property p;
-      if (tok.size() == 5 && tok[1] == "list") {
-        p.is_list = true;
-        p.count_type = parse_type(tok[2]);
-        p.type = parse_type(tok[3]);
-        p.name = tok[4];
-        if (p.count_type == Type::kBad || p.count_type == Type::kFloat32 || p.count_type == Type::kFloat64)
-          return text_error(path, ln, "bad list count type '" + std::string(tok[2]) + "'");
-      } else if (tok.size() == 3) {
-        p.type = parse_type(tok[1]);
-        p.name = tok[2];
-      } else {
-        return text_error(path, ln, "expected 'property <type> <name>' or a list property");
-      }
-      if (p.type == Type::kBad) return text_error(path, ln, "unknown property type");
-      elements.back().props.push_back(std::move(p));
+      if (h.elements.empty()) return text_error(path, ln, "property before any element");
+      auto p = read_property(path, ln, tok);
+      if (!p) return p.error();
+      h.elements.back().props.push_back(std::move(*p));
     } else if (tok[0] == "end_header") {
       ended = true;
     } else {
@@ -213,77 +221,109 @@ Expected<Mesh> read_ply(const std::string& path, std::string_view text, bool ver
   }
   if (!ended) return text_error(path, lines.line_no(), "missing end_header");
   if (!have_format) return text_error(path, lines.line_no(), "missing format line");
+  return h;
+}
 
-  Body body(path, text, lines.offset(), lines.line_no() + 1, format);
+// Which properties of an element are x, y, z and the face's index list (-1: none).
+struct ElementRoles {
+  int xyz[3] = {-1, -1, -1};
+  int index_prop = -1;
+};
+ElementRoles element_roles(const Element& e) {
+  ElementRoles r;
+  for (size_t k = 0; k < e.props.size(); ++k) {
+    const Property& p = e.props[k];
+    for (int a = 0; a < 3; ++a)
+      if (!p.is_list && p.name == std::string(1, char('x' + a))) r.xyz[a] = int(k);
+    if (is_index_list(p)) r.index_prop = int(k);
+  }
+  return r;
+}
+
+// One list property's values; the face's index list (`keep`) fan-triangulated into mesh.faces.
+Status read_list(Body& body, const Property& p, bool keep, std::vector<int>& polygon, Mesh& mesh) {
+  Error error;
+  double v = 0;
+  if (!body.read(p.count_type, v, error)) return error;
+  if (v < 0 || v != std::floor(v) || v * double(body.min_bytes(p.type)) > double(body.remaining()))
+    return body.where("bad list length " + std::to_string(v));
+  const auto n = static_cast<uint64_t>(v);
+  if (keep && n < 3) return body.where("a face needs at least 3 vertices");
+  polygon.clear();
+  for (uint64_t j = 0; j < n; ++j) {
+    if (!body.read(p.type, v, error)) return error;
+    if (keep) {
+      if (v < 0 || v >= 2147483647.0 || v != std::floor(v)) return body.where("bad vertex index " + std::to_string(v));
+      polygon.push_back(static_cast<int>(v));
+    }
+  }
+  if (keep) {
+    if (mesh.faces.size() + n > kMaxFaces) return body.where("too many faces");
+    add_fan(polygon, mesh.faces);
+  }
+  return {};
+}
+
+// Every item of element `e`: vertices into mesh.vertices, faces (unless vertices_only) into mesh.faces,
+// other elements read past.
+Status read_element(const std::string& path, Body& body, Format format, const Element& e, bool vertices_only,
+                    Mesh& mesh) {
+  const bool is_vertex = e.name == "vertex", is_face = e.name == "face";
+  // Refuse counts the remaining bytes cannot hold: each item needs its fixed-size part (binary)
+  // or two characters per property (ascii).
+  uint64_t min_bytes = 0;
+  for (const Property& p : e.props)
+    min_bytes += format == Format::kAscii ? 2 : (p.is_list ? type_size(p.count_type) : type_size(p.type));
+  const uint64_t limit = is_vertex ? kMaxPoints : kMaxFaces;
+  if (e.count > limit || (min_bytes > 0 && e.count > (body.remaining() + 1) / min_bytes))
+    return text_error(path, e.header_line, "element '" + e.name + "' count " + std::to_string(e.count) +
+                                               " exceeds what the file can hold");
+  const ElementRoles roles = element_roles(e);
+  if (is_vertex) {
+    if (roles.xyz[0] < 0 || roles.xyz[1] < 0 || roles.xyz[2] < 0)
+      return text_error(path, e.header_line, "vertex element lacks x, y or z");
+    mesh.vertices.reserve(e.count);
+  }
+  if (is_face && !vertices_only && roles.index_prop < 0)
+    return text_error(path, e.header_line, "face element lacks a vertex_indices list");
+  std::vector<int> polygon;
+  Error error;
+  for (uint64_t i = 0; i < e.count; ++i) {
+    double xyzv[3] = {0, 0, 0};
+    body.begin_item(e.name, e.props.size());
+    for (size_t k = 0; k < e.props.size(); ++k) {
+      const Property& p = e.props[k];
+      if (p.is_list) {
+        const bool keep = is_face && int(k) == roles.index_prop && !vertices_only;
+        if (Status s = read_list(body, p, keep, polygon, mesh); !s) return s;
+        continue;
+      }
+      double v = 0;
+      if (!body.read(p.type, v, error)) return error;
+      for (int a = 0; a < 3; ++a)
+        if (roles.xyz[a] == int(k)) xyzv[a] = v;
+    }
+    if (!body.end_item(error)) return error;
+    if (is_vertex) mesh.vertices.emplace_back(float(xyzv[0]), float(xyzv[1]), float(xyzv[2]));
+  }
+  return {};
+}
+
+}  // namespace
+
+Expected<Mesh> read_ply(const std::string& path, std::string_view text, bool vertices_only,
+                        std::optional<Vec3>* sensor) {
+  LineCursor lines(text);
+  auto header = read_header(path, lines, sensor);
+  if (!header) return header.error();
+  Body body(path, text, lines.offset(), lines.line_no() + 1, header->format);
   Mesh mesh;
   uint64_t vertex_count = 0;
   bool have_vertices = false;
-  std::vector<int> polygon;
-  Error error;
-  for (const Element& e : elements) {
-    const bool is_vertex = e.name == "vertex", is_face = e.name == "face";
+  for (const Element& e : header->elements) {
     if (vertices_only && have_vertices) break;
-    // Refuse counts the remaining bytes cannot hold: each item needs its fixed-size part (binary)
-    // or two characters per property (ascii).
-    uint64_t min_bytes = 0;
-    for (const Property& p : e.props)
-      min_bytes += format == Format::kAscii ? 2 : (p.is_list ? type_size(p.count_type) : type_size(p.type));
-    const uint64_t limit = is_vertex ? kMaxPoints : kMaxFaces;
-    if (e.count > limit || (min_bytes > 0 && e.count > (body.remaining() + 1) / min_bytes))
-      return text_error(path, e.header_line, "element '" + e.name + "' count " + std::to_string(e.count) +
-                                                 " exceeds what the file can hold");
-    int xyz[3] = {-1, -1, -1};
-    int index_prop = -1;
-    for (size_t k = 0; k < e.props.size(); ++k) {
-      const Property& p = e.props[k];
-      for (int a = 0; a < 3; ++a)
-        if (!p.is_list && p.name == std::string(1, char('x' + a))) xyz[a] = int(k);
-      if (is_index_list(p)) index_prop = int(k);
-    }
-    if (is_vertex) {
-      if (xyz[0] < 0 || xyz[1] < 0 || xyz[2] < 0)
-        return text_error(path, e.header_line, "vertex element lacks x, y or z");
-      mesh.vertices.reserve(e.count);
-      vertex_count = e.count;
-      have_vertices = true;
-    }
-    if (is_face && !vertices_only && index_prop < 0)
-      return text_error(path, e.header_line, "face element lacks a vertex_indices list");
-    for (uint64_t i = 0; i < e.count; ++i) {
-      double xyzv[3] = {0, 0, 0};
-      body.begin_item(e.name, e.props.size());
-      for (size_t k = 0; k < e.props.size(); ++k) {
-        const Property& p = e.props[k];
-        double v = 0;
-        if (!p.is_list) {
-          if (!body.read(p.type, v, error)) return error;
-          for (int a = 0; a < 3; ++a)
-            if (xyz[a] == int(k)) xyzv[a] = v;
-          continue;
-        }
-        if (!body.read(p.count_type, v, error)) return error;
-        if (v < 0 || v != std::floor(v) || v * double(body.min_bytes(p.type)) > double(body.remaining()))
-          return body.where("bad list length " + std::to_string(v));
-        const auto n = static_cast<uint64_t>(v);
-        const bool keep = is_face && int(k) == index_prop && !vertices_only;
-        if (keep && n < 3) return body.where("a face needs at least 3 vertices");
-        polygon.clear();
-        for (uint64_t j = 0; j < n; ++j) {
-          if (!body.read(p.type, v, error)) return error;
-          if (keep) {
-            if (v < 0 || v >= 2147483647.0 || v != std::floor(v))
-              return body.where("bad vertex index " + std::to_string(v));
-            polygon.push_back(static_cast<int>(v));
-          }
-        }
-        if (keep) {
-          if (mesh.faces.size() + n > kMaxFaces) return body.where("too many faces");
-          add_fan(polygon, mesh.faces);
-        }
-      }
-      if (!body.end_item(error)) return error;
-      if (is_vertex) mesh.vertices.emplace_back(float(xyzv[0]), float(xyzv[1]), float(xyzv[2]));
-    }
+    if (Status s = read_element(path, body, header->format, e, vertices_only, mesh); !s) return s.error();
+    if (e.name == "vertex") vertex_count = e.count, have_vertices = true;
   }
   if (!have_vertices) return text_error(path, lines.line_no(), "no vertex element");
   for (const Eigen::Vector3i& f : mesh.faces)

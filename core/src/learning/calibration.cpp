@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <optional>
 #include <random>
 
 #include "glimpse/learning/calibration.h"
@@ -30,11 +31,14 @@ double median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
-// What the held-out decisions of the inner folds measured: per decision, its winner and, per component
-// method, every category's nearest reference.
+// What the held-out decisions of the inner folds measured: per decision, its truth, the components'
+// mean scores, the fusion's logistic decision's probabilities, its winner (at the head's chosen share)
+// and, per component method, every category's nearest reference.
 struct HeldOut {
+  std::vector<int> truths;
+  std::vector<Eigen::VectorXd> scores;              // [decision]: the components' mean scores (novelty divides by them)
+  std::vector<Eigen::VectorXd> head_probabilities;  // [decision]: empty without the head
   std::vector<int> winners;
-  std::vector<Eigen::VectorXd> scores;                  // [decision]: the components' mean scores (novelty divides by them)
   std::vector<std::vector<NearestReferences>> nearest;  // [decision][component]
   // The same of each decision's top-down prefix (TrainParams::novelty_prefix); empty: it has none.
   std::vector<Eigen::VectorXd> prefix_scores;
@@ -135,7 +139,229 @@ std::vector<int> objects_per_category(const std::vector<int>& labels, const std:
   return out;
 }
 
+// Every category needs objects in at least two inner folds, or a fold learns nothing of it.
+bool two_objects_per_category(const std::vector<std::string>& object_categories) {
+  std::map<std::string, size_t> per_category;
+  for (const std::string& cat : object_categories) ++per_category[cat];
+  for (const auto& [cat, n] : per_category)
+    if (n < 2) return false;
+  return true;
+}
+
+// What every inner fold of one calibration shares.
+struct InnerFolds {
+  const ModelImpl& impl;
+  const CalibrationRows& rows;
+  std::vector<int> object_fold{};    // per object: its inner fold
+  std::vector<MethodId> parts{};     // the calibrated method's components
+  std::vector<int> novelty_objects{};  // per category (objects_per_category)
+  bool with_head = false;            // the fusion's logistic decision takes a share of its scores
+  bool measure_novelty = false;
+  int threads = 1;
+};
+
+// One inner fold: the other folds' rows learn, this fold's are decided. with_prefix: the places in
+// test_rows of the rows whose prefix is decided too (only when novelty is measured); prefix_rows: those
+// rows.
+struct FoldRows {
+  std::vector<Eigen::Index> train_rows, test_rows;
+  std::vector<int> train_labels, train_groups;
+  std::vector<size_t> with_prefix;
+  std::vector<Eigen::Index> prefix_rows;
+};
+
+// Fold k's rows; none when it holds no row or a category lies wholly in it.
+std::optional<FoldRows> fold_rows(const InnerFolds& in, int k) {
+  const CalibrationRows& rows = in.rows;
+  FoldRows f;
+  for (size_t i = 0; i < rows.labels.size(); ++i)
+    (in.object_fold[static_cast<size_t>(rows.objects[i])] == k ? f.test_rows : f.train_rows).push_back(static_cast<Eigen::Index>(i));
+  if (f.test_rows.empty()) return std::nullopt;
+  for (Eigen::Index i : f.train_rows)
+    f.train_labels.push_back(rows.labels[static_cast<size_t>(i)]), f.train_groups.push_back(rows.objects[static_cast<size_t>(i)]);
+  std::vector<int> seen(static_cast<size_t>(rows.categories), 0);
+  for (int l : f.train_labels) seen[static_cast<size_t>(l)] = 1;
+  if (std::count(seen.begin(), seen.end(), 0)) return std::nullopt;
+  for (size_t r = 0; r < f.test_rows.size() && in.measure_novelty; ++r)
+    if (static_cast<size_t>(f.test_rows[r]) < rows.has_prefix.size() && rows.has_prefix[static_cast<size_t>(f.test_rows[r])])
+      f.with_prefix.push_back(r);
+  for (size_t r : f.with_prefix) f.prefix_rows.push_back(f.test_rows[r]);
+  return f;
+}
+
+// One fold's held-out decisions by the components' stages.
+struct FoldDecisions {
+  std::vector<Eigen::MatrixXd> scores;                         // [component]: held-out rows x categories
+  std::vector<std::vector<NearestReferences>> nearest;         // [row][component]
+  std::vector<Eigen::VectorXd> prefix_sums;                    // [row]: its prefix's scores, summed over components
+  std::vector<std::vector<NearestReferences>> prefix_nearest;  // [row][component]
+};
+
+// The decision parameters of a held-out stage of method m: BoG's dimensions capped as in the model's
+// stage, but with PCA only where the other methods have it (the model's BoG stage always has one).
+DecisionParams held_out_stage_params(const TrainParams& p, MethodId m) {
+  DecisionParams dp = p.decision;
+  if (m == MethodId::kBoG) dp.max_pca_dims = p.bog_pca_dims;
+  return dp;
+}
+
+// Component j's stage, fitted on the fold's training rows, decides its held-out rows (and for novelty
+// their nearest references, and their prefixes). False when the stage cannot be fitted.
+bool component_decisions(const InnerFolds& in, size_t j, const FoldRows& fold, FoldDecisions& out) {
+  const CalibrationRows& rows = in.rows;
+  const TrainParams& p = in.impl.params;
+  const MethodId part = in.parts[j];
+  const Eigen::MatrixXd& h = rows.histograms[static_cast<size_t>(part)];
+  const Eigen::MatrixXd& q = rows.queries()[static_cast<size_t>(part)];
+  Eigen::MatrixXd train_h(static_cast<Eigen::Index>(fold.train_rows.size()), h.cols());
+  for (size_t r = 0; r < fold.train_rows.size(); ++r) train_h.row(static_cast<Eigen::Index>(r)) = h.row(fold.train_rows[r]);
+  auto stage = fit_decision(train_h, fold.train_labels, rows.categories, held_out_stage_params(p, part),
+                            p.seed + 10 + static_cast<uint64_t>(part), in.threads, fold.train_groups);
+  if (!stage.ok()) return false;
+  const std::vector<uint8_t> reference_whole = whole_references(stage->kind, rows.whole, fold.train_rows);
+  const std::vector<uint32_t> reference_object = object_references(stage->kind, rows.objects, fold.train_rows);
+  out.scores[j].resize(static_cast<Eigen::Index>(fold.test_rows.size()), rows.categories);
+  std::vector<NearestReferences> component(fold.test_rows.size());
+  decide_rows_with_distances(*stage, q, fold.test_rows, in.threads, [&](size_t r, StageScores&& answer) {
+    out.scores[j].row(static_cast<Eigen::Index>(r)) = answer.scores.transpose();
+    if (in.measure_novelty)
+      component[r] = nearest_references(*stage, std::move(answer), reference_whole, reference_object, in.novelty_objects);
+  });
+  for (size_t r = 0; r < fold.test_rows.size(); ++r) out.nearest[r].push_back(std::move(component[r]));
+  if (fold.prefix_rows.empty()) return true;
+  decide_rows_with_distances(*stage, rows.prefix_histograms[static_cast<size_t>(part)], fold.prefix_rows, in.threads,
+                             [&](size_t k, StageScores&& answer) {
+                               Eigen::VectorXd& sum = out.prefix_sums[fold.with_prefix[k]];
+                               sum = sum.size() ? Eigen::VectorXd(sum + answer.scores) : answer.scores;
+                               out.prefix_nearest[fold.with_prefix[k]].push_back(nearest_references(
+                                   *stage, std::move(answer), reference_whole, reference_object, in.novelty_objects));
+                             });
+  return true;
+}
+
+// The fusion's logistic decision learnt on the fold's training rows like the stages, started from the
+// model's own head (all the rows): LIBLINEAR stops at the same tolerance of the same problem, in fewer
+// steps. Per held-out row its probabilities; empty when the fit fails.
+Eigen::MatrixXd held_out_head_probabilities(const InnerFolds& in, const FoldRows& fold) {
+  const TrainParams& p = in.impl.params;
+  Eigen::MatrixXd probabilities;
+  auto head = fit_chi2_logistic(fusion_head_rows(in.impl, in.rows.histograms, fold.train_rows, in.threads),
+                                fold.train_labels, in.rows.categories, p.fusion_head, in.threads, &*in.impl.fusion_head);
+  if (head.ok()) {
+    const Eigen::MatrixXd x = fusion_head_rows(in.impl, in.rows.queries(), fold.test_rows, in.threads);
+    probabilities.resize(x.rows(), in.rows.categories);
+    for (Eigen::Index r = 0; r < x.rows(); ++r)
+      probabilities.row(r) = chi2_logistic_probabilities(*head, x.row(r).transpose()).transpose();
+  }
+  return probabilities;
+}
+
+// Inner fold k's held-out decisions, added to `out` (its winners are chosen later, at the head's share);
+// nothing when the fold has none or a component's stage cannot be fitted.
+void decide_held_out_fold(const InnerFolds& in, int k, const CancelFn& cancel, HeldOut& out) {
+  const std::optional<FoldRows> fold = fold_rows(in, k);
+  if (!fold) return;
+  const size_t n = fold->test_rows.size();
+  FoldDecisions d{std::vector<Eigen::MatrixXd>(in.parts.size()), std::vector<std::vector<NearestReferences>>(n),
+                  std::vector<Eigen::VectorXd>(n), std::vector<std::vector<NearestReferences>>(n)};
+  for (size_t j = 0; j < in.parts.size(); ++j)
+    if (!component_decisions(in, j, *fold, d)) return;
+  Eigen::MatrixXd probabilities;
+  if (in.with_head && !(cancel && cancel())) probabilities = held_out_head_probabilities(in, *fold);
+  for (size_t r = 0; r < n; ++r) {
+    Eigen::VectorXd s = Eigen::VectorXd::Zero(in.rows.categories);
+    for (const Eigen::MatrixXd& m : d.scores) s += m.row(static_cast<Eigen::Index>(r)).transpose();
+    s /= double(std::max<size_t>(1, d.scores.size()));  // the fusion's mean, as method_scores
+    out.scores.push_back(s);  // novelty is over the nearest references' scores (method_decision)
+    out.head_probabilities.push_back(probabilities.rows() ? Eigen::VectorXd(probabilities.row(static_cast<Eigen::Index>(r)).transpose())
+                                                          : Eigen::VectorXd());
+    out.truths.push_back(in.rows.labels[static_cast<size_t>(fold->test_rows[r])]);
+    out.nearest.push_back(std::move(d.nearest[r]));
+    out.prefix_scores.push_back(d.prefix_sums[r] / double(std::max<size_t>(1, in.parts.size())));
+    out.prefix_nearest.push_back(std::move(d.prefix_nearest[r]));
+  }
+}
+
+// The head's share: the one of `shares` whose held-out decisions are most often right, the smallest on a
+// tie; `share` when none is right.
+double choose_head_share(const std::vector<double>& shares, const HeldOut& h, double share) {
+  size_t best_right = 0;
+  for (double candidate : shares) {
+    if (!(candidate >= 0 && candidate <= 1)) continue;
+    size_t right = 0;
+    for (size_t i = 0; i < h.scores.size(); ++i)
+      right += argmax(fused_scores(h.scores[i], h.head_probabilities[i], candidate)) == h.truths[i];
+    if (right > best_right || (right == best_right && candidate < share)) best_right = right, share = candidate;
+  }
+  return share;
+}
+
+// The held-out decisions at the head's share: their winners, the share right and the settle margin (the
+// lowest margin at which `precision` of them are right).
+void settle_on_held_out(Calibration& c, HeldOut& h, int categories, double precision) {
+  std::vector<std::pair<double, bool>> decisions;
+  size_t correct = 0;
+  for (size_t i = 0; i < h.scores.size(); ++i) {
+    const Eigen::VectorXd s = fused_scores(h.scores[i], h.head_probabilities[i], c.fusion_head_share);
+    const int winner = argmax(s);
+    double second = 0;
+    for (int k = 0; k < categories; ++k)
+      if (k != winner) second = std::max(second, s[k]);
+    const bool right = winner == h.truths[i];
+    decisions.push_back({s[winner] - second, right});
+    correct += right;
+    h.winners.push_back(winner);
+  }
+  c.held_out = decisions.size();
+  c.held_out_accuracy = double(correct) / double(decisions.size());
+  c.settle_margin = settle_margin(std::move(decisions), precision, 20);
+}
+
+// Per component, each reference of the model's own stage (which learnt every row): whether it is a whole
+// cloud, and its training object.
+void model_references(Calibration& c, const ModelImpl& impl, const std::vector<MethodId>& parts,
+                      const CalibrationRows& rows) {
+  for (MethodId m : parts) {
+    std::vector<Eigen::Index> all(rows.labels.size());
+    for (size_t i = 0; i < all.size(); ++i) all[i] = static_cast<Eigen::Index>(i);
+    const DecisionRule kind = impl.stages[static_cast<int>(m)]->kind;
+    c.reference_whole.push_back(whole_references(kind, rows.whole, all));
+    c.reference_object.push_back(object_references(kind, rows.objects, all));
+  }
+}
+
 }  // namespace
+
+Calibration calibrate(const ModelImpl& impl, MethodId method, const CalibrationRows& rows, bool measure_novelty,
+                      int threads, const CancelFn& cancel) {
+  const TrainParams& p = impl.params;
+  Calibration c;
+  c.method = method;
+  const int folds = p.calibration_folds;
+  if (folds < 2 || !two_objects_per_category(rows.object_categories)) return c;
+  InnerFolds in{impl, rows};
+  in.object_fold = stratified_folds(rows.object_categories, folds, p.seed + 101);
+  in.parts = component_methods(impl, method);
+  in.novelty_objects = objects_per_category(rows.labels, rows.objects, in.object_fold, folds, rows.categories,
+                                            std::max(1, p.novelty_objects));
+  in.with_head = method == MethodId::kFusion && impl.fusion_head.has_value() && !p.fusion_head_shares.empty();
+  in.measure_novelty = measure_novelty;
+  in.threads = threads;
+  HeldOut held_out;
+  for (int k = 0; k < folds; ++k) {
+    if (cancel && cancel()) return c;  // the caller sees the cancel and stores nothing
+    decide_held_out_fold(in, k, cancel, held_out);
+  }
+  if (held_out.scores.empty()) return c;
+  if (in.with_head) c.fusion_head_share = choose_head_share(p.fusion_head_shares, held_out, c.fusion_head_share);
+  settle_on_held_out(c, held_out, rows.categories, p.settle_precision);
+  if (measure_novelty) calibrate_novelty(c, held_out, in.parts.size(), rows.categories, p.known_acceptance);
+  if (!c.novelty_scale.empty()) {
+    c.novelty_objects = in.novelty_objects;
+    model_references(c, impl, in.parts, rows);
+  }
+  return c;
+}
 
 std::vector<int> stratified_folds(const std::vector<std::string>& object_categories, int folds, uint64_t seed) {
   std::vector<int> fold(object_categories.size(), 0);
@@ -168,162 +394,6 @@ double settle_margin(std::vector<std::pair<double, bool>> decisions, double prec
     if (double(right) >= precision * double(i + 1)) best = decisions[i].first;
   }
   return best > 0 ? best : decisions.front().first + 1e-9;  // never right enough: settle on nothing seen
-}
-
-Calibration calibrate(const ModelImpl& impl, MethodId method, const CalibrationRows& rows, bool measure_novelty,
-                      int threads, const CancelFn& cancel) {
-  const std::vector<Eigen::MatrixXd>& histograms = rows.histograms;
-  const std::vector<Eigen::MatrixXd>& queries = rows.queries();
-  const std::vector<Eigen::MatrixXd>& prefix_queries = rows.prefix_histograms;
-  const std::vector<uint8_t>& has_prefix = rows.has_prefix;
-  const std::vector<int>& labels = rows.labels;
-  const std::vector<int>& objects = rows.objects;
-  const std::vector<uint8_t>& whole = rows.whole;
-  const std::vector<std::string>& object_categories = rows.object_categories;
-  const int categories = rows.categories;
-  const TrainParams& p = impl.params;
-  Calibration c;
-  c.method = method;
-  const int folds = p.calibration_folds;
-  if (folds < 2) return c;
-  // Every category needs objects in at least two inner folds, or a fold learns nothing of it.
-  std::map<std::string, size_t> per_category;
-  for (const std::string& cat : object_categories) ++per_category[cat];
-  for (const auto& [cat, n] : per_category)
-    if (n < 2) return c;
-  const std::vector<int> object_fold = stratified_folds(object_categories, folds, p.seed + 101);
-  const std::vector<MethodId> parts = component_methods(impl, method);
-  const std::vector<int> novelty_objects =
-      objects_per_category(labels, objects, object_fold, folds, categories, std::max(1, p.novelty_objects));
-  std::vector<std::pair<double, bool>> decisions;
-  HeldOut held_out;
-  // Per held-out decision: the mean of the components' scores, the head's probabilities, the truth.
-  std::vector<Eigen::VectorXd> means, head_probabilities;
-  std::vector<int> truths;
-  const bool with_head = method == MethodId::kFusion && impl.fusion_head.has_value() && !p.fusion_head_shares.empty();
-  size_t correct = 0;
-  for (int k = 0; k < folds; ++k) {
-    if (cancel && cancel()) return c;  // the caller sees the cancel and stores nothing
-    std::vector<Eigen::Index> train_rows, test_rows;
-    for (size_t i = 0; i < labels.size(); ++i)
-      (object_fold[static_cast<size_t>(objects[i])] == k ? test_rows : train_rows).push_back(static_cast<Eigen::Index>(i));
-    if (test_rows.empty()) continue;
-    std::vector<int> train_labels, train_groups;
-    for (Eigen::Index i : train_rows) train_labels.push_back(labels[static_cast<size_t>(i)]), train_groups.push_back(objects[static_cast<size_t>(i)]);
-    std::vector<int> seen(static_cast<size_t>(categories), 0);
-    for (int l : train_labels) seen[static_cast<size_t>(l)] = 1;
-    if (std::count(seen.begin(), seen.end(), 0)) continue;  // a category wholly in this fold
-    std::vector<Eigen::MatrixXd> scores(parts.size());
-    std::vector<std::vector<NearestReferences>> nearest(test_rows.size());
-    // The held-out rows with a prefix (places in test_rows), and per one its components' mean score.
-    std::vector<size_t> with_prefix;
-    for (size_t r = 0; r < test_rows.size() && measure_novelty; ++r)
-      if (static_cast<size_t>(test_rows[r]) < has_prefix.size() && has_prefix[static_cast<size_t>(test_rows[r])]) with_prefix.push_back(r);
-    std::vector<Eigen::Index> prefix_rows;
-    for (size_t r : with_prefix) prefix_rows.push_back(test_rows[r]);
-    std::vector<Eigen::VectorXd> prefix_means(test_rows.size());
-    std::vector<std::vector<NearestReferences>> prefix_nearest(test_rows.size());
-    bool ok = true;
-    for (size_t j = 0; j < parts.size() && ok; ++j) {
-      const Eigen::MatrixXd& h = histograms[static_cast<size_t>(parts[j])];
-      const Eigen::MatrixXd& q = queries[static_cast<size_t>(parts[j])];
-      Eigen::MatrixXd train_h(static_cast<Eigen::Index>(train_rows.size()), h.cols());
-      for (size_t r = 0; r < train_rows.size(); ++r) train_h.row(static_cast<Eigen::Index>(r)) = h.row(train_rows[r]);
-      DecisionParams dp = p.decision;
-      if (parts[j] == MethodId::kBoG) dp.max_pca_dims = p.bog_pca_dims;
-      auto stage = fit_decision(train_h, train_labels, categories, dp, p.seed + 10 + static_cast<uint64_t>(parts[j]),
-                                threads, train_groups);
-      if (!stage.ok()) {
-        ok = false;
-        break;
-      }
-      const std::vector<uint8_t> reference_whole = whole_references(stage->kind, whole, train_rows);
-      const std::vector<uint32_t> reference_object = object_references(stage->kind, objects, train_rows);
-      scores[j].resize(static_cast<Eigen::Index>(test_rows.size()), categories);
-      std::vector<NearestReferences> component(test_rows.size());
-      decide_rows_with_distances(*stage, q, test_rows, threads, [&](size_t r, StageScores&& answer) {
-        scores[j].row(static_cast<Eigen::Index>(r)) = answer.scores.transpose();
-        if (measure_novelty)
-          component[r] = nearest_references(*stage, std::move(answer), reference_whole, reference_object, novelty_objects);
-      });
-      for (size_t r = 0; r < test_rows.size(); ++r) nearest[r].push_back(std::move(component[r]));
-      if (prefix_rows.empty()) continue;
-      decide_rows_with_distances(*stage, prefix_queries[static_cast<size_t>(parts[j])], prefix_rows, threads,
-                                 [&](size_t k, StageScores&& answer) {
-                                   Eigen::VectorXd& mean = prefix_means[with_prefix[k]];
-                                   mean = mean.size() ? Eigen::VectorXd(mean + answer.scores) : answer.scores;
-                                   prefix_nearest[with_prefix[k]].push_back(nearest_references(
-                                       *stage, std::move(answer), reference_whole, reference_object, novelty_objects));
-                                 });
-    }
-    if (!ok) continue;
-    // The fusion's logistic decision, learnt on this fold's training rows like the stages.
-    Eigen::MatrixXd probabilities;
-    if (with_head && !(cancel && cancel())) {
-      // Started from the model's own head (all the rows): LIBLINEAR stops at the same tolerance of the
-      // same problem, in fewer steps.
-      auto head = fit_chi2_logistic(fusion_head_rows(impl, histograms, train_rows, threads), train_labels, categories, p.fusion_head, threads,
-                                    &*impl.fusion_head);
-      if (head.ok()) {
-        const Eigen::MatrixXd x = fusion_head_rows(impl, queries, test_rows, threads);
-        probabilities.resize(x.rows(), categories);
-        for (Eigen::Index r = 0; r < x.rows(); ++r)
-          probabilities.row(r) = chi2_logistic_probabilities(*head, x.row(r).transpose()).transpose();
-      }
-    }
-    for (size_t r = 0; r < test_rows.size(); ++r) {
-      Eigen::VectorXd s = Eigen::VectorXd::Zero(categories);
-      for (const Eigen::MatrixXd& m : scores) s += m.row(static_cast<Eigen::Index>(r)).transpose();
-      s /= double(std::max<size_t>(1, scores.size()));  // the fusion's mean, as method_scores
-      means.push_back(s);
-      head_probabilities.push_back(probabilities.rows() ? Eigen::VectorXd(probabilities.row(static_cast<Eigen::Index>(r)).transpose())
-                                                        : Eigen::VectorXd());
-      truths.push_back(labels[static_cast<size_t>(test_rows[r])]);
-      held_out.nearest.push_back(std::move(nearest[r]));
-      held_out.prefix_scores.push_back(prefix_means[r] / double(std::max<size_t>(1, parts.size())));
-      held_out.prefix_nearest.push_back(std::move(prefix_nearest[r]));
-    }
-  }
-  if (means.empty()) return c;
-  // The head's share: the one of fusion_head_shares whose held-out decisions are most often right, the
-  // smallest on a tie. (Measured and dropped in stop 33: one share where the winner's nearest references
-  // are whole training views and one where one is a prefix; full views are nearest to large prefixes.)
-  if (with_head) {
-    size_t best_right = 0;
-    for (double share : p.fusion_head_shares) {
-      if (!(share >= 0 && share <= 1)) continue;
-      size_t right = 0;
-      for (size_t i = 0; i < means.size(); ++i) right += argmax(fused_scores(means[i], head_probabilities[i], share)) == truths[i];
-      if (right > best_right || (right == best_right && share < c.fusion_head_share)) best_right = right, c.fusion_head_share = share;
-    }
-  }
-  for (size_t i = 0; i < means.size(); ++i) {
-    const Eigen::VectorXd s = fused_scores(means[i], head_probabilities[i], c.fusion_head_share);
-    const int winner = argmax(s);
-    double second = 0;
-    for (int k = 0; k < categories; ++k)
-      if (k != winner) second = std::max(second, s[k]);
-    const bool right = winner == truths[i];
-    decisions.push_back({s[winner] - second, right});
-    correct += right;
-    held_out.winners.push_back(winner);
-    held_out.scores.push_back(means[i]);  // novelty is over the nearest references' scores (method_decision)
-  }
-  c.held_out = decisions.size();
-  c.held_out_accuracy = double(correct) / double(decisions.size());
-  c.settle_margin = settle_margin(std::move(decisions), p.settle_precision, 20);
-  if (measure_novelty) calibrate_novelty(c, held_out, parts.size(), categories, p.known_acceptance);
-  if (!c.novelty_scale.empty()) {
-    c.novelty_objects = novelty_objects;
-    for (MethodId m : parts) {  // the model's own stages learnt every row
-      std::vector<Eigen::Index> rows(labels.size());
-      for (size_t i = 0; i < rows.size(); ++i) rows[i] = static_cast<Eigen::Index>(i);
-      const DecisionRule kind = impl.stages[static_cast<int>(m)]->kind;
-      c.reference_whole.push_back(whole_references(kind, whole, rows));
-      c.reference_object.push_back(object_references(kind, objects, rows));
-    }
-  }
-  return c;
 }
 
 }  // namespace glimpse

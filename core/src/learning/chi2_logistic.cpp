@@ -39,11 +39,11 @@ Eigen::VectorXd additive_chi2_features(const std::vector<Eigen::VectorXd>& histo
 }
 
 namespace {
-void quiet(const char*) {}
-}  // namespace
 
-Expected<Chi2Logistic> fit_chi2_logistic(const Eigen::MatrixXd& features, const std::vector<int>& labels, int categories,
-                                         const Chi2LogisticParams& params, int threads, const Chi2Logistic* start) {
+void quiet(const char*) {}
+
+Status check_problem(const Eigen::MatrixXd& features, const std::vector<int>& labels, int categories,
+                     const Chi2LogisticParams& params) {
   if (categories < 2) return invalid_argument("a logistic decision needs at least 2 categories");
   if (features.rows() != static_cast<Eigen::Index>(labels.size()) || features.rows() < 2 || features.cols() < 1)
     return invalid_argument("the logistic decision needs at least 2 labelled training rows");
@@ -56,18 +56,27 @@ Expected<Chi2Logistic> fit_chi2_logistic(const Eigen::MatrixXd& features, const 
   }
   for (int c = 0; c < categories; ++c)
     if (!seen[static_cast<size_t>(c)]) return invalid_argument("category " + std::to_string(c) + " has no training row");
-  static std::once_flag silenced;
-  std::call_once(silenced, [] { set_print_string_function(&quiet); });
+  return {};
+}
 
-  // The problem in LIBLINEAR's sparse rows: 1-based indices, a bias feature (value 1) last, -1 ends a row.
-  // Rows counted, then written, in blocks shared among threads (each row to its own place); a block
-  // is read column by column, as the matrix is stored.
+// The problem in LIBLINEAR's sparse rows: 1-based indices, a bias feature (value 1) last, -1 ends a row;
+// row r starts at nodes[starts[r]].
+struct SparseRows {
+  std::vector<size_t> starts;
+  std::vector<feature_node> nodes;
+};
+
+// Rows counted, then written, in blocks shared among threads (each row to its own place); a block is
+// read column by column, as the matrix is stored.
+SparseRows sparse_rows(const Eigen::MatrixXd& features, int threads) {
   const int n = static_cast<int>(features.cols());
   const Eigen::Index rows_count = features.rows();
   const int fill_threads = threads > 0 ? threads : omp_get_max_threads();
   constexpr Eigen::Index kBlock = 256;
   const Eigen::Index blocks = (rows_count + kBlock - 1) / kBlock;
-  std::vector<size_t> starts(static_cast<size_t>(rows_count) + 1, 2);  // the bias and the end marker
+  SparseRows out;
+  std::vector<size_t>& starts = out.starts;
+  starts.assign(static_cast<size_t>(rows_count) + 1, 2);  // the bias and the end marker
   starts[0] = 0;
 #pragma omp parallel for num_threads(fill_threads) schedule(static)
   for (Eigen::Index b = 0; b < blocks; ++b) {
@@ -76,17 +85,63 @@ Expected<Chi2Logistic> fit_chi2_logistic(const Eigen::MatrixXd& features, const 
       for (Eigen::Index r = first; r < last; ++r) starts[static_cast<size_t>(r) + 1] += features(r, c) != 0;
   }
   for (size_t r = 0; r < static_cast<size_t>(rows_count); ++r) starts[r + 1] += starts[r];
-  std::vector<feature_node> nodes(starts.back());
+  out.nodes.resize(starts.back());
+  feature_node* nodes = out.nodes.data();
 #pragma omp parallel for num_threads(fill_threads) schedule(static)
   for (Eigen::Index b = 0; b < blocks; ++b) {
     const Eigen::Index first = b * kBlock, last = std::min(rows_count, first + kBlock);
     feature_node* at[kBlock];
-    for (Eigen::Index r = first; r < last; ++r) at[r - first] = nodes.data() + starts[static_cast<size_t>(r)];
+    for (Eigen::Index r = first; r < last; ++r) at[r - first] = nodes + starts[static_cast<size_t>(r)];
     for (int c = 0; c < n; ++c)
       for (Eigen::Index r = first; r < last; ++r)
         if (const double v = features(r, c); v != 0) *at[r - first]++ = {c + 1, v};
     for (Eigen::Index r = first; r < last; ++r) *at[r - first]++ = {n + 1, 1.0}, *at[r - first] = {-1, 0.0};
   }
+  return out;
+}
+
+// Category k against the rest: its rows first, so LIBLINEAR takes it as its positive label (label index
+// 0), as it does for the first category of a multi-class problem. Writes row k of the head's weights and
+// bias; the reason when LIBLINEAR refuses or fails, empty otherwise.
+std::string fit_one_against_rest(SparseRows& x, const std::vector<int>& labels, int k, int n,
+                                 const parameter& param, const Chi2Logistic* start, Chi2Logistic& head) {
+  std::vector<feature_node*> rows;
+  std::vector<double> y;
+  for (int positive = 1; positive >= 0; --positive)
+    for (size_t r = 0; r < labels.size(); ++r)
+      if ((labels[r] == k) == bool(positive))
+        rows.push_back(x.nodes.data() + x.starts[r]), y.push_back(positive ? 1 : -1);
+  std::vector<double> init;
+  parameter own = param;
+  if (start && start->weights.rows() == head.weights.rows() && start->weights.cols() == n) {
+    init.resize(static_cast<size_t>(n) + 1);
+    for (int f = 0; f < n; ++f) init[static_cast<size_t>(f)] = start->weights(k, f);
+    init[static_cast<size_t>(n)] = start->bias[k];
+    own.init_sol = init.data();
+  }
+  problem prob{};
+  prob.l = static_cast<int>(rows.size());
+  prob.n = n + 1;
+  prob.y = y.data();
+  prob.x = rows.data();
+  prob.bias = 1;
+  if (const char* why = check_parameter(&prob, &own)) return std::string("LIBLINEAR: ") + why;
+  std::unique_ptr<model, void (*)(model*)> fitted(train(&prob, &own), [](model* m) { free_and_destroy_model(&m); });
+  if (!fitted || get_nr_class(fitted.get()) != 2) return "LIBLINEAR trained no model";
+  for (int f = 0; f < n; ++f) head.weights(k, f) = get_decfun_coef(fitted.get(), f + 1, 0);
+  head.bias[k] = get_decfun_bias(fitted.get(), 0);
+  return {};
+}
+
+}  // namespace
+
+Expected<Chi2Logistic> fit_chi2_logistic(const Eigen::MatrixXd& features, const std::vector<int>& labels, int categories,
+                                         const Chi2LogisticParams& params, int threads, const Chi2Logistic* start) {
+  if (Status s = check_problem(features, labels, categories, params); !s.ok()) return s.error();
+  static std::once_flag silenced;
+  std::call_once(silenced, [] { set_print_string_function(&quiet); });
+  const int n = static_cast<int>(features.cols());
+  SparseRows x = sparse_rows(features, threads);
   parameter param{};
   param.solver_type = L2R_LR;
   param.eps = params.tolerance;
@@ -99,45 +154,12 @@ Expected<Chi2Logistic> fit_chi2_logistic(const Eigen::MatrixXd& features, const 
   head.bias = Eigen::VectorXd::Zero(categories);
   // One-vs-rest as LIBLINEAR's multi-class training does it, one binary problem per category, the
   // problems shared among threads (each writes its own row of weights: the same answer whatever the
-  // thread count). A category's rows go first, so LIBLINEAR takes it as its positive label, as it
-  // does for the first category of a multi-class problem; two categories are one problem, negated.
+  // thread count); two categories are one problem, negated.
   const int problems = categories == 2 ? 1 : categories;
   std::vector<std::string> failed(static_cast<size_t>(problems));
   const int workers = std::max(1, std::min(threads > 0 ? threads : omp_get_max_threads(), problems));
 #pragma omp parallel for num_threads(workers) schedule(dynamic, 1)
-  for (int k = 0; k < problems; ++k) {
-    std::vector<feature_node*> rows;
-    std::vector<double> y;
-    for (int positive = 1; positive >= 0; --positive)
-      for (size_t r = 0; r < labels.size(); ++r)
-        if ((labels[r] == k) == bool(positive)) rows.push_back(nodes.data() + starts[r]), y.push_back(positive ? 1 : -1);
-    std::vector<double> init;
-    parameter own = param;
-    if (start && start->weights.rows() == categories && start->weights.cols() == n) {
-      init.resize(static_cast<size_t>(n) + 1);
-      for (int f = 0; f < n; ++f) init[static_cast<size_t>(f)] = start->weights(k, f);
-      init[static_cast<size_t>(n)] = start->bias[k];
-      own.init_sol = init.data();
-    }
-    problem prob{};
-    prob.l = static_cast<int>(rows.size());
-    prob.n = n + 1;
-    prob.y = y.data();
-    prob.x = rows.data();
-    prob.bias = 1;
-    if (const char* why = check_parameter(&prob, &own)) {
-      failed[static_cast<size_t>(k)] = std::string("LIBLINEAR: ") + why;
-      continue;
-    }
-    std::unique_ptr<model, void (*)(model*)> fitted(train(&prob, &own), [](model* m) { free_and_destroy_model(&m); });
-    if (!fitted || get_nr_class(fitted.get()) != 2) {
-      failed[static_cast<size_t>(k)] = "LIBLINEAR trained no model";
-      continue;
-    }
-    // Label index 0 is the positive one (its rows came first).
-    for (int f = 0; f < n; ++f) head.weights(k, f) = get_decfun_coef(fitted.get(), f + 1, 0);
-    head.bias[k] = get_decfun_bias(fitted.get(), 0);
-  }
+  for (int k = 0; k < problems; ++k) failed[static_cast<size_t>(k)] = fit_one_against_rest(x, labels, k, n, param, start, head);
   for (const std::string& why : failed)
     if (!why.empty()) return internal_error(why);
   if (categories == 2) head.weights.row(1) = -head.weights.row(0), head.bias[1] = -head.bias[0];

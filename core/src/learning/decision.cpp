@@ -75,13 +75,113 @@ void l1_to_rows_many(const Eigen::MatrixXd& m, const Eigen::MatrixXd& x, Eigen::
     }
 }
 // Queries per pass over the references, each block of references read from memory once for all of
-// them (32 since stop 50, 8 before: bench_decision BM_DecideRows/2 0.61x with the groups inside the blocks).
+// them (32 with the groups inside the blocks against 8 per pass: bench_decision BM_DecideRows/2 0.61x).
 constexpr Eigen::Index kQueriesPerPass = 32;
 
 double median(std::vector<double> v) {
   if (v.empty()) return 0;
   std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
   return v[v.size() / 2];
+}
+
+}  // namespace
+
+namespace {
+
+// The stage's projection: PCA of the training histograms, or none (L1 on the histograms themselves: the
+// identity projection).
+Status fit_projection(DecisionStage& st, const Eigen::MatrixXd& histograms, const DecisionParams& params, int threads) {
+  if (params.pca_explained_variance > 0) {
+    auto pca = fit_pca(histograms, params.pca_explained_variance, params.max_pca_dims, 1, threads);
+    if (!pca.ok()) return pca.error();
+    st.pca = std::move(*pca);
+    return {};
+  }
+  st.projected = false;
+  const Eigen::Index d = histograms.cols();
+  st.pca.mean = Eigen::VectorXd::Zero(d);
+  st.pca.basis = Eigen::MatrixXd::Identity(d, d);
+  st.pca.explained = Eigen::VectorXd::Constant(d, 1.0 / static_cast<double>(std::max<Eigen::Index>(d, 1)));
+  return {};
+}
+
+// Every training vector a reference. The scale: per query, the distance from a training vector to its
+// nearest one of another object (the distance a new object is from the training set; another view of
+// the same object is closer). Quadratic in the training vectors (tens of thousands with several
+// elevations and prefixes), so the queries are params.temperature_queries of them, evenly spaced in
+// training order (each against every vector): a few rows' distances per pass over the rows
+// (l1_to_rows_many), passes shared among threads (each writes its own slots: the result does not depend
+// on the thread count).
+std::vector<double> nearest_other_object(const Eigen::MatrixXd& y, const DecisionParams& params, int threads,
+                                         const std::vector<int>& groups) {
+  auto same_object = [&](Eigen::Index i, Eigen::Index j) {
+    return !groups.empty() && groups[static_cast<size_t>(i)] == groups[static_cast<size_t>(j)];
+  };
+  const Eigen::Index n = y.rows();
+  const Eigen::Index m = params.temperature_queries > 0 ? std::min<Eigen::Index>(n, params.temperature_queries) : n;
+  auto query = [&](Eigen::Index k) { return k * n / m; };  // the k-th of the m, in training order
+  std::vector<double> nearest(static_cast<size_t>(m), INFINITY);
+  const int workers = threads > 0 ? threads : std::max(1, omp_get_max_threads());
+  const Eigen::Index passes = (m + kQueriesPerPass - 1) / kQueriesPerPass;
+#pragma omp parallel for num_threads(workers) schedule(dynamic, 2)
+  for (Eigen::Index pass = 0; pass < passes; ++pass) {
+    const Eigen::Index first = pass * kQueriesPerPass, count = std::min(kQueriesPerPass, m - first);
+    Eigen::MatrixXd rows(count, y.cols());
+    for (Eigen::Index q = 0; q < count; ++q) rows.row(q) = y.row(query(first + q));
+    Eigen::ArrayXXd dist;
+    l1_to_rows_many(y, rows, dist);
+    for (Eigen::Index q = 0; q < count; ++q) {
+      const Eigen::Index i = query(first + q);
+      double best = INFINITY;
+      for (Eigen::Index j = 0; j < n; ++j)
+        if (j != i && !same_object(i, j)) best = std::min(best, dist(j, q));
+      nearest[static_cast<size_t>(first + q)] = best;
+    }
+  }
+  std::vector<double> scale;
+  for (double best : nearest)
+    if (std::isfinite(best)) scale.push_back(best);
+  return scale;
+}
+
+// K-means centres of each category's training vectors (sec. 3.3.3); one per category = the paper. The
+// scale: per training vector, the distance to its category's nearest centre.
+std::vector<double> category_centres(DecisionStage& st, const Eigen::MatrixXd& y, const std::vector<int>& labels,
+                                     const std::vector<int>& per_category, const DecisionParams& params,
+                                     uint64_t seed, int threads) {
+  const int per = params.kind == DecisionRule::kNearestCentre ? 1 : std::max(1, params.centres_per_category);
+  std::vector<Eigen::VectorXd> centres;
+  for (int c = 0; c < st.categories; ++c) {
+    Eigen::MatrixXd rows(per_category[c], y.cols());
+    Eigen::Index r = 0;
+    for (size_t i = 0; i < labels.size(); ++i)
+      if (labels[i] == c) rows.row(r++) = y.row(static_cast<Eigen::Index>(i));
+    KMeansParams km;
+    km.k = std::min<int>(per, static_cast<int>(rows.rows()));
+    km.seed = seed + static_cast<uint64_t>(c);
+    km.threads = threads;
+    Eigen::MatrixXd found;
+    if (km.k == 1) {
+      found = rows.colwise().mean();
+    } else {
+      auto result = kmeans(rows, km);
+      found = result.ok() ? result->centres : Eigen::MatrixXd(rows.colwise().mean());
+    }
+    for (Eigen::Index k = 0; k < found.rows(); ++k) {
+      centres.push_back(found.row(k).transpose());
+      st.labels.push_back(c);
+    }
+  }
+  st.references.resize(static_cast<Eigen::Index>(centres.size()), y.cols());
+  for (size_t i = 0; i < centres.size(); ++i) st.references.row(static_cast<Eigen::Index>(i)) = centres[i].transpose();
+  std::vector<double> scale;
+  for (Eigen::Index i = 0; i < y.rows(); ++i) {
+    double best = INFINITY;
+    for (Eigen::Index k = 0; k < st.references.rows(); ++k)
+      if (st.labels[k] == labels[i]) best = std::min(best, l1_rows(st.references, k, y.row(i).transpose()));
+    scale.push_back(best);
+  }
+  return scale;
 }
 
 }  // namespace
@@ -93,9 +193,6 @@ Expected<DecisionStage> fit_decision(const Eigen::MatrixXd& histograms, const st
     return invalid_argument("the decision stage needs at least 2 labelled training vectors");
   if (!groups.empty() && groups.size() != labels.size())
     return internal_error("one training object per training vector is needed");
-  auto same_object = [&](Eigen::Index i, Eigen::Index j) {
-    return !groups.empty() && groups[static_cast<size_t>(i)] == groups[static_cast<size_t>(j)];
-  };
   std::vector<int> per_category(categories, 0);
   for (int l : labels) {
     if (l < 0 || l >= categories) return internal_error("a training label is out of range");
@@ -108,85 +205,15 @@ Expected<DecisionStage> fit_decision(const Eigen::MatrixXd& histograms, const st
   st.kind = params.kind;
   st.categories = categories;
   st.neighbours = std::max(1, params.neighbours);
-  if (params.pca_explained_variance > 0) {
-    auto pca = fit_pca(histograms, params.pca_explained_variance, params.max_pca_dims, 1, threads);
-    if (!pca.ok()) return pca.error();
-    st.pca = std::move(*pca);
-  } else {  // no PCA: L1 on the histograms themselves (the identity projection)
-    st.projected = false;
-    const Eigen::Index d = histograms.cols();
-    st.pca.mean = Eigen::VectorXd::Zero(d);
-    st.pca.basis = Eigen::MatrixXd::Identity(d, d);
-    st.pca.explained = Eigen::VectorXd::Constant(d, 1.0 / static_cast<double>(std::max<Eigen::Index>(d, 1)));
-  }
+  if (Status s = fit_projection(st, histograms, params, threads); !s.ok()) return s.error();
   const Eigen::MatrixXd y = project(st.pca, histograms, threads);
-
   std::vector<double> scale;
   if (params.kind == DecisionRule::kNearestNeighbours || params.kind == DecisionRule::kNearestReference) {
     st.references = y;
     st.labels = labels;
-    // Scale: the median distance from a training vector to its nearest one of another object (the
-    // distance a new object is from the training set; another view of the same object is closer).
-    // Quadratic in the training vectors (tens of thousands with several elevations and prefixes), so
-    // the median is over params.temperature_queries of them, evenly spaced in training order (each
-    // against every vector): a few rows' distances per pass over the rows (l1_to_rows_many), passes
-    // shared among threads (each writes its own slots: the result does not depend on the thread count).
-    const Eigen::Index n = y.rows();
-    const Eigen::Index m = params.temperature_queries > 0 ? std::min<Eigen::Index>(n, params.temperature_queries) : n;
-    auto query = [&](Eigen::Index k) { return k * n / m; };  // the k-th of the m, in training order
-    std::vector<double> nearest(static_cast<size_t>(m), INFINITY);
-    const int workers = threads > 0 ? threads : std::max(1, omp_get_max_threads());
-    const Eigen::Index passes = (m + kQueriesPerPass - 1) / kQueriesPerPass;
-#pragma omp parallel for num_threads(workers) schedule(dynamic, 2)
-    for (Eigen::Index pass = 0; pass < passes; ++pass) {
-      const Eigen::Index first = pass * kQueriesPerPass, count = std::min(kQueriesPerPass, m - first);
-      Eigen::MatrixXd rows(count, y.cols());
-      for (Eigen::Index q = 0; q < count; ++q) rows.row(q) = y.row(query(first + q));
-      Eigen::ArrayXXd dist;
-      l1_to_rows_many(y, rows, dist);
-      for (Eigen::Index q = 0; q < count; ++q) {
-        const Eigen::Index i = query(first + q);
-        double best = INFINITY;
-        for (Eigen::Index j = 0; j < n; ++j)
-          if (j != i && !same_object(i, j)) best = std::min(best, dist(j, q));
-        nearest[static_cast<size_t>(first + q)] = best;
-      }
-    }
-    for (double best : nearest)
-      if (std::isfinite(best)) scale.push_back(best);
+    scale = nearest_other_object(y, params, threads, groups);
   } else {
-    // K-means centres of each category's training vectors (sec. 3.3.3); one per category = the paper.
-    const int per = params.kind == DecisionRule::kNearestCentre ? 1 : std::max(1, params.centres_per_category);
-    std::vector<Eigen::VectorXd> centres;
-    for (int c = 0; c < categories; ++c) {
-      Eigen::MatrixXd rows(per_category[c], y.cols());
-      Eigen::Index r = 0;
-      for (size_t i = 0; i < labels.size(); ++i)
-        if (labels[i] == c) rows.row(r++) = y.row(static_cast<Eigen::Index>(i));
-      KMeansParams km;
-      km.k = std::min<int>(per, static_cast<int>(rows.rows()));
-      km.seed = seed + static_cast<uint64_t>(c);
-      km.threads = threads;
-      Eigen::MatrixXd found;
-      if (km.k == 1) {
-        found = rows.colwise().mean();
-      } else {
-        auto result = kmeans(rows, km);
-        found = result.ok() ? result->centres : Eigen::MatrixXd(rows.colwise().mean());
-      }
-      for (Eigen::Index k = 0; k < found.rows(); ++k) {
-        centres.push_back(found.row(k).transpose());
-        st.labels.push_back(c);
-      }
-    }
-    st.references.resize(static_cast<Eigen::Index>(centres.size()), y.cols());
-    for (size_t i = 0; i < centres.size(); ++i) st.references.row(static_cast<Eigen::Index>(i)) = centres[i].transpose();
-    for (Eigen::Index i = 0; i < y.rows(); ++i) {
-      double best = INFINITY;
-      for (Eigen::Index k = 0; k < st.references.rows(); ++k)
-        if (st.labels[k] == labels[i]) best = std::min(best, l1_rows(st.references, k, y.row(i).transpose()));
-      scale.push_back(best);
-    }
+    scale = category_centres(st, y, labels, per_category, params, seed, threads);
   }
   st.temperature = std::max(median(scale), 1e-9);
   return st;

@@ -1,4 +1,4 @@
-// The model format's byte primitives (serialize.cpp, serialize_calibration.cpp): little-endian
+// The model format's byte primitives (serialize*.cpp) and the blocks its files share: little-endian
 // integers, IEEE-754 binary64 reals, length-prefixed strings, vectors and matrices. Reader checks every
 // length against the bytes left and keeps the first failure, so a corrupt model is an error, never UB.
 #pragma once
@@ -8,8 +8,11 @@
 #include <cstddef>
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
+
+#include "glimpse/features/methods.h"
 
 namespace glimpse::serial {
 
@@ -117,4 +120,12 @@ std::map<std::string, double> read_train_params(serial::Reader& r, TrainParams& 
 // The calibration block (serialize_calibration.cpp); read_calibration needs the model's stages read.
 void write_calibration(serial::Writer& w, const Calibration& c);
 void read_calibration(serial::Reader& r, Calibration& c, uint32_t ncat, const ModelImpl& impl, uint32_t version);
+// A method list: a u32 count, a u8 per method (serialize_impl.cpp).
+void write_methods(serial::Writer& w, const std::vector<MethodId>& ms);
+std::vector<MethodId> read_methods(serial::Reader& r);
+// The trained part of a model (serialize_impl.cpp); then (format 8 on) a u8, 1: the novelty model follows
+// (ModelImpl::novelty, the same layout, its own flag 0); then, but for the novelty model (`nested`), how
+// novelty combines its evidence (format 9 on). read_impl reads a block of format `version`.
+void write_impl(serial::Writer& w, const ModelImpl& m, bool nested);
+std::shared_ptr<ModelImpl> read_impl(serial::Reader& r, uint32_t ncat, uint32_t version, bool nested);
 }  // namespace glimpse

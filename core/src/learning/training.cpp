@@ -1,5 +1,6 @@
-// Training (sec. 3.2.5-3.3.3, 4): features of every training cloud -> keypoint codebooks -> per-method
-// global histograms -> Bag-of-Features decision stages -> calibration on held-out folds.
+// Training from computed features (sec. 3.2.5-3.3.3, 4), stage by stage: the rows' categories and
+// objects -> keypoint codebooks -> per-method global histograms and decision stages -> the fusion's
+// logistic decision -> calibration on held-out folds -> the novelty model of the clouds not augmented.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -16,13 +17,9 @@
 #include "glimpse/learning/scores.h"
 #include "glimpse/learning/train_params.h"
 #include "glimpse/threads.h"
-#include "glimpse/views/exploration.h"
-#include "glimpse/views/placement.h"
-#include "glimpse/views/sampling.h"
+#include "learning/training_checks.h"
 
 namespace glimpse {
-
-// ---- Training -------------------------------------------------------------------------------------
 
 const Calibration& calibration(const Model& model) {
   static const Calibration none;
@@ -43,34 +40,44 @@ std::vector<MethodId> base_methods(const TrainParams& params) {
   return base;
 }
 
-Cloud training_view(const Cloud& cloud, const TrainParams& params, uint64_t salt) {
-  if (!(params.tilt_deg > 0)) return cloud;
-  uint64_t z = params.seed + 0x9E3779B97F4A7C15ull * (salt + 1);  // splitmix64 of (seed, salt)
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  return rotate_about_centroid(cloud, random_tilt(z ^ (z >> 31), params.tilt_deg));
-}
-
 namespace {
 
-template <class Sample>
-Status validate(const std::vector<Sample>& data, const TrainParams& params) {
-  if (data.empty()) return invalid_argument("no training clouds");
-  if (params.methods.empty()) return invalid_argument("no method to train");
-  for (size_t i = 0; i < data.size(); ++i)
-    if (data[i].category.empty()) return invalid_argument("training cloud " + std::to_string(i) + " has no category");
-  std::set<std::string> categories;
-  for (const auto& d : data) categories.insert(d.category);
-  if (categories.size() < 2)
-    return failed_precondition("training needs at least 2 categories; got only '" + *categories.begin() + "'");
-  if (Status s = check_codebook_sizes(params); !s.ok()) return s;
-  if (!(params.known_acceptance > 0 && params.known_acceptance <= 1))
-    return invalid_argument("known_acceptance must be in (0, 1]");
-  if (!(params.novelty_prefix >= 0 && params.novelty_prefix <= 1))
-    return invalid_argument("novelty_prefix must be in [0, 1] (0: no prefix)");
-  return {};
-}
+// Training's progress and cancel, as its stages report and poll them.
+struct Steps {
+  const ProgressFn& progress;
+  const CancelFn& cancel;
+  void report(const char* stage, size_t done, size_t total) const {
+    if (progress) progress({stage, done, total});
+  }
+  bool cancelled_now() const { return cancel && cancel(); }
+};
 
+Error with_method(MethodId m, const Error& e) { return Error{e.code, std::string(method_name(m)) + ": " + e.message}; }
+
+// 1. The model's categories (sorted by name, into `categories`) and every row's category, object and
+// wholeness: the rows calibration decides again, held out.
+CalibrationRows labelled_rows(const std::vector<TrainingSample>& data, std::vector<std::string>& categories) {
+  std::map<std::string, int> index;
+  for (const auto& d : data) index.emplace(d.category, 0);
+  for (auto& [name, i] : index) {
+    i = static_cast<int>(categories.size());
+    categories.push_back(name);
+  }
+  CalibrationRows rows;
+  std::map<std::string, int> object_index;
+  for (const auto& d : data) {
+    rows.labels.push_back(index[d.category]);
+    rows.whole.push_back(d.whole ? 1 : 0);
+    // A cloud without an object id is an object of its own.
+    const std::string key = d.object_id.empty() ? '#' + std::to_string(rows.labels.size()) : d.category + "/" + d.object_id;
+    rows.objects.push_back(object_index.emplace(key, static_cast<int>(object_index.size())).first->second);
+  }
+  rows.object_categories.resize(object_index.size());
+  for (size_t i = 0; i < rows.labels.size(); ++i)
+    rows.object_categories[static_cast<size_t>(rows.objects[i])] = categories[static_cast<size_t>(rows.labels[i])];
+  rows.categories = static_cast<int>(categories.size());
+  return rows;
+}
 
 // Every keypoint descriptor of the training set, subsampled evenly above `cap` rows.
 Eigen::MatrixXd pooled_descriptors(const std::vector<CloudFeatures>& feats, size_t cap) {
@@ -85,137 +92,211 @@ Eigen::MatrixXd pooled_descriptors(const std::vector<CloudFeatures>& feats, size
   return descriptor_rows(rows);
 }
 
-}  // namespace
-
-Expected<Model> train(const std::vector<TrainingCloud>& data, const TrainParams& params, const ProgressFn& progress,
-                      const CancelFn& cancel) {
-  const auto t0 = std::chrono::steady_clock::now();
-  if (Status s = validate(data, params); !s.ok()) return s.error();
-  auto cancelled_now = [&] { return cancel && cancel(); };
-  const std::vector<MethodId> base = base_methods(params);
-
-  // The clouds to learn from: each training cloud whole, then its top-down prefixes (0 = whole).
-  struct Job {
-    size_t cloud;
-    size_t prefix;
-  };
-  std::vector<Job> jobs;
-  std::vector<Cloud> learnt(data.size());
-  std::map<std::string, uint64_t> seen;  // clouds so far per object
-  for (size_t i = 0; i < data.size(); ++i) {
-    // The tilt is seeded by the object's name and the cloud's place among its views, not by its
-    // place in the list: the same views learnt anywhere (the lab, the service) get the same tilts.
-    const uint64_t salt = data[i].object_id.empty() ? i : object_seed(params.seed, data[i].object_id) + seen[data[i].object_id]++;
-    learnt[i] = training_view(data[i].cloud, params, salt);
-    jobs.push_back({i, 0});
-    const size_t n = data[i].cloud.points.size();
-    for (double f : params.partial_prefixes) {
-      const auto count = static_cast<size_t>(std::lround(f * static_cast<double>(n)));
-      if (count >= params.features.min_points && count < n) jobs.push_back({i, count});
-    }
+// KGH's distance bins span the largest keypoint distance seen in training (robustly: its 95th percentile
+// over the clouds).
+float kgh_distance_range(const std::vector<CloudFeatures>& f) {
+  std::vector<float> spans;
+  for (const auto& c : f) {
+    float span = 0;
+    for (size_t i = 0; i < c.positions.size(); ++i)
+      for (size_t j = i + 1; j < c.positions.size(); ++j) span = std::max(span, (c.positions[i] - c.positions[j]).norm());
+    if (span > 0) spans.push_back(span);
   }
-  // Features of every job, in parallel; batches keep progress and cancel responsive.
-  const int threads = resolve_threads(params.threads);
-  std::vector<Expected<CloudFeatures>> feats(jobs.size(), internal_error("not computed"));
-  // Tilted training views: the clouds as given are what calibration decides (what a sensor sends).
-  const bool tilted = params.tilt_deg > 0 && params.calibration_folds >= 2;
-  std::vector<Expected<CloudFeatures>> as_seen(tilted ? jobs.size() : 0, internal_error("not computed"));
-  const MethodFeatureParams as_given = method_feature_params(params);
-  MethodFeatureParams learnt_only = as_given;
-  learnt_only.top_prefix_fraction = 0;
-  const size_t batch = static_cast<size_t>(threads) * 4;
-  for (size_t begin = 0; begin < jobs.size(); begin += batch) {
-    if (cancelled_now()) return cancelled("training cancelled");
-    const int64_t end = static_cast<int64_t>(std::min(jobs.size(), begin + batch));
-#pragma omp parallel for num_threads(threads) schedule(dynamic, 1)
-    for (int64_t j = static_cast<int64_t>(begin); j < end; ++j) {
-      auto features_of = [&](const Cloud& cloud, const MethodFeatureParams& p) {
-        return jobs[j].prefix ? cloud_features(reveal_top_down(cloud, jobs[j].prefix), p, base, 1, cancel)
-                              : cloud_features(cloud, p, base, 1, cancel);
-      };
-      // Tilted, calibration decides the clouds as given: only they need the novelty's top-down prefix.
-      feats[j] = features_of(learnt[jobs[j].cloud], tilted ? learnt_only : as_given);
-      if (tilted) as_seen[j] = features_of(data[jobs[j].cloud].cloud, as_given);
-    }
-    if (progress) progress({"features", static_cast<size_t>(end), jobs.size()});
-  }
-  std::vector<TrainingSample> samples;
-  samples.reserve(jobs.size());
-  for (size_t j = 0; j < jobs.size(); ++j) {
-    const TrainingCloud& d = data[jobs[j].cloud];
-    if (!feats[j].ok()) {
-      // A whole cloud must work; a prefix too small or too thin for a method is only skipped.
-      if (jobs[j].prefix && feats[j].error().code == ErrorCode::kInvalidArgument) continue;
-      return Error{feats[j].error().code, "training cloud " + std::to_string(jobs[j].cloud) + " (category '" +
-                                              d.category + "', object '" + d.object_id + "')" +
-                                              (jobs[j].prefix ? ", top " + std::to_string(jobs[j].prefix) + " points" : "") +
-                                              ": " + feats[j].error().message};
-    }
-    samples.push_back({d.category, d.object_id, std::move(*feats[j]), jobs[j].prefix == 0, std::nullopt, d.augmented});
-    if (tilted && as_seen[j].ok()) samples.back().as_seen = std::move(*as_seen[j]);
-  }
-  feats.clear();
-  as_seen.clear();
-  // The density clouds are classified at: the median relative density of the training clouds as given.
-  TrainParams learnt_params = params;
-  if (params.filter_scans && params.filters.relative_density <= 0) {
-    std::vector<double> density(data.size(), 0.0);
-#pragma omp parallel for num_threads(threads) schedule(dynamic, 4)
-    for (int64_t i = 0; i < static_cast<int64_t>(data.size()); ++i) density[i] = relative_density(data[i].cloud.points);
-    std::erase(density, 0.0);
-    if (!density.empty()) {
-      std::nth_element(density.begin(), density.begin() + std::ptrdiff_t(density.size() / 2), density.end());
-      learnt_params.filters.relative_density = density[density.size() / 2];
-    }
-  }
-  auto model = train_on_features(std::move(samples), learnt_params, progress, cancel);
-  if (model.ok()) {
-    // Statistics count the clouds given, not the prefixes made of them.
-    model->stats.clouds = data.size();
-    std::fill(model->stats.clouds_per_category.begin(), model->stats.clouds_per_category.end(), 0);
-    for (const TrainingCloud& d : data)
-      ++model->stats.clouds_per_category[static_cast<size_t>(
-          std::find(model->categories.begin(), model->categories.end(), d.category) - model->categories.begin())];
-    model->stats.seconds = ms_since(t0) / 1000.0;
-  }
-  return model;
+  std::sort(spans.begin(), spans.end());
+  return spans.empty() ? 1.f : spans[std::min(spans.size() - 1, spans.size() * 95 / 100)];
 }
+
+// 2. Keypoint codebooks (sec. 3.2.5) of the methods that need them: BoK's, BoG's with its graph
+// vocabulary, KGH's with its distance range.
+Status fit_codebooks(ModelImpl& impl, const std::vector<CloudFeatures>& f, const std::vector<MethodId>& base,
+                     const TrainParams& params, int threads) {
+  const Eigen::MatrixXd pooled = std::any_of(base.begin(), base.end(), uses_keypoints)
+                                     ? pooled_descriptors(f, 100000) : Eigen::MatrixXd();
+  auto codebook = [&](int clusters, uint64_t salt) {
+    return fit_keypoint_codebook(pooled, {clusters, params.codebook_explained_variance, params.kmeans_restarts,
+                                          params.seed + salt, threads});
+  };
+  if (needs(base, MethodId::kBoK)) {
+    auto cb = codebook(params.bok_clusters, 1);
+    if (!cb.ok()) return with_method(MethodId::kBoK, cb.error());
+    impl.bok = std::move(*cb);
+  }
+  if (needs(base, MethodId::kBoG)) {
+    auto cb = codebook(params.bog_keypoint_clusters, 2);
+    if (!cb.ok()) return with_method(MethodId::kBoG, cb.error());
+    impl.bog = std::move(*cb);
+    std::vector<std::vector<LocalGraph>> graphs;
+    for (const auto& c : f) graphs.push_back(local_graphs(c.positions, keypoint_words(impl.bog, c.descriptors)));
+    auto voc = fit_graph_vocabulary(graphs, params.bog_keypoint_clusters, params.bog_volume_clusters, params.seed + 3);
+    if (!voc.ok()) return with_method(MethodId::kBoG, voc.error());
+    impl.graphs = std::move(*voc);
+  }
+  if (needs(base, MethodId::kKGH)) {
+    auto cb = codebook(params.kgh_clusters, 4);
+    if (!cb.ok()) return with_method(MethodId::kKGH, cb.error());
+    impl.kgh = std::move(*cb);
+    impl.kgh_max_distance_m = kgh_distance_range(f);
+  }
+  return {};
+}
+
+// The features each row's calibration query comes from, as the decision stages take them: the rows as
+// learnt, the same clouds as a sensor gives them (when tilted), and each row's own top-down prefix (of the
+// cloud as given when tilted; null: none).
+struct RowFeatures {
+  const std::vector<CloudFeatures>& learnt;
+  const std::vector<std::optional<CloudFeatures>>& as_seen;
+  bool tilted = false;
+  std::vector<const CloudFeatures*> prefix{};
+  bool any_prefix = false;
+};
+
+// Method m's histogram of every row into `rows` (as learnt, as seen when tilted, of its prefix).
+void method_rows(const ModelImpl& impl, MethodId m, const RowFeatures& f, CalibrationRows& rows) {
+  Eigen::MatrixXd& h = rows.histograms[static_cast<size_t>(m)];
+  Eigen::MatrixXd& q = rows.as_seen[static_cast<size_t>(m)];
+  Eigen::MatrixXd& pq = rows.prefix_histograms[static_cast<size_t>(m)];
+  const size_t n = f.learnt.size();
+  for (size_t i = 0; i < n; ++i) {
+    const Eigen::VectorXd row = method_histogram(impl, m, f.learnt[i]);
+    if (i == 0) h.resize(static_cast<Eigen::Index>(n), row.size());
+    if (i == 0 && f.any_prefix) pq.setZero(static_cast<Eigen::Index>(n), row.size());
+    h.row(static_cast<Eigen::Index>(i)) = row.transpose();
+    if (f.prefix[i]) pq.row(static_cast<Eigen::Index>(i)) = method_histogram(impl, m, *f.prefix[i]).transpose();
+    if (!f.tilted) continue;
+    if (i == 0) q.resize(h.rows(), h.cols());
+    if (f.as_seen[i]) q.row(static_cast<Eigen::Index>(i)) = method_histogram(impl, m, *f.as_seen[i]).transpose();
+    else q.row(static_cast<Eigen::Index>(i)) = h.row(static_cast<Eigen::Index>(i));
+  }
+}
+
+// The decision parameters of the model's own stage of method m: BoG's 1032 graph types reduced to 65 dims
+// (sec. 4), by PCA even where the other methods have none.
+DecisionParams model_stage_params(const TrainParams& params, MethodId m) {
+  DecisionParams dp = params.decision;
+  if (m == MethodId::kBoG) {
+    dp.max_pca_dims = params.bog_pca_dims;
+    if (dp.pca_explained_variance <= 0) dp.pca_explained_variance = 1;
+  }
+  return dp;
+}
+
+// 3. Global histograms and decision stages (sec. 3.3), method by method.
+Status fit_decision_stages(ModelImpl& impl, CalibrationRows& rows, const std::vector<CloudFeatures>& f,
+                           const std::vector<std::optional<CloudFeatures>>& as_seen, const std::vector<MethodId>& base,
+                           int threads, const Steps& steps) {
+  RowFeatures features{f, as_seen};
+  features.tilted = std::any_of(as_seen.begin(), as_seen.end(), [](const auto& a) { return a.has_value(); });
+  rows.histograms.resize(kMethodCount);
+  rows.prefix_histograms.resize(kMethodCount);
+  rows.as_seen.resize(kMethodCount);  // emptied below when nothing is tilted: the rows as learnt
+  features.prefix.assign(f.size(), nullptr);
+  rows.has_prefix.assign(f.size(), 0);
+  for (size_t i = 0; i < f.size(); ++i) {
+    const CloudFeatures& seen = features.tilted && as_seen[i] ? *as_seen[i] : f[i];
+    features.prefix[i] = seen.top_prefix.get();
+    rows.has_prefix[i] = features.prefix[i] != nullptr;
+  }
+  features.any_prefix = std::count(rows.has_prefix.begin(), rows.has_prefix.end(), 1) > 0;
+  size_t done = 0;
+  for (MethodId m : base) {
+    method_rows(impl, m, features, rows);
+    auto stage = fit_decision(rows.histograms[static_cast<size_t>(m)], rows.labels, rows.categories,
+                              model_stage_params(impl.params, m), impl.params.seed + 10 + static_cast<uint64_t>(m),
+                              threads, rows.objects);
+    if (!stage.ok()) return with_method(m, stage.error());
+    impl.stages[static_cast<int>(m)] = std::move(*stage);
+    steps.report("centres", ++done, base.size());
+    if (steps.cancelled_now()) return cancelled("training cancelled");
+  }
+  if (!features.tilted) rows.as_seen.clear();
+  return {};
+}
+
+// The methods the model classifies with (params.methods, in MethodId order) and its default.
+Status choose_methods(Model& model, const ModelImpl& impl, const TrainParams& params) {
+  for (MethodId m : kAllMethods)
+    if (needs(params.methods, m)) model.methods.push_back(m);
+  if (needs(model.methods, MethodId::kFusion) && component_methods(impl, MethodId::kFusion).empty())
+    return invalid_argument("fusion needs at least one of its component methods (fusion_of)");
+  model.default_method = needs(model.methods, params.default_method) ? params.default_method : model.methods.front();
+  return {};
+}
+
+// 3b. The fusion's logistic decision over its components' histograms (its share is calibrated in step 4).
+Status fit_fusion_head(ModelImpl& impl, const Model& model, const CalibrationRows& rows, int threads) {
+  const TrainParams& params = impl.params;
+  if (!(needs(model.methods, MethodId::kFusion) && params.fusion_head.c > 0 && model.categories.size() >= 2 &&
+        !fusion_head_methods(impl).empty()))
+    return {};
+  auto head = fit_chi2_logistic(fusion_head_rows(impl, rows.histograms, {}, threads), rows.labels,
+                                static_cast<int>(model.categories.size()), params.fusion_head, threads);
+  if (!head.ok()) return with_method(MethodId::kFusion, head.error());
+  impl.fusion_head = std::move(*head);
+  return {};
+}
+
+// What the model says of its training set: clouds, objects, keypoints, extents, clouds per category.
+TrainingSummary training_summary(const std::vector<TrainingSample>& data, const std::vector<CloudFeatures>& f,
+                                 const std::vector<int>& labels, const std::vector<std::string>& categories) {
+  TrainingSummary stats;
+  stats.clouds = data.size();
+  std::set<std::string> objects;
+  for (const auto& d : data) objects.insert(d.category + "/" + d.object_id);
+  stats.objects = objects.size();
+  for (const auto& c : f) stats.keypoints += c.positions.size();
+  stats.min_extent_m = INFINITY;
+  for (const auto& c : f) {
+    stats.min_extent_m = std::min(stats.min_extent_m, c.extent_m);
+    stats.max_extent_m = std::max(stats.max_extent_m, c.extent_m);
+  }
+  stats.categories = categories;
+  stats.clouds_per_category.assign(categories.size(), 0);
+  for (int l : labels) ++stats.clouds_per_category[static_cast<size_t>(l)];
+  return stats;
+}
+
+// 5. Novelty from the clouds given as they are: the augmented ones widen the decision, not what is
+// known. The clouds not augmented train a model of their own (ModelImpl::novelty); without a calibrated
+// novelty there (too few objects of a category, or a category only augmented clouds have), novelty stays
+// the model's own, calibrated again with it. Their features move there (nothing reads them after), so
+// they are never held twice.
+Status learn_novelty_apart(ModelImpl& impl, const Model& model, const CalibrationRows& rows,
+                           std::vector<TrainingSample>& data, std::vector<CloudFeatures>& f,
+                           std::vector<std::optional<CloudFeatures>>& as_seen, int threads, const Steps& steps) {
+  const TrainParams& params = impl.params;
+  std::vector<TrainingSample> given;
+  for (size_t i = 0; i < data.size(); ++i)
+    if (!data[i].augmented)
+      given.push_back({std::move(data[i].category), std::move(data[i].object_id), std::move(f[i]), data[i].whole,
+                       std::move(as_seen[i]), false});
+  steps.report("novelty", 0, 1);
+  auto novelty = train_on_features(std::move(given), params, {}, steps.cancel);
+  if (steps.cancelled_now()) return cancelled("training cancelled");
+  if (novelty.ok() && novelty->categories == model.categories && novelty->impl &&
+      !novelty->impl->calibration.novelty_scale.empty() && novelty->impl->calibration.method == impl.calibration.method)
+    impl.novelty = novelty->impl;
+  else if (params.measure_novelty)  // the same margin and share, with the model's own novelty
+    impl.calibration = calibrate(impl, model.default_method, rows, true, threads, steps.cancel);
+  if (steps.cancelled_now()) return cancelled("training cancelled");
+  steps.report("novelty", 1, 1);
+  return {};
+}
+
+}  // namespace
 
 Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainParams& params,
                                   const ProgressFn& progress, const CancelFn& cancel) {
   const auto t0 = std::chrono::steady_clock::now();
-  if (Status s = validate(data, params); !s.ok()) return s.error();
-  auto report = [&](const char* stage, size_t done, size_t total) {
-    if (progress) progress({stage, done, total});
-  };
-  auto cancelled_now = [&] { return cancel && cancel(); };
-
+  if (Status s = check_training_set(data, params); !s.ok()) return s.error();
+  const Steps steps{progress, cancel};
   Model model;
   auto impl = std::make_shared<ModelImpl>();
   impl->params = params;
-  std::map<std::string, int> index;
-  for (const auto& d : data) index.emplace(d.category, 0);
-  for (auto& [name, i] : index) {
-    i = static_cast<int>(model.categories.size());
-    model.categories.push_back(name);
-  }
-  CalibrationRows rows;  // what calibration decides again, held out (step 4)
-  std::vector<int>& labels = rows.labels;
-  std::vector<int>& object_of = rows.objects;
-  std::vector<uint8_t>& whole = rows.whole;
-  std::map<std::string, int> object_index;
-  for (const auto& d : data) {
-    labels.push_back(index[d.category]);
-    whole.push_back(d.whole ? 1 : 0);
-    // A cloud without an object id is an object of its own.
-    const std::string key = d.object_id.empty() ? "#" + std::to_string(labels.size()) : d.category + "/" + d.object_id;
-    object_of.push_back(object_index.emplace(key, static_cast<int>(object_index.size())).first->second);
-  }
-
-  // What novelty measures against when some clouds were augmented: the others, learnt apart (step 5).
+  CalibrationRows rows = labelled_rows(data, model.categories);
+  // With some clouds augmented, novelty measures against the others, learnt apart (step 5).
   const size_t augmented = static_cast<size_t>(std::count_if(data.begin(), data.end(), [](const TrainingSample& d) { return d.augmented; }));
   const bool novelty_apart = augmented > 0 && augmented < data.size();
-
   const std::vector<MethodId> base = base_methods(params);
   const int threads = resolve_threads(params.threads);
   std::vector<CloudFeatures> f;
@@ -223,166 +304,27 @@ Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainP
   f.reserve(data.size());
   for (auto& d : data) f.push_back(std::move(d.features)), as_seen.push_back(std::move(d.as_seen));
 
-  // 2. Keypoint codebooks (sec. 3.2.5).
-  report("codebooks", 0, 3);
-  const Eigen::MatrixXd pooled = std::any_of(base.begin(), base.end(), uses_keypoints)
-                                     ? pooled_descriptors(f, 100000) : Eigen::MatrixXd();
-  auto codebook = [&](int clusters, uint64_t salt) {
-    return fit_keypoint_codebook(pooled, {clusters, params.codebook_explained_variance, params.kmeans_restarts,
-                                          params.seed + salt, threads});
-  };
-  auto with_method = [&](MethodId m, const Error& e) {
-    return Error{e.code, std::string(method_name(m)) + ": " + e.message};
-  };
-  if (needs(base, MethodId::kBoK)) {
-    auto cb = codebook(params.bok_clusters, 1);
-    if (!cb.ok()) return with_method(MethodId::kBoK, cb.error());
-    impl->bok = std::move(*cb);
-  }
-  if (needs(base, MethodId::kBoG)) {
-    auto cb = codebook(params.bog_keypoint_clusters, 2);
-    if (!cb.ok()) return with_method(MethodId::kBoG, cb.error());
-    impl->bog = std::move(*cb);
-    std::vector<std::vector<LocalGraph>> graphs;
-    for (const auto& c : f) graphs.push_back(local_graphs(c.positions, keypoint_words(impl->bog, c.descriptors)));
-    auto voc = fit_graph_vocabulary(graphs, params.bog_keypoint_clusters, params.bog_volume_clusters, params.seed + 3);
-    if (!voc.ok()) return with_method(MethodId::kBoG, voc.error());
-    impl->graphs = std::move(*voc);
-  }
-  if (needs(base, MethodId::kKGH)) {
-    auto cb = codebook(params.kgh_clusters, 4);
-    if (!cb.ok()) return with_method(MethodId::kKGH, cb.error());
-    impl->kgh = std::move(*cb);
-    // Distance bins span the largest keypoint distance seen in training (robustly: its 95th percentile).
-    std::vector<float> spans;
-    for (const auto& c : f) {
-      float span = 0;
-      for (size_t i = 0; i < c.positions.size(); ++i)
-        for (size_t j = i + 1; j < c.positions.size(); ++j) span = std::max(span, (c.positions[i] - c.positions[j]).norm());
-      if (span > 0) spans.push_back(span);
-    }
-    std::sort(spans.begin(), spans.end());
-    impl->kgh_max_distance_m = spans.empty() ? 1.f : spans[std::min(spans.size() - 1, spans.size() * 95 / 100)];
-  }
-  report("codebooks", 3, 3);
-  if (cancelled_now()) return cancelled("training cancelled");
-
-  // 3. Global histograms and decision stages (sec. 3.3).
-  size_t done = 0;
-  const bool tilted = std::any_of(as_seen.begin(), as_seen.end(), [](const auto& a) { return a.has_value(); });
-  std::vector<Eigen::MatrixXd>& histograms = rows.histograms;
-  std::vector<Eigen::MatrixXd>& queries = rows.as_seen;
-  std::vector<Eigen::MatrixXd>& prefix_queries = rows.prefix_histograms;
-  histograms.resize(kMethodCount);
-  prefix_queries.resize(kMethodCount);
-  queries.resize(kMethodCount);  // emptied below when nothing is tilted: the rows as learnt
-  // The top-down prefix of each row as calibration decides it (of the cloud as given when tilted).
-  std::vector<const CloudFeatures*> prefix_of(f.size(), nullptr);
-  std::vector<uint8_t>& has_prefix = rows.has_prefix;
-  has_prefix.assign(f.size(), 0);
-  for (size_t i = 0; i < f.size(); ++i) {
-    const CloudFeatures& seen = tilted && as_seen[i] ? *as_seen[i] : f[i];
-    prefix_of[i] = seen.top_prefix.get();
-    has_prefix[i] = prefix_of[i] != nullptr;
-  }
-  const bool any_prefix = std::count(has_prefix.begin(), has_prefix.end(), 1) > 0;
-  for (MethodId m : base) {
-    Eigen::MatrixXd& h = histograms[static_cast<size_t>(m)];
-    Eigen::MatrixXd& q = queries[static_cast<size_t>(m)];
-    Eigen::MatrixXd& pq = prefix_queries[static_cast<size_t>(m)];
-    for (size_t i = 0; i < f.size(); ++i) {
-      const Eigen::VectorXd row = method_histogram(*impl, m, f[i]);
-      if (i == 0) h.resize(static_cast<Eigen::Index>(f.size()), row.size());
-      if (i == 0 && any_prefix) pq.setZero(static_cast<Eigen::Index>(f.size()), row.size());
-      h.row(static_cast<Eigen::Index>(i)) = row.transpose();
-      if (prefix_of[i]) pq.row(static_cast<Eigen::Index>(i)) = method_histogram(*impl, m, *prefix_of[i]).transpose();
-      if (!tilted) continue;
-      if (i == 0) q.resize(h.rows(), h.cols());
-      if (as_seen[i]) q.row(static_cast<Eigen::Index>(i)) = method_histogram(*impl, m, *as_seen[i]).transpose();
-      else q.row(static_cast<Eigen::Index>(i)) = h.row(static_cast<Eigen::Index>(i));
-    }
-    DecisionParams dp = params.decision;
-    if (m == MethodId::kBoG) {  // 1032 graph types reduced to 65 dims (sec. 4), also without PCA elsewhere
-      dp.max_pca_dims = params.bog_pca_dims;
-      if (dp.pca_explained_variance <= 0) dp.pca_explained_variance = 1;
-    }
-    auto stage = fit_decision(h, labels, static_cast<int>(model.categories.size()), dp,
-                              params.seed + 10 + static_cast<uint64_t>(m), threads, object_of);
-    if (!stage.ok()) return with_method(m, stage.error());
-    impl->stages[static_cast<int>(m)] = std::move(*stage);
-    report("centres", ++done, base.size());
-    if (cancelled_now()) return cancelled("training cancelled");
-  }
-
-  if (!tilted) queries.clear();
-  for (MethodId m : kAllMethods)
-    if (needs(params.methods, m)) model.methods.push_back(m);
-  if (needs(model.methods, MethodId::kFusion) && component_methods(*impl, MethodId::kFusion).empty())
-    return invalid_argument("fusion needs at least one of its component methods (fusion_of)");
-  model.default_method = needs(model.methods, params.default_method) ? params.default_method : model.methods.front();
-  // 3b. The fusion's logistic decision over its components' histograms (its share is calibrated below).
-  if (cancelled_now()) return cancelled("training cancelled");
-  if (needs(model.methods, MethodId::kFusion) && params.fusion_head.c > 0 && model.categories.size() >= 2 &&
-      !fusion_head_methods(*impl).empty()) {
-    auto head = fit_chi2_logistic(fusion_head_rows(*impl, histograms, {}, threads), labels, static_cast<int>(model.categories.size()),
-                                  params.fusion_head, threads);
-    if (!head.ok()) return with_method(MethodId::kFusion, head.error());
-    impl->fusion_head = std::move(*head);
-  }
-  // 4. Calibration of the default method on held-out folds of the training objects.
-  report("calibration", 0, 1);
-  rows.object_categories.resize(object_index.size());
-  for (size_t i = 0; i < labels.size(); ++i)
-    rows.object_categories[static_cast<size_t>(object_of[i])] = model.categories[static_cast<size_t>(labels[i])];
-  rows.categories = static_cast<int>(model.categories.size());
-  // Nothing learnt tilted: the held-out clouds are decided as they were learnt. With augmented clouds
-  // the novelty model's calibration measures novelty (step 5); this one does only if that fails.
-  auto calibrate_model = [&](bool measure_novelty) {
-    return calibrate(*impl, model.default_method, rows, measure_novelty, threads, cancel);
-  };
-  impl->calibration = calibrate_model(params.measure_novelty && !novelty_apart);
-  report("calibration", 1, 1);
-  if (cancelled_now()) return cancelled("training cancelled");
-  model.stats.clouds = data.size();
-  std::set<std::string> objects;
-  for (const auto& d : data) objects.insert(d.category + "/" + d.object_id);
-  model.stats.objects = objects.size();
-  for (const auto& c : f) model.stats.keypoints += c.positions.size();
-  model.stats.min_extent_m = INFINITY;
-  for (const auto& c : f) {
-    model.stats.min_extent_m = std::min(model.stats.min_extent_m, c.extent_m);
-    model.stats.max_extent_m = std::max(model.stats.max_extent_m, c.extent_m);
-  }
-  model.stats.categories = model.categories;
-  model.stats.clouds_per_category.assign(model.categories.size(), 0);
-  for (int l : labels) ++model.stats.clouds_per_category[static_cast<size_t>(l)];
-
-  // 5. Novelty from the clouds given as they are: the augmented ones widen the decision, not what is
-  // known. Without a calibrated novelty there (too few objects of a category, or a category only
-  // augmented clouds have), novelty stays the model's own. Their features move there (the stats
-  // above were the last to read them), so they are never held twice.
-  if (novelty_apart) {
-    std::vector<TrainingSample> given;
-    for (size_t i = 0; i < data.size(); ++i)
-      if (!data[i].augmented)
-        given.push_back({std::move(data[i].category), std::move(data[i].object_id), std::move(f[i]), data[i].whole,
-                         std::move(as_seen[i]), false});
-    report("novelty", 0, 1);
-    auto novelty = train_on_features(std::move(given), params, {}, cancel);
-    if (cancelled_now()) return cancelled("training cancelled");
-    if (novelty.ok() && novelty->categories == model.categories && novelty->impl &&
-        !novelty->impl->calibration.novelty_scale.empty() && novelty->impl->calibration.method == impl->calibration.method)
-      impl->novelty = novelty->impl;
-    else if (params.measure_novelty)
-      impl->calibration = calibrate_model(true);  // the same margin and share, with the model's own novelty
-    if (cancelled_now()) return cancelled("training cancelled");
-    report("novelty", 1, 1);
-  }
+  steps.report("codebooks", 0, 3);
+  if (Status s = fit_codebooks(*impl, f, base, params, threads); !s.ok()) return s.error();
+  steps.report("codebooks", 3, 3);
+  if (steps.cancelled_now()) return cancelled("training cancelled");
+  if (Status s = fit_decision_stages(*impl, rows, f, as_seen, base, threads, steps); !s.ok()) return s.error();
+  if (Status s = choose_methods(model, *impl, params); !s.ok()) return s.error();
+  if (steps.cancelled_now()) return cancelled("training cancelled");
+  if (Status s = fit_fusion_head(*impl, model, rows, threads); !s.ok()) return s.error();
+  // 4. Calibration of the default method on held-out folds of the training objects. With augmented
+  // clouds the novelty model's calibration measures novelty (step 5); this one does only if that fails.
+  steps.report("calibration", 0, 1);
+  impl->calibration = calibrate(*impl, model.default_method, rows, params.measure_novelty && !novelty_apart, threads, cancel);
+  steps.report("calibration", 1, 1);
+  if (steps.cancelled_now()) return cancelled("training cancelled");
+  model.stats = training_summary(data, f, rows.labels, model.categories);
+  if (novelty_apart)
+    if (Status s = learn_novelty_apart(*impl, model, rows, data, f, as_seen, threads, steps); !s.ok()) return s.error();
   model.stats.seconds = ms_since(t0) / 1000.0;
   model.impl = std::move(impl);
-  report("done", 1, 1);
+  steps.report("done", 1, 1);
   return model;
 }
-
 
 }  // namespace glimpse

@@ -81,11 +81,11 @@ void track_decision(DecisionTrack& t, const ChunkEvidence& e, bool keypoints_mat
   // To settle, the decision has won each of the last stability_window decisions, this chunk's own
   // (unsmoothed) evidence agreeing: its scores on the category, or for "unknown" its own novelty (of the
   // nearest category) above the threshold. A margin calibrated on single held-out decisions is trusted
-  // only once the evidence agrees over a window (on SHREC CV streams settling after two agreeing chunks
-  // was 95.0 % right, below the 98 % the margin was calibrated for; with the full window, 98.2 %). Without
-  // the newest chunk's novelty, SHREC -> PSB streams settled 110 of 900 known views "unknown" on a
-  // smoothed novelty the scan had already left behind; with it, 96 (first settled right 82.0 -> 83.6 %;
-  // SHREC CV 16 of 600 -> 7, 96.0 -> 97.5 %; PSB -> SHREC unchanged, 11 and 96.2 %). "Unknown" needs the
+  // only once the evidence agrees over a window (on SHREC CV streams, settling after two agreeing chunks
+  // is 95.0 % right, below the 98 % the margin is calibrated for; with the full window, 98.2 %). Without
+  // the newest chunk's novelty, SHREC -> PSB streams settle 110 of 900 known views "unknown" on a
+  // smoothed novelty the scan has already left behind; with it, 96 (first settled right 82.0 -> 83.6 %;
+  // SHREC CV 16 of 600 -> 7, 96.0 -> 97.5 %; PSB -> SHREC the same, 11 and 96.2 %). "Unknown" needs the
   // longer unknown_settle_window and unknown_settle_confidence, a category a novelty well inside the
   // threshold (settle_novelty_share; session.h says why).
   const int raw_winner = e.scores.empty() ? -1 : static_cast<int>(std::max_element(e.scores.begin(), e.scores.end()) - e.scores.begin());

@@ -62,102 +62,137 @@ void human(Builder& b, Rng& r) {
 }
 
 // ---- angular machine parts; size ~1 before scaling ----
-void mechanic(Builder& b, Rng& r) {
+// A bolt ring: a short tube of radius `rad`, `height` tall, with a hole.
+void boss(Builder& b, const Vec3& at, float rad, float height, float hole) {
+  b.extrusion(at, Mat3::Identity(), [rad](float) { return rad; }, rad, height, hole);
+}
+
+// An L, T (t_or_u, half the time) or U (the other half) bracket with bolt rings and gussets.
+void bracket(Builder& b, Rng& r, bool t_or_u) {
+  const float len = r.uniform(0.6f, 1.0f), wid = r.uniform(0.3f, 0.7f), th = r.uniform(0.05f, 0.14f);
+  const float wall = r.uniform(0.3f, 0.9f);
+  b.box(Vec3(0, 0, th / 2), Vec3(len, wid, th));
+  std::vector<float> walls = {-len / 2 + th / 2};       // L
+  if (t_or_u) walls = r.chance(0.5) ? std::vector<float>{0.f}  // T
+                                        : std::vector<float>{-len / 2 + th / 2, len / 2 - th / 2};  // U
+  for (float x : walls) b.box(Vec3(x, 0, wall / 2), Vec3(th, wid, wall));
+  if (r.chance(0.6))  // gussets in the corner of the first wall
+    for (float sy : {-1.f, 1.f})
+      b.beam(Vec3(walls[0] + th / 2, sy * wid * 0.35f, wall * 0.5f),
+             Vec3(walls[0] + th / 2 + wall * 0.45f, sy * wid * 0.35f, th), th * 0.6f, th * 0.6f);
+  const int holes = r.integer(1, 4);
+  for (int k = 0; k < holes; ++k)
+    boss(b, Vec3(-len / 2 + len * (k + 1.2f) / (holes + 1), r.uniform(-wid / 4, wid / 4), th + 0.02f), 0.06f, 0.04f, 0.03f);
+}
+
+// A flange: ring, hub, bolt circle.
+void flange(Builder& b, Rng& r) {
   const Mat3 I = Mat3::Identity();
-  auto boss = [&](const Vec3& at, float rad, float height, float hole) {  // hole-like ring
-    b.extrusion(at, I, [rad](float) { return rad; }, rad, height, hole);
+  const float R = 0.5f, hole = R * r.uniform(0.25f, 0.45f), th = r.uniform(0.06f, 0.15f);
+  const int nb = r.integer(4, 8);
+  const bool square = r.chance(0.4);
+  b.extrusion(Vec3(0, 0, th / 2), I, [R, square](float a) {
+    return square ? R / std::max(std::abs(std::cos(a)), std::abs(std::sin(a))) * 0.8f : R;
+  }, R, th, hole, 1, 32);
+  b.extrusion(Vec3(0, 0, th), I, [hole](float) { return hole * 1.5f; }, hole * 1.5f, r.uniform(0.3f, 0.7f), hole);
+  for (int k = 0; k < nb; ++k) {
+    const float a = 2 * kPi * k / nb;
+    boss(b, Vec3(0.78f * R * std::cos(a), 0.78f * R * std::sin(a), th + 0.025f), 0.05f, 0.05f, 0.025f);
+  }
+}
+
+// A spur gear (prism approximation), maybe compound.
+void spur_gear(Builder& b, Rng& r) {
+  const Mat3 I = Mat3::Identity();
+  const int teeth = r.integer(8, 28);
+  const float R = 0.5f, depth = r.uniform(0.05f, 0.1f), th = r.uniform(0.08f, 0.3f), hole = r.uniform(0.06f, 0.16f);
+  auto gear = [&](float z, float radius, float thick, int n) {
+    b.extrusion(Vec3(0, 0, z), I, [radius, depth, n](float a) {
+      const float p = a * n / (2 * kPi), f = p - std::floor(p);  // trapezoidal tooth profile
+      const float up = std::clamp((f < 0.5f ? f : 1 - f) * 6.f - 0.5f, 0.f, 1.f);
+      return radius - depth + depth * up;
+    }, radius, thick, hole, 1, 10 * n);
   };
+  gear(th / 2, R, th, teeth);
+  if (r.chance(0.4)) gear(th + th * 0.4f, R * r.uniform(0.4f, 0.7f), th * 0.8f, std::max(6, teeth / 2));
+  else b.extrusion(Vec3(0, 0, th), I, [hole](float) { return hole * 1.8f; }, hole * 1.8f, r.uniform(0.1f, 0.3f), hole);
+}
+
+// A stepped shaft with a key and a collar, lying along x.
+void stepped_shaft(Builder& b, Rng& r) {
+  const int n = r.integer(2, 5);
+  std::vector<float> len(n), rad(n);
+  float total = 0;
+  for (int k = 0; k < n; ++k) total += len[k] = r.uniform(0.15f, 0.45f), rad[k] = r.uniform(0.06f, 0.16f);
+  float x = -total / 2;
+  for (int k = 0; k < n; ++k) {
+    b.frustum(Vec3(x, 0, 0), Vec3(x + len[k], 0, 0), rad[k], rad[k]);
+    if (k == 0) b.box(Vec3(x + len[k] / 2, 0, rad[k]), Vec3(len[k] * 0.6f, rad[k] * 0.5f, rad[k] * 0.4f));
+    x += len[k];
+  }
+  if (r.chance(0.5)) b.frustum(Vec3(-0.02f, 0, 0), Vec3(0.04f, 0, 0), 0.22f, 0.22f, 0.05f);
+}
+
+// A stepped or slotted block.
+void slotted_block(Builder& b, Rng& r) {
+  const float L = r.uniform(0.6f, 1.0f), W = r.uniform(0.3f, 0.7f), H = r.uniform(0.1f, 0.3f);
+  b.box(Vec3(0, 0, H / 2), Vec3(L, W, H));
+  const int n = r.integer(1, 3);
+  for (int k = 0; k < n; ++k) {
+    const float bl = L * r.uniform(0.15f, 0.4f), bh = r.uniform(0.1f, 0.35f);
+    const float bx = r.uniform(-L / 2 + bl / 2, L / 2 - bl / 2);
+    if (r.chance(0.5)) b.box(Vec3(bx, 0, H + bh / 2), Vec3(bl, W, bh));  // full-width step
+    else for (float s : {-1.f, 1.f}) b.box(Vec3(bx, s * W * 0.35f, H + bh / 2), Vec3(bl, W * 0.3f, bh));  // slot
+  }
+  if (r.chance(0.5)) boss(b, Vec3(L * 0.3f, 0, H + 0.03f), 0.08f, 0.06f, 0.04f);
+}
+
+// A hex bolt with threads, or a hex nut.
+void fastener(Builder& b, Rng& r) {
+  const Mat3 I = Mat3::Identity();
+  const float ap = r.uniform(0.15f, 0.25f);
+  auto hex = [ap](float a) {
+    const float s = std::fmod(a + kPi / 6, kPi / 3) - kPi / 6;
+    return ap / std::cos(s);
+  };
+  if (r.chance(0.3)) {
+    b.extrusion(Vec3(0, 0, ap * 0.45f), I, hex, ap * 1.16f, ap * 0.9f, ap * 0.55f, 1, 60);
+  } else {
+    const float shaft = r.uniform(0.5f, 0.9f), sr = ap * 0.6f, hh = ap * 0.7f;
+    b.extrusion(Vec3(0, 0, hh / 2), I, hex, ap * 1.16f, hh, 0, 1, 60);
+    b.frustum(Vec3(0, 0, hh), Vec3(0, 0, hh + shaft), sr, sr);
+    const int threads = int(shaft / (sr * 0.35f) * r.uniform(0.4f, 0.8f));
+    for (int k = 0; k < threads; ++k)
+      b.torus(Vec3(0, 0, hh + shaft - (k + 0.5f) * sr * 0.35f), I, sr, sr * 0.12f);
+  }
+}
+
+// A pipe fitting: a tee or an elbow, with end flanges.
+void pipe_fitting(Builder& b, Rng& r) {
+  const Mat3 I = Mat3::Identity();
+  const float pr = r.uniform(0.12f, 0.2f), hole = pr * 0.7f, arm = r.uniform(0.3f, 0.5f);
+  const Mat3 along_x = rot_y(kPi / 2);
+  if (r.chance(0.5)) {
+    b.extrusion(Vec3(0, 0, 0), along_x, [pr](float) { return pr; }, pr, 2 * arm, hole);
+    b.extrusion(Vec3(0, 0, arm / 2), I, [pr](float) { return pr; }, pr, arm, hole);
+  } else {
+    b.torus(Vec3(0, 0, 0), I, arm, pr, kPi / 2);
+    b.extrusion(Vec3(arm, -arm * 0.25f, 0), rot_x(kPi / 2), [pr](float) { return pr; }, pr, arm * 0.5f, hole);
+  }
+  if (r.chance(0.6)) b.extrusion(Vec3(-arm, 0, 0), along_x, [pr](float) { return pr * 1.6f; }, pr * 1.6f, 0.06f, hole);
+}
+
+void mechanic(Builder& b, Rng& r) {
   const int style = r.integer(0, 7);
-  if (style == 0 || style == 1) {  // L / T / U bracket with bolt rings and gussets
-    const float len = r.uniform(0.6f, 1.0f), wid = r.uniform(0.3f, 0.7f), th = r.uniform(0.05f, 0.14f);
-    const float wall = r.uniform(0.3f, 0.9f);
-    b.box(Vec3(0, 0, th / 2), Vec3(len, wid, th));
-    std::vector<float> walls = {-len / 2 + th / 2};       // L
-    if (style == 1) walls = r.chance(0.5) ? std::vector<float>{0.f}  // T
-                                          : std::vector<float>{-len / 2 + th / 2, len / 2 - th / 2};  // U
-    for (float x : walls) b.box(Vec3(x, 0, wall / 2), Vec3(th, wid, wall));
-    if (r.chance(0.6))  // gussets in the corner of the first wall
-      for (float sy : {-1.f, 1.f})
-        b.beam(Vec3(walls[0] + th / 2, sy * wid * 0.35f, wall * 0.5f),
-               Vec3(walls[0] + th / 2 + wall * 0.45f, sy * wid * 0.35f, th), th * 0.6f, th * 0.6f);
-    const int holes = r.integer(1, 4);
-    for (int k = 0; k < holes; ++k)
-      boss(Vec3(-len / 2 + len * (k + 1.2f) / (holes + 1), r.uniform(-wid / 4, wid / 4), th + 0.02f), 0.06f, 0.04f, 0.03f);
-  } else if (style == 2) {  // flange: ring, hub, bolt circle
-    const float R = 0.5f, hole = R * r.uniform(0.25f, 0.45f), th = r.uniform(0.06f, 0.15f);
-    const int nb = r.integer(4, 8);
-    const bool square = r.chance(0.4);
-    b.extrusion(Vec3(0, 0, th / 2), I, [R, square](float a) {
-      return square ? R / std::max(std::abs(std::cos(a)), std::abs(std::sin(a))) * 0.8f : R;
-    }, R, th, hole, 1, 32);
-    b.extrusion(Vec3(0, 0, th), I, [hole](float) { return hole * 1.5f; }, hole * 1.5f, r.uniform(0.3f, 0.7f), hole);
-    for (int k = 0; k < nb; ++k) {
-      const float a = 2 * kPi * k / nb;
-      boss(Vec3(0.78f * R * std::cos(a), 0.78f * R * std::sin(a), th + 0.025f), 0.05f, 0.05f, 0.025f);
-    }
-  } else if (style == 3) {  // spur gear (prism approximation), maybe compound
-    const int teeth = r.integer(8, 28);
-    const float R = 0.5f, depth = r.uniform(0.05f, 0.1f), th = r.uniform(0.08f, 0.3f), hole = r.uniform(0.06f, 0.16f);
-    auto gear = [&](float z, float radius, float thick, int n) {
-      b.extrusion(Vec3(0, 0, z), I, [radius, depth, n](float a) {
-        const float p = a * n / (2 * kPi), f = p - std::floor(p);  // trapezoidal tooth profile
-        const float up = std::clamp((f < 0.5f ? f : 1 - f) * 6.f - 0.5f, 0.f, 1.f);
-        return radius - depth + depth * up;
-      }, radius, thick, hole, 1, 10 * n);
-    };
-    gear(th / 2, R, th, teeth);
-    if (r.chance(0.4)) gear(th + th * 0.4f, R * r.uniform(0.4f, 0.7f), th * 0.8f, std::max(6, teeth / 2));
-    else b.extrusion(Vec3(0, 0, th), I, [hole](float) { return hole * 1.8f; }, hole * 1.8f, r.uniform(0.1f, 0.3f), hole);
-  } else if (style == 4) {  // stepped shaft with a key and a collar, lying along x
-    const int n = r.integer(2, 5);
-    std::vector<float> len(n), rad(n);
-    float total = 0;
-    for (int k = 0; k < n; ++k) total += len[k] = r.uniform(0.15f, 0.45f), rad[k] = r.uniform(0.06f, 0.16f);
-    float x = -total / 2;
-    for (int k = 0; k < n; ++k) {
-      b.frustum(Vec3(x, 0, 0), Vec3(x + len[k], 0, 0), rad[k], rad[k]);
-      if (k == 0) b.box(Vec3(x + len[k] / 2, 0, rad[k]), Vec3(len[k] * 0.6f, rad[k] * 0.5f, rad[k] * 0.4f));
-      x += len[k];
-    }
-    if (r.chance(0.5)) b.frustum(Vec3(-0.02f, 0, 0), Vec3(0.04f, 0, 0), 0.22f, 0.22f, 0.05f);
-  } else if (style == 5) {  // stepped / slotted block
-    const float L = r.uniform(0.6f, 1.0f), W = r.uniform(0.3f, 0.7f), H = r.uniform(0.1f, 0.3f);
-    b.box(Vec3(0, 0, H / 2), Vec3(L, W, H));
-    const int n = r.integer(1, 3);
-    for (int k = 0; k < n; ++k) {
-      const float bl = L * r.uniform(0.15f, 0.4f), bh = r.uniform(0.1f, 0.35f);
-      const float bx = r.uniform(-L / 2 + bl / 2, L / 2 - bl / 2);
-      if (r.chance(0.5)) b.box(Vec3(bx, 0, H + bh / 2), Vec3(bl, W, bh));  // full-width step
-      else for (float s : {-1.f, 1.f}) b.box(Vec3(bx, s * W * 0.35f, H + bh / 2), Vec3(bl, W * 0.3f, bh));  // slot
-    }
-    if (r.chance(0.5)) boss(Vec3(L * 0.3f, 0, H + 0.03f), 0.08f, 0.06f, 0.04f);
-  } else if (style == 6) {  // hex bolt with threads, or hex nut
-    const float ap = r.uniform(0.15f, 0.25f);
-    auto hex = [ap](float a) {
-      const float s = std::fmod(a + kPi / 6, kPi / 3) - kPi / 6;
-      return ap / std::cos(s);
-    };
-    if (r.chance(0.3)) {
-      b.extrusion(Vec3(0, 0, ap * 0.45f), I, hex, ap * 1.16f, ap * 0.9f, ap * 0.55f, 1, 60);
-    } else {
-      const float shaft = r.uniform(0.5f, 0.9f), sr = ap * 0.6f, hh = ap * 0.7f;
-      b.extrusion(Vec3(0, 0, hh / 2), I, hex, ap * 1.16f, hh, 0, 1, 60);
-      b.frustum(Vec3(0, 0, hh), Vec3(0, 0, hh + shaft), sr, sr);
-      const int threads = int(shaft / (sr * 0.35f) * r.uniform(0.4f, 0.8f));
-      for (int k = 0; k < threads; ++k)
-        b.torus(Vec3(0, 0, hh + shaft - (k + 0.5f) * sr * 0.35f), I, sr, sr * 0.12f);
-    }
-  } else {  // pipe fitting: tee or elbow with end flanges
-    const float pr = r.uniform(0.12f, 0.2f), hole = pr * 0.7f, arm = r.uniform(0.3f, 0.5f);
-    const Mat3 along_x = rot_y(kPi / 2);
-    if (r.chance(0.5)) {
-      b.extrusion(Vec3(0, 0, 0), along_x, [pr](float) { return pr; }, pr, 2 * arm, hole);
-      b.extrusion(Vec3(0, 0, arm / 2), I, [pr](float) { return pr; }, pr, arm, hole);
-    } else {
-      b.torus(Vec3(0, 0, 0), I, arm, pr, kPi / 2);
-      b.extrusion(Vec3(arm, -arm * 0.25f, 0), rot_x(kPi / 2), [pr](float) { return pr; }, pr, arm * 0.5f, hole);
-    }
-    if (r.chance(0.6)) b.extrusion(Vec3(-arm, 0, 0), along_x, [pr](float) { return pr * 1.6f; }, pr * 1.6f, 0.06f, hole);
+  switch (style) {
+    case 0:
+    case 1: return bracket(b, r, style == 1);
+    case 2: return flange(b, r);
+    case 3: return spur_gear(b, r);
+    case 4: return stepped_shaft(b, r);
+    case 5: return slotted_block(b, r);
+    case 6: return fastener(b, r);
+    default: return pipe_fitting(b, r);
   }
 }
 

@@ -17,8 +17,9 @@ struct Chi2LogisticParams {
   int sample_steps = 2;      // terms of the feature map per bin: 2 x steps - 1
   double sample_interval = 0.5;
   // LIBLINEAR's stopping tolerance (eps): the solver stops once the gradient's norm is at most this share
-  // of its norm at zero (times the smaller side's share of the rows). 1e-3 since stop 50, 1e-4 before
-  // (README: 20 of SHREC -> PSB's 2700 winners moved, PSB -> SHREC's run 0.91x); LIBLINEAR's default 1e-2.
+  // of its norm at zero (times the smaller side's share of the rows). Against 1e-4, 1e-3 moves 20 of
+  // SHREC -> PSB's 2700 fusion winners and takes PSB -> SHREC's run 0.91x the time (docs/notebook.md,
+  // "Run time"); LIBLINEAR's default is 1e-2.
   double tolerance = 1e-3;
 };
 

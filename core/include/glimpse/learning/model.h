@@ -106,7 +106,7 @@ struct Calibration {
   double fusion_head_share = 0;
 };
 
-struct ModelImpl;  // codebooks, bases, centres: defined in core/src (model_impl.h)
+struct ModelImpl;  // codebooks, bases, centres: defined in model_internals.h
 
 struct TrainParams;  // defined in train_params.h: features, codebooks, decision; defaults there
 

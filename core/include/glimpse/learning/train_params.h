@@ -70,10 +70,10 @@ struct TrainParams {
   // out): (1 - w) x mean + w x probabilities, w the share of fusion_head_shares whose held-out decisions
   // (calibration_folds) are most often right, the smallest on a tie; 0 there: none. c <= 0: no head.
   // Learnt from the paper's ideal views alone it loses 4-16 points on a simulated depth camera's views;
-  // learnt from a depth camera's views too (the recipe's training sensors, evaluation.h), it gains 1-5
-  // points on ideal views and up to 4 on the camera's full and 20 % views; at 10 % visible on the
-  // camera's views it is within a point in SHREC CV and SHREC -> PSB, 5 under an older run PSB -> SHREC
-  // (README).
+  // learnt from a depth camera's views too (the recipe's training sensors, default_training_sensors in
+  // object_views.h), it gains 1-5 points on ideal views and up to 4 on the camera's full and 20 % views;
+  // at 10 % visible on the camera's views it is within a point in SHREC CV and SHREC -> PSB, and 5 under
+  // in one run of PSB -> SHREC (docs/results.md, "The recipe").
   Chi2LogisticParams fusion_head{.c = 10};
   std::vector<double> fusion_head_shares = {0, 0.05, 0.1, 0.15, 0.2, 0.3};
 
@@ -89,7 +89,8 @@ struct TrainParams {
   // Every cloud classified (Classify, ClassifyBatch, a stream's final decision) first goes through the
   // scan filters: isolated points, a ground plane, a voxel grid down to filters.relative_density, which
   // train() sets to the median relative density of its training clouds. Training clouds are learnt as
-  // given. Models written before the filters existed read with filter_scans false and classify as before.
+  // given. A model whose stored parameters lack the filters' reads with filter_scans false: it classifies
+  // unfiltered, as it learnt.
   bool filter_scans = true;
   ScanFilterParams filters;
 
@@ -111,8 +112,8 @@ struct TrainParams {
   // its whole view passes for one. Calibrated alike (the held-out clouds' own prefixes). The prefix reuses
   // the cloud's local surfaces (nothing is refitted) and is taken from every k-th point, at most
   // novelty_prefix_points of them: its USH and VFH then cost about 3 % of a Classify whatever the
-  // density (bench_classify). 0: the cloud's novelty alone (older models). Chosen on SHREC CV with chairs
-  // or quadrupeds held out as the unknown (README, "Open set").
+  // density (bench_classify). 0: the cloud's novelty alone (models of format 9 and older). Chosen on SHREC
+  // CV with chairs or quadrupeds held out as the unknown (docs/open-set.md).
   double novelty_prefix = 0.55;
   // False: no novelty is calibrated and no top-down prefix described (nothing is ever "unknown" but what a
   // method cannot judge), for runs that read only the winners (the lab's ablations); training and

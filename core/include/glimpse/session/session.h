@@ -28,8 +28,8 @@ struct SessionParams {
   // than 30 degrees apart), that chunk is decided by Classify's of the scan (classify_fused: view by
   // view, each point facing its chunk's sensor; about 0.4 s for 670k points of six 640x480 depth frames with
   // their floor), and the chunks until the next run repeat that decision. Otherwise, and for
-  // a model without filters, the features are ScanFeatures' (features.h): the state extract() gives
-  // the accumulated points, grown incrementally, duplicates by the rule of clean(). VFH and ESF
+  // a model without filters, the features are ScanFeatures' (features/local_features.h): the state
+  // extract() gives the accumulated points, grown incrementally, duplicates by the rule of clean(). VFH and ESF
   // describe the whole cloud and cost what it holds, so on this path they are recomputed when the
   // scan grew by this fraction since the last time and always by finish(); USH and size every chunk.
   double global_refresh_growth = 0.2;
@@ -63,7 +63,7 @@ struct SessionParams {
   // of it is seen). A category settles only while the winner's smoothed novelty is at most
   // settle_novelty_share of the threshold (an object of no learnt category is decided as its nearest
   // one, just inside the threshold, more often than a known one). Chosen on streams the recogniser is
-  // not reported on (README, "Open set"): SHREC CV with chairs and with quadrupeds held out as unknown,
+  // not reported on (docs/open-set.md, "In a stream"): SHREC CV with chairs and with quadrupeds held out as unknown,
   // and SHREC and PSB models streaming the zoo.
   int unknown_settle_window = 6;
   double unknown_settle_confidence = 1.0;

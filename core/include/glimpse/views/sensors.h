@@ -1,7 +1,7 @@
 // Simulated range sensors: single views as a depth camera or a spinning LiDAR would return them, by
 // casting rays against the mesh (Intel Embree), so density follows distance and incidence as in a real
-// scan, with each sensor's noise. The ideal views of sec. 3.4 (HPR on uniform samples) are views.h's.
-// World convention as in views.h: metres, +z up, the object on the ground (z = 0).
+// scan, with each sensor's noise. The ideal views of sec. 3.4 (HPR on uniform samples) are hidden_point_removal.h's.
+// World convention as in placement.h: metres, +z up, the object on the ground (z = 0).
 #pragma once
 
 #include <cstdint>

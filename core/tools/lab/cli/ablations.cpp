@@ -62,11 +62,10 @@ struct Variant {
   std::function<void(EvalParams&)> change;
 };
 
-// What the run's settings can be changed to, one at a time.
-std::vector<Variant> keypoint_variants(const EvalParams& params) {
-  const TrainParams& t = params.train;
+// The keypoints' and descriptors' settings changed (sec. 2.2, 3.2.1-3.2.2): rho1's cap, the claims, the
+// boundary band and test, the descriptors' scale.
+void add_keypoint_variants(const TrainParams& t, std::vector<Variant>& v) {
   const KeypointParams& kp = t.features.keypoints;
-  std::vector<Variant> v;
   if (kp.max_radius_supports > 0 || kp.max_characteristic_radius_m > 0)
     v.push_back({"no cap on rho1", [](EvalParams& p) {
                    p.train.features.keypoints.max_radius_supports = 0;
@@ -91,6 +90,12 @@ std::vector<Variant> keypoint_variants(const EvalParams& params) {
   else
     v.push_back({"descriptors over rho1 (up to 8 r)",
                  [](EvalParams& p) { p.train.features.descriptor.characteristic_scale_supports = 8; }});
+}
+
+// The clouds' settings changed: the support radius, vertices or samples, the keypoints' response.
+void add_cloud_variants(const EvalParams& params, std::vector<Variant>& v) {
+  const TrainParams& t = params.train;
+  const KeypointParams& kp = t.features.keypoints;
   if (t.features.surface.support_neighbours != 30)
     v.push_back({"r from the 30th neighbour", [](EvalParams& p) {
                    p.train.features.surface.support_neighbours = 30;
@@ -118,6 +123,11 @@ std::vector<Variant> keypoint_variants(const EvalParams& params) {
   else
     v.push_back({"smaller Harris curvature",
                  [](EvalParams& p) { p.train.features.keypoints.response = KeypointResponse::kLambdaMin; }});
+}
+
+// The histograms' and the decision's settings changed: normalisation, soft words, PCA, the decision rule,
+// training on prefixes.
+void add_decision_variants(const TrainParams& t, std::vector<Variant>& v) {
   if (t.normalise_up_to_keypoints > 0 || !t.normalise_histograms)
     v.push_back({"histograms always normalised", [](EvalParams& p) {
                    p.train.normalise_up_to_keypoints = 0;
@@ -148,6 +158,14 @@ std::vector<Variant> keypoint_variants(const EvalParams& params) {
                  [](EvalParams& p) { p.train.partial_prefixes = {0.15, 0.25, 0.35, 0.5, 0.7}; }});
   else
     v.push_back({"trained on full views only", [](EvalParams& p) { p.train.partial_prefixes.clear(); }});
+}
+
+// What the run's settings can be changed to, one at a time, in the report's order.
+std::vector<Variant> keypoint_variants(const EvalParams& params) {
+  std::vector<Variant> v;
+  add_keypoint_variants(params.train, v);
+  add_cloud_variants(params, v);
+  add_decision_variants(params.train, v);
   return v;
 }
 

@@ -1,6 +1,8 @@
 // glimpse-lab eval: the paper's evaluation protocol (sec. 3.4, 4, 5) on the SHREC 2007 meshes or the
 // procedural zoo, written as a report (report.md, decisions.csv, evolution SVGs). The protocol lives
-// in core (evaluation.h); this file only turns flags into EvalParams and shows progress.
+// in the lab library (glimpse/lab/evaluation.h); this file declares the flags, runs the protocol and
+// its ablations (ablations.cpp) and shows progress; eval_params.cpp turns the flags into EvalParams,
+// eval_objects.cpp gathers the objects.
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -9,12 +11,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
-#include <map>
-#include <numbers>
-#include <random>
-#include <set>
-#include <sstream>
-#include <tuple>
 
 #include "glimpse/lab/evaluation.h"
 #include "eval.h"
@@ -23,75 +19,6 @@ namespace glimpse::lab {
 
 namespace {
 
-// The objects of every folder in `dirs`, each given `role`.
-Expected<std::vector<EvalObject>> load_sources(const std::vector<std::string>& dirs, EvalRole role, uint64_t seed,
-                                               size_t max_objects, int threads) {
-  std::vector<EvalObject> all;
-  for (const std::string& dir : dirs) {
-    Expected<std::vector<EvalObject>> loaded = std::vector<EvalObject>{};
-    if (dir.rfind("zoo:", 0) == 0) {  // the procedural zoo as a source: zoo:N objects per category
-      const long n = std::strtol(dir.c_str() + 4, nullptr, 10);
-      if (n <= 0) return invalid_argument("'" + dir + "': want zoo:N with N objects per category");
-      std::fprintf(stderr, "making the zoo: %ld objects per category ...\n", n);
-      loaded = zoo_objects(static_cast<size_t>(n), seed);
-    } else {
-      std::fprintf(stderr, "loading %s ...\n", dir.c_str());
-      loaded = load_dataset_objects(dir, seed, max_objects, threads);
-    }
-    if (!loaded.ok()) return loaded.error();
-    for (EvalObject& o : *loaded) {
-      o.role = role;
-      all.push_back(std::move(o));
-    }
-  }
-  return all;
-}
-
-// --hold-out: the named categories' objects become unknown (tested, never learnt; training-only ones
-// are dropped). An open-set evaluation from known data alone: each category in turn plays "none of these".
-Status hold_out(std::vector<EvalObject>& objects, const std::string& list) {
-  std::set<std::string> present, held;
-  for (const EvalObject& x : objects)
-    if (x.role != EvalRole::kUnknown) present.insert(x.category);
-  for (const std::string& c : split_list(list)) {
-    if (!present.count(c)) {
-      std::string names;
-      for (const std::string& p : present) names += (names.empty() ? "" : ", ") + p;
-      return invalid_argument("--hold-out: no object of category '" + c + "' (categories: " + names + ")");
-    }
-    held.insert(c);
-  }
-  std::erase_if(objects, [&](const EvalObject& x) { return x.role == EvalRole::kTrainOnly && held.count(x.category); });
-  std::set<std::string> learnt;
-  for (EvalObject& x : objects) {
-    if (x.role == EvalRole::kUnknown) continue;
-    if (held.count(x.category)) x.role = EvalRole::kUnknown;
-    else if (x.role != EvalRole::kTestOnly) learnt.insert(x.category);
-  }
-  if (learnt.size() < 2) return invalid_argument("--hold-out: at least two learnt categories must remain");
-  return {};
-}
-
-// --pick-objects N: N objects of each category of each source, drawn by the seed. The draw depends on
-// the source, the category and the ids alone, so a folder given on both sides (--train X --test X) tests
-// the very objects it learnt, as the paper's tables appear to (57 of their 60 figures are k/18: 3
-// objects x 6 views per category).
-void pick_objects(std::vector<EvalObject>& objects, size_t n, uint64_t seed) {
-  std::map<std::pair<std::string, std::string>, std::vector<std::string>> ids;  // (source, category) -> ids
-  for (const EvalObject& x : objects) ids[{x.source, x.category}].push_back(x.id);
-  std::set<std::tuple<std::string, std::string, std::string>> kept;
-  for (auto& [key, list] : ids) {
-    std::sort(list.begin(), list.end());
-    list.erase(std::unique(list.begin(), list.end()), list.end());
-    uint64_t h = 0xcbf29ce484222325ull;  // FNV-1a of "source/category"
-    for (unsigned char c : key.first + '/' + key.second) h = (h ^ c) * 0x100000001b3ull;
-    std::mt19937_64 rng(seed ^ h);
-    for (size_t i = list.size(); i > 1; --i) std::swap(list[i - 1], list[rng() % i]);  // Fisher-Yates
-    for (size_t i = 0; i < std::min(n, list.size()); ++i) kept.insert({key.first, key.second, list[i]});
-  }
-  std::erase_if(objects, [&](const EvalObject& x) { return !kept.count({x.source, x.category, x.id}); });
-}
-
 // Objects tested as one of the learnt categories (the unknown ones apart).
 size_t tested_known_objects(const EvalResult& r) {
   size_t n = 0;
@@ -99,47 +26,57 @@ size_t tested_known_objects(const EvalResult& r) {
   return n;
 }
 
-// A source named twice (its objects learnt twice, or learnt and cross-validated at once) is an error;
-// --train X --test X is not (resubstitution, which the report flags).
-Status check_sources(const EvalOptions& o) {
-  if (o.data.empty() && o.train.empty() && (!o.unknown.empty() || !o.also_train.empty()))
-    return invalid_argument("--unknown and --also-train go with --data or --train (the zoo as a source: --data zoo:N)");
-  std::map<std::string, std::string> seen;  // source -> the flag that named it
-  auto key = [](const std::string& dir) {
-    if (dir.rfind("zoo:", 0) == 0) return dir;
-    std::error_code ec;
-    const auto canonical = std::filesystem::weakly_canonical(dir, ec);
-    return ec ? dir : canonical.string();
-  };
-  for (const auto& [list, flag] : {std::pair{o.data, "--data"}, {o.train, "--train"}, {o.also_train, "--also-train"},
-                                   {o.unknown, "--unknown"}}) {
-    for (const std::string& dir : split_list(list))
-      if (auto [it, fresh] = seen.emplace(key(dir), flag); !fresh)
-        return invalid_argument(std::string(flag) + ": " + dir + " is named already (" + it->second +
-                                "): its objects would be learnt twice, or learnt and tested at once");
+// The report folder, made before the run rather than after it: 0, or the exit code once the reason is
+// printed.
+int make_report_folder(const std::string& out) {
+  std::error_code ec;
+  std::filesystem::create_directories(out, ec);
+  if (ec || !std::filesystem::is_directory(out)) {
+    std::fprintf(stderr, "glimpse-lab eval: --out: cannot use %s as the report folder%s%s\n", out.c_str(),
+                 ec ? ": " : " (not a folder)", ec ? ec.message().c_str() : "");
+    return 2;
   }
-  std::set<std::string> tests;
-  for (const std::string& dir : split_list(o.test)) {
-    if (!tests.insert(key(dir)).second) return invalid_argument("--test: " + dir + " is named twice");
-    if (const auto it = seen.find(key(dir)); it != seen.end() && it->second != std::string("--train"))
-      return invalid_argument("--test: " + dir + " is named already (" + it->second + ")");
-  }
-  return {};
+  return 0;
 }
 
-// Across sources every tested category must be learnt: a category the model never saw cannot be right,
-// and its objects belong in --unknown.
-Status check_tested_categories_learnt(const std::vector<EvalObject>& objects) {
-  std::set<std::string> learnt, missing;
-  for (const EvalObject& x : objects)
-    if (x.role == EvalRole::kTrainOnly) learnt.insert(x.category);
-  for (const EvalObject& x : objects)
-    if (x.role == EvalRole::kTestOnly && !learnt.count(x.category)) missing.insert(x.category);
-  if (missing.empty()) return {};
-  std::string names;
-  for (const std::string& c : missing) names += (names.empty() ? "" : ", ") + c;
-  return invalid_argument("--test: categories no training source holds: " + names +
-                          " (objects of categories the model never learnt go in --unknown)");
+// --export-histograms' folder: 0, or the exit code once the reason is printed.
+int make_export_folder(const std::string& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) {
+    std::fprintf(stderr, "glimpse-lab eval: --export-histograms: cannot create %s: %s\n", dir.c_str(), ec.message().c_str());
+    return 2;
+  }
+  return 0;
+}
+
+// The terminal's summary: accuracy per method and stage, the category changes, the open set, the time.
+void print_summary(const EvalResult& result, const EvalOptions& o, const EvalParams& params, size_t objects) {
+  for (const PhaseTiming& t : result.timings)
+    std::fprintf(stderr, "  %-24s %7.1f s  %s\n", t.phase.c_str(), t.seconds, t.detail.c_str());
+  if (result.cross_source)
+    std::printf("accuracy %% (paper in brackets), trained on %s, tested on %zu objects of %s%s:\n%s", o.train.c_str(),
+                tested_known_objects(result), o.test.c_str(),
+                tests_learnt_objects(result) ? " (learnt too: resubstitution, not a held-out figure)" : "",
+                summary_table(result).c_str());
+  else
+    std::printf("accuracy %% (paper in brackets), %zu objects, %d folds:\n%s", objects, params.folds,
+                summary_table(result).c_str());
+  std::printf("category changes (%s), finally correct / incorrect:", method_name(result.change_method));
+  for (const ChangeRow& c : result.changes)
+    std::printf("  <=%zu kp %.2f / %.2f", c.up_to_keypoints, c.mean_correct, c.mean_incorrect);
+  if (!result.unknown_categories.empty()) {
+    std::printf("\nopen set (%s): stage AUROC FAR@95%% | at the operating point: known accepted, unknown accepted, known accuracy closed -> right and accepted\n",
+                method_name(result.change_method));
+    for (const OpenSetRow& row : open_set_summary(result.decisions, params.stages, result.change_method,
+                                                  result.unknown_categories.size()))
+      std::printf("  %-6s %.3f %5.1f %% | %5.1f %% %5.1f %% %5.1f -> %5.1f %%\n", row.stage.c_str(), row.auroc, row.far_at_95,
+                  row.known_acceptance, row.false_acceptance, row.known_accuracy_closed, row.known_accuracy_open);
+    if (const SettleRow s = unknown_settle_summary(result.streams); s.views)
+      std::printf("  streams of unknown objects: %zu of %zu settled, %zu of them as unknown\n", s.settled_views, s.views, s.correct);
+  }
+  std::printf("\ntime %.1f s on %d threads\n", result.total_seconds, result.threads);
+  std::printf("report: %s\n", (std::filesystem::path(o.out) / "report.md").string().c_str());
 }
 
 int run_eval(const EvalOptions& o) {
@@ -152,87 +89,14 @@ int run_eval(const EvalOptions& o) {
     std::fprintf(stderr, "glimpse-lab eval: %s\n", s.error().message.c_str());
     return 2;
   }
-  {  // the report folder, before the run rather than after it
-    std::error_code ec;
-    std::filesystem::create_directories(o.out, ec);
-    if (ec || !std::filesystem::is_directory(o.out)) {
-      std::fprintf(stderr, "glimpse-lab eval: --out: cannot use %s as the report folder%s%s\n", o.out.c_str(),
-                   ec ? ": " : " (not a folder)", ec ? ec.message().c_str() : "");
-      return 2;
-    }
-  }
+  if (int rc = make_report_folder(o.out); rc != 0) return rc;
   const auto t0 = std::chrono::steady_clock::now();
-  const size_t max_objects = o.quick && o.max_objects == 0 ? 8 : o.max_objects;
   std::vector<EvalObject> objects;
   std::string source;
-  if (!o.data.empty() || !o.train.empty()) {
-    const bool cross = !o.train.empty();
-    auto first = load_sources(split_list(cross ? o.train : o.data), cross ? EvalRole::kTrainOnly : EvalRole::kCrossValidate,
-                              params->seed, max_objects, params->threads);
-    if (!first.ok()) {
-      std::fprintf(stderr, "glimpse-lab eval: %s\n", first.error().message.c_str());
-      return 1;
-    }
-    objects = std::move(*first);
-    source = "meshes in " + (cross ? o.train : o.data);
-    // Sources beside the evaluated ones (--also-train, --unknown): false after printing why they failed.
-    auto add_sources = [&](const std::string& list, EvalRole role, const char* flag) {
-      if (list.empty()) return true;
-      auto extra = load_sources(split_list(list), role, params->seed, max_objects, params->threads);
-      if (!extra.ok()) {
-        std::fprintf(stderr, "glimpse-lab eval: %s: %s\n", flag, extra.error().message.c_str());
-        return false;
-      }
-      for (EvalObject& x : *extra) objects.push_back(std::move(x));
-      return true;
-    };
-    if (!add_sources(o.also_train, EvalRole::kTrainOnly, "--also-train")) return 1;
-    if (!o.also_train.empty()) source += " (also trained on " + o.also_train + ")";
-    if (!add_sources(o.unknown, EvalRole::kUnknown, "--unknown")) return 1;
-    if (!o.unknown.empty()) source += " (unknown: " + o.unknown + ")";
-    if (cross) {
-      auto second = load_sources(split_list(o.test), EvalRole::kTestOnly, params->seed, max_objects, params->threads);
-      if (!second.ok()) {
-        std::fprintf(stderr, "glimpse-lab eval: %s\n", second.error().message.c_str());
-        return 1;
-      }
-      for (EvalObject& x : *second) objects.push_back(std::move(x));
-      source = "trained on " + o.train + (o.also_train.empty() ? "" : "," + o.also_train) + ", tested on " + o.test +
-               (o.unknown.empty() ? "" : " and on " + o.unknown + " (unknown)");
-      if (Status s = check_tested_categories_learnt(objects); !s.ok()) {
-        std::fprintf(stderr, "glimpse-lab eval: %s\n", s.error().message.c_str());
-        return 2;
-      }
-    }
-  } else {
-    const size_t n = max_objects ? std::min(o.zoo, max_objects) : o.zoo;
-    std::fprintf(stderr, "making the zoo: %zu objects per category ...\n", n);
-    objects = zoo_objects(n, params->seed);
-    source = "procedural zoo (make_zoo, seed " + std::to_string(params->seed) + ")";
-  }
-  if (o.pick_objects > 0) {
-    pick_objects(objects, o.pick_objects, params->seed);
-    source += " (" + std::to_string(o.pick_objects) + " objects per category drawn by seed " + std::to_string(params->seed) + ")";
-  }
-  if (o.poses == "given")
-    for (EvalObject& x : objects) x.any_pose = false;
-  if (!o.hold_out.empty()) {
-    if (Status s = hold_out(objects, o.hold_out); !s.ok()) {
-      std::fprintf(stderr, "glimpse-lab eval: %s\n", s.error().message.c_str());
-      return 2;
-    }
-    source += " (held out as unknown: " + o.hold_out + ")";
-  }
+  if (int rc = gather_objects(o, *params, objects, source); rc != 0) return rc;
   const double load_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-
-  if (!o.export_histograms.empty()) {
-    std::error_code ec;
-    std::filesystem::create_directories(o.export_histograms, ec);
-    if (ec) {
-      std::fprintf(stderr, "glimpse-lab eval: --export-histograms: cannot create %s: %s\n", o.export_histograms.c_str(), ec.message().c_str());
-      return 2;
-    }
-  }
+  if (!o.export_histograms.empty())
+    if (int rc = make_export_folder(o.export_histograms); rc != 0) return rc;
   ProgressBar bar;
   auto result = run_evaluation(objects, *params, source, [&bar](const EvalProgress& p) { bar(p); });
   if (!result.ok()) {
@@ -257,32 +121,157 @@ int run_eval(const EvalOptions& o) {
     std::fprintf(stderr, "glimpse-lab eval: %s\n", s.error().message.c_str());
     return 1;
   }
-  for (const PhaseTiming& t : result->timings)
-    std::fprintf(stderr, "  %-24s %7.1f s  %s\n", t.phase.c_str(), t.seconds, t.detail.c_str());
-  if (result->cross_source)
-    std::printf("accuracy %% (paper in brackets), trained on %s, tested on %zu objects of %s%s:\n%s", o.train.c_str(),
-                tested_known_objects(*result), o.test.c_str(),
-                tests_learnt_objects(*result) ? " (learnt too: resubstitution, not a held-out figure)" : "",
-                summary_table(*result).c_str());
-  else
-    std::printf("accuracy %% (paper in brackets), %zu objects, %d folds:\n%s", objects.size(), params->folds,
-                summary_table(*result).c_str());
-  std::printf("category changes (%s), finally correct / incorrect:", method_name(result->change_method));
-  for (const ChangeRow& c : result->changes)
-    std::printf("  <=%zu kp %.2f / %.2f", c.up_to_keypoints, c.mean_correct, c.mean_incorrect);
-  if (!result->unknown_categories.empty()) {
-    std::printf("\nopen set (%s): stage AUROC FAR@95%% | at the operating point: known accepted, unknown accepted, known accuracy closed -> right and accepted\n",
-                method_name(result->change_method));
-    for (const OpenSetRow& row : open_set_summary(result->decisions, params->stages, result->change_method,
-                                                  result->unknown_categories.size()))
-      std::printf("  %-6s %.3f %5.1f %% | %5.1f %% %5.1f %% %5.1f -> %5.1f %%\n", row.stage.c_str(), row.auroc, row.far_at_95,
-                  row.known_acceptance, row.false_acceptance, row.known_accuracy_closed, row.known_accuracy_open);
-    if (const SettleRow s = unknown_settle_summary(result->streams); s.views)
-      std::printf("  streams of unknown objects: %zu of %zu settled, %zu of them as unknown\n", s.settled_views, s.views, s.correct);
-  }
-  std::printf("\ntime %.1f s on %d threads\n", result->total_seconds, result->threads);
-  std::printf("report: %s\n", (std::filesystem::path(o.out) / "report.md").string().c_str());
+  print_summary(*result, o, *params, objects.size());
   return 0;
+}
+
+// ---- glimpse-lab eval's flags, in the order its help lists them ----
+
+// Where the objects come from and which are learnt, tested or unknown.
+void add_source_flags(CLI::App* cmd, EvalOptions& o) {
+  auto* data = cmd->add_option("--data", o.data,
+                               "dataset folders DIR[,DIR...] (DIR/<category>/<mesh>, e.g. SHREC 2007): cross-validation "
+                               "over the union, by object");
+  auto* train = cmd->add_option("--train", o.train, "cross-source: train on every object of these folders DIR[,DIR...]");
+  auto* test = cmd->add_option("--test", o.test, "cross-source: test on every view of these folders DIR[,DIR...]");
+  auto* zoo = cmd->add_option("--zoo", o.zoo, "use the procedural zoo with N objects per category instead");
+  data->excludes(zoo)->excludes(train)->excludes(test);
+  zoo->excludes(data)->excludes(train)->excludes(test);
+  train->needs(test);
+  test->needs(train);
+  cmd->add_option("--also-train", o.also_train,
+                  "extra training-only sources DIR[,DIR...] or zoo:N (the procedural zoo, N per category), learnt by "
+                  "every model and never tested; the zoo beside other sources is augmented (novelty measures against a "
+                  "model of the other objects)");
+  cmd->add_option("--unknown", o.unknown,
+                  "objects of categories no model learns DIR[,DIR...] or zoo:N, tested besides the known ones: the "
+                  "report's open-set section (AUROC of novelty, false acceptance, known accuracy at the operating point) and "
+                  "how their streams settle");
+  cmd->add_option("--hold-out", o.hold_out,
+                  "categories CAT[,CAT...] of the evaluated sources that no model learns: their objects are tested "
+                  "as unknown (the open-set section from known data alone, e.g. each category in turn)");
+}
+
+// The views of every object, what each model learns from them and how it decides.
+void add_training_flags(CLI::App* cmd, EvalOptions& o) {
+  cmd->add_option("--train-tilt", o.tilt, "training views turned by a random tilt of up to DEG degrees (default: the recogniser's)");
+  cmd->add_option("--size-blind", o.size_blind,
+                  "methods of the size-blind ablation (every object 1 m tall, train and test), or 'none'")
+      ->capture_default_str();
+  cmd->add_option("--points", o.points,
+                  "object cloud: 'vertices' (the paper) or N area-weighted samples per object (a sensor at 3x the "
+                  "bounding radius sees about the same number of points whatever the object's size)")
+      ->capture_default_str();
+  cmd->add_option("--views", o.views, "views per object (1-6, evenly spaced of the paper's 6)")->capture_default_str();
+  cmd->add_option("--train-elevations", o.train_elevations,
+                  "training-only views besides the tested ones: the same azimuths from these elevations, degrees "
+                  "above the horizon, comma-separated (tested views stay at the paper's 30; e.g. 0,15 for cameras "
+                  "mounted low)");
+  o.train_sensors = training_sensors_spec(default_training_sensors());
+  cmd->add_option("--train-sensors", o.train_sensors,
+                  "training-only views of simulated sensors besides the ideal ones: SENSOR:METRES:DEGREES[,...] "
+                  "(depth or lidar, from that distance and elevation, the same azimuths, through the scan filters "
+                  "down to the model's density, the median of its ideal training views; augmented: the decision learns them, novelty measures against a model of the other views), or 'none' (the recipe's: off the 2 m, 30 deg camera the "
+                  "robustness matrix tests)")
+      ->capture_default_str();
+  cmd->add_option("--folds", o.folds, "cross-validation folds (by object, stratified)")->capture_default_str();
+  cmd->add_option("--methods", o.methods, "comma-separated: bok,bog,kgh,vfh,esf,ush,size,fusion")->capture_default_str();
+  cmd->add_option("--train-on", o.train_on,
+                  "full: full views only (the paper); partial: plus their top-down prefixes (--train-prefixes)")
+      ->capture_default_str();
+  cmd->add_option("--train-prefixes", o.train_prefixes,
+                  "with --train-on partial: comma-separated fractions of each training view's points")
+      ->capture_default_str();
+  cmd->add_option("--decision", o.decision, "nearest-centre (the paper), centres, knn or nearest (every training vector a reference)")->capture_default_str();
+  cmd->add_option("--fusion-of", o.fusion_of, "comma-separated components of fusion (default: the recogniser's)");
+  cmd->add_option("--fusion-head-c", o.fusion_head_c,
+                  "C of the fusion's logistic decision (its share is calibrated per model; measured with 10); 0: none, the "
+                  "nearest references alone (default: the recogniser's, none)");
+  cmd->add_option("--neighbours", o.neighbours, "k of the k-NN decision (0: the recogniser's default)");
+  cmd->add_option("--pca-variance", o.pca_variance,
+                  "explained variance the decision stage's PCA keeps (0: default; negative: no PCA, L1 on the histograms)");
+  cmd->add_option("--pca-dims", o.pca_dims, "at most this many PCA dimensions in the decision stage (0: default)");
+}
+
+// The run: threads, seed, report folder, how many objects, exported histograms, poses.
+void add_run_flags(CLI::App* cmd, EvalOptions& o) {
+  cmd->add_option("--threads", o.threads, "threads (0: all cores); results do not depend on it")->capture_default_str();
+  cmd->add_option("--seed", o.seed, "seed of sizes, samples, folds, codebooks")->capture_default_str();
+  cmd->add_option("--out", o.out, "report folder")->capture_default_str();
+  cmd->add_flag("--quick", o.quick, "CI size: at most 8 objects per category, 3 views, exploration every 10 keypoints");
+  cmd->add_option("--max-objects", o.max_objects, "at most N objects per category (0: all)")->capture_default_str();
+  cmd->add_option("--pick-objects", o.pick_objects,
+                  "N objects per category of every source, drawn by --seed; a folder given as both --train and "
+                  "--test then tests the objects it learnt (the paper's tables hold 18 views, 3 objects, per category)");
+  cmd->add_option("--export-histograms", o.export_histograms,
+                  "folder: every fold's model writes the histograms it decides on (its training clouds and every "
+                  "tested stage, one row per cloud and method) to DIR/fold<k>.csv, to try other classifiers on them");
+  cmd->add_option("--poses", o.poses,
+                  "dataset: categories without a natural up (sizes.csv 'any-pose', by default mechanic) seen in a "
+                  "random pose per view; given: every object as its file has it (the paper)")
+      ->check(CLI::IsMember({"dataset", "given"}))
+      ->capture_default_str();
+}
+
+// What is tested: stages, streams, the test views' sensor and the robustness matrix.
+void add_test_flags(CLI::App* cmd, EvalOptions& o) {
+  cmd->add_option("--explore-step", o.explore_step, "keypoint step of the exploration grid (1: the paper's)")
+      ->capture_default_str();
+  cmd->add_option("--stages", o.stages, "comma-separated stages: full, Nkp (N visible keypoints), N% (of the full cloud)")
+      ->capture_default_str();
+  cmd->add_option("--stream-chunk", o.stream_chunk,
+                  "stream every test view (--unknown objects' too) in chunks of this fraction of the full cloud (0: no "
+                  "streaming)")
+      ->capture_default_str();
+  cmd->add_option("--sensor", o.sensor,
+                  "test views from: ideal (HPR on samples, the paper's), depth (Kinect-class camera) or lidar "
+                  "(16 beams), cast against the mesh; training views stay ideal")
+      ->capture_default_str();
+  cmd->add_option("--distance", o.distance, "depth/lidar: metres from the sensor to the object's centre")
+      ->capture_default_str();
+  cmd->add_option("--elevation", o.elevation, "depth/lidar: degrees above the horizon")->capture_default_str();
+  cmd->add_option("--tilt", o.scan_tilt, "test views' up off by up to DEG degrees (random direction)")
+      ->capture_default_str();
+  cmd->add_flag("--floor", o.floor, "depth/lidar: a floor patch under the object, removed by the ground filter");
+  cmd->add_option("--outliers", o.outliers, "stray points added to each test view, x its size")->capture_default_str();
+  cmd->add_option("--matrix", o.matrix, "robustness matrix: none, small (default run) or full")->capture_default_str();
+  cmd->add_option("--matrix-views", o.matrix_views,
+                  "views per tested object in the robustness matrix (0: 1 for small, 2 for full)")
+      ->capture_default_str();
+  cmd->add_option("--cut-margin", o.cut_margin, "keypoint stage cut below the k-th keypoint, in support radii")
+      ->capture_default_str();
+}
+
+// The paper preset, keypoints and descriptors (sec. 2.2, 3.2.1-3.2.2, 4), and the keypoint ablation.
+void add_keypoint_flags(CLI::App* cmd, EvalOptions& o) {
+  cmd->add_option("--preset", o.preset,
+                  "paper: the paper's settings for every flag not given (mesh vertices, poses as given, full-view training, "
+                  "BoK/BoG/KGH/VFH, one centre per category with L1 on the histograms, r from 6 neighbours, no "
+                  "rho1 cap, claims of rho1, boundary test over 2 r with a band of r/4, descriptors at rho1 up to "
+                  "8 r, normalised up to 25 keypoints)");
+  cmd->add_option("--support-neighbours", o.support_neighbours,
+                  "support radius r = median distance to this nearest neighbour (default 30)");
+  cmd->add_option("--min-neighbours", o.min_neighbours, "fewer neighbours within r: no surface (default 8)");
+  cmd->add_option("--keypoint-cap", o.keypoint_cap, "keypoints need rho1 <= this x r; 0: no cap (default 8)");
+  cmd->add_option("--claim-min", o.claim_min, "a keypoint claims max(rho1, this x r); 0: rho1 (default 1)");
+  cmd->add_option("--boundary-band", o.boundary_band,
+                  "no keypoint within this x r of a view's boundary point; 0: boundary points only (default 1)");
+  cmd->add_option("--descriptor-scale", o.descriptor_scale,
+                  "describe each keypoint over its rho1 clamped to [r, this x r]; 0: over r (default)");
+  cmd->add_option("--boundary-radius", o.boundary_radius,
+                  "the boundary test looks at neighbours within this x r (default 1)");
+  cmd->add_option("--boundary-gap", o.boundary_gap, "boundary point: an angular gap wider than DEG (default 90)");
+  cmd->add_option("--keypoint-response", o.keypoint_response,
+                  "lambda-min (the paper: smaller principal Harris curvature) or harris (det - k tr^2, local maxima)");
+  cmd->add_option("--normalise-up-to", o.normalise_up_to,
+                  "keypoint histograms divided by their count up to N keypoints and by N's after (sec. 4); 0: always");
+  cmd->add_option("--soft-words", o.soft_words,
+                  "BoK: each keypoint shared among its N nearest words (default 1: one word, the paper)");
+  cmd->add_option("--default-method", o.default_method,
+                  "the method of the category changes and streams (default: the recogniser's, fusion)");
+  cmd->add_flag("--keypoint-ablation", o.keypoint_ablation,
+                "also re-run the keypoint methods with one keypoint or decision setting changed at a time (rho1 cap, "
+                "claim radius, boundary band, r, vertices/samples, response, normalisation, PCA, decision, prefixes)");
 }
 
 }  // namespace
@@ -290,133 +279,11 @@ int run_eval(const EvalOptions& o) {
 void add_eval_command(CLI::App& app) {
   auto o = std::make_shared<EvalOptions>();
   CLI::App* cmd = app.add_subcommand("eval", "run the paper's evaluation protocol and write a report");
-  auto* data = cmd->add_option("--data", o->data,
-                               "dataset folders DIR[,DIR...] (DIR/<category>/<mesh>, e.g. SHREC 2007): cross-validation "
-                               "over the union, by object");
-  auto* train = cmd->add_option("--train", o->train, "cross-source: train on every object of these folders DIR[,DIR...]");
-  auto* test = cmd->add_option("--test", o->test, "cross-source: test on every view of these folders DIR[,DIR...]");
-  auto* zoo = cmd->add_option("--zoo", o->zoo, "use the procedural zoo with N objects per category instead");
-  data->excludes(zoo)->excludes(train)->excludes(test);
-  zoo->excludes(data)->excludes(train)->excludes(test);
-  train->needs(test);
-  test->needs(train);
-  cmd->add_option("--also-train", o->also_train,
-                  "extra training-only sources DIR[,DIR...] or zoo:N (the procedural zoo, N per category), learnt by "
-                  "every model and never tested; the zoo beside other sources is augmented (novelty measures against a "
-                  "model of the other objects)");
-  cmd->add_option("--unknown", o->unknown,
-                  "objects of categories no model learns DIR[,DIR...] or zoo:N, tested besides the known ones: the "
-                  "report's open-set section (AUROC of novelty, false acceptance, known accuracy at the operating point) and "
-                  "how their streams settle");
-  cmd->add_option("--hold-out", o->hold_out,
-                  "categories CAT[,CAT...] of the evaluated sources that no model learns: their objects are tested "
-                  "as unknown (the open-set section from known data alone, e.g. each category in turn)");
-  cmd->add_option("--train-tilt", o->tilt, "training views turned by a random tilt of up to DEG degrees (default: the recogniser's)");
-  cmd->add_option("--size-blind", o->size_blind,
-                  "methods of the size-blind ablation (every object 1 m tall, train and test), or 'none'")
-      ->capture_default_str();
-  cmd->add_option("--points", o->points,
-                  "object cloud: 'vertices' (the paper) or N area-weighted samples per object (a sensor at 3x the "
-                  "bounding radius sees about the same number of points whatever the object's size)")
-      ->capture_default_str();
-  cmd->add_option("--views", o->views, "views per object (1-6, evenly spaced of the paper's 6)")->capture_default_str();
-  cmd->add_option("--train-elevations", o->train_elevations,
-                  "training-only views besides the tested ones: the same azimuths from these elevations, degrees "
-                  "above the horizon, comma-separated (tested views stay at the paper's 30; e.g. 0,15 for cameras "
-                  "mounted low)");
-  o->train_sensors = training_sensors_spec(default_training_sensors());
-  cmd->add_option("--train-sensors", o->train_sensors,
-                  "training-only views of simulated sensors besides the ideal ones: SENSOR:METRES:DEGREES[,...] "
-                  "(depth or lidar, from that distance and elevation, the same azimuths, through the scan filters "
-                  "down to the model's density, the median of its ideal training views; augmented: the decision learns them, novelty measures against a model of the other views), or 'none' (the recipe's: off the 2 m, 30 deg camera the "
-                  "robustness matrix tests)")
-      ->capture_default_str();
-  cmd->add_option("--folds", o->folds, "cross-validation folds (by object, stratified)")->capture_default_str();
-  cmd->add_option("--methods", o->methods, "comma-separated: bok,bog,kgh,vfh,esf,ush,size,fusion")->capture_default_str();
-  cmd->add_option("--train-on", o->train_on,
-                  "full: full views only (the paper); partial: plus their top-down prefixes (--train-prefixes)")
-      ->capture_default_str();
-  cmd->add_option("--train-prefixes", o->train_prefixes,
-                  "with --train-on partial: comma-separated fractions of each training view's points")
-      ->capture_default_str();
-  cmd->add_option("--decision", o->decision, "nearest-centre (the paper), centres, knn or nearest (every training vector a reference)")->capture_default_str();
-  cmd->add_option("--fusion-of", o->fusion_of, "comma-separated components of fusion (default: the recogniser's)");
-  cmd->add_option("--fusion-head-c", o->fusion_head_c,
-                  "C of the fusion's logistic decision (its share is calibrated per model; measured with 10); 0: none, the "
-                  "nearest references alone (default: the recogniser's, none)");
-  cmd->add_option("--neighbours", o->neighbours, "k of the k-NN decision (0: the recogniser's default)");
-  cmd->add_option("--pca-variance", o->pca_variance,
-                  "explained variance the decision stage's PCA keeps (0: default; negative: no PCA, L1 on the histograms)");
-  cmd->add_option("--pca-dims", o->pca_dims, "at most this many PCA dimensions in the decision stage (0: default)");
-  cmd->add_option("--threads", o->threads, "threads (0: all cores); results do not depend on it")->capture_default_str();
-  cmd->add_option("--seed", o->seed, "seed of sizes, samples, folds, codebooks")->capture_default_str();
-  cmd->add_option("--out", o->out, "report folder")->capture_default_str();
-  cmd->add_flag("--quick", o->quick, "CI size: at most 8 objects per category, 3 views, exploration every 10 keypoints");
-  cmd->add_option("--max-objects", o->max_objects, "at most N objects per category (0: all)")->capture_default_str();
-  cmd->add_option("--pick-objects", o->pick_objects,
-                  "N objects per category of every source, drawn by --seed; a folder given as both --train and "
-                  "--test then tests the objects it learnt (the paper's tables hold 18 views, 3 objects, per category)");
-  cmd->add_option("--export-histograms", o->export_histograms,
-                  "folder: every fold's model writes the histograms it decides on (its training clouds and every "
-                  "tested stage, one row per cloud and method) to DIR/fold<k>.csv, to try other classifiers on them");
-  cmd->add_option("--poses", o->poses,
-                  "dataset: categories without a natural up (sizes.csv 'any-pose', by default mechanic) seen in a "
-                  "random pose per view; given: every object as its file has it (the paper)")
-      ->check(CLI::IsMember({"dataset", "given"}))
-      ->capture_default_str();
-  cmd->add_option("--explore-step", o->explore_step, "keypoint step of the exploration grid (1: the paper's)")
-      ->capture_default_str();
-  cmd->add_option("--stages", o->stages, "comma-separated stages: full, Nkp (N visible keypoints), N% (of the full cloud)")
-      ->capture_default_str();
-  cmd->add_option("--stream-chunk", o->stream_chunk,
-                  "stream every test view (--unknown objects' too) in chunks of this fraction of the full cloud (0: no "
-                  "streaming)")
-      ->capture_default_str();
-  cmd->add_option("--sensor", o->sensor,
-                  "test views from: ideal (HPR on samples, the paper's), depth (Kinect-class camera) or lidar "
-                  "(16 beams), cast against the mesh; training views stay ideal")
-      ->capture_default_str();
-  cmd->add_option("--distance", o->distance, "depth/lidar: metres from the sensor to the object's centre")
-      ->capture_default_str();
-  cmd->add_option("--elevation", o->elevation, "depth/lidar: degrees above the horizon")->capture_default_str();
-  cmd->add_option("--tilt", o->scan_tilt, "test views' up off by up to DEG degrees (random direction)")
-      ->capture_default_str();
-  cmd->add_flag("--floor", o->floor, "depth/lidar: a floor patch under the object, removed by the ground filter");
-  cmd->add_option("--outliers", o->outliers, "stray points added to each test view, x its size")->capture_default_str();
-  cmd->add_option("--matrix", o->matrix, "robustness matrix: none, small (default run) or full")->capture_default_str();
-  cmd->add_option("--matrix-views", o->matrix_views,
-                  "views per tested object in the robustness matrix (0: 1 for small, 2 for full)")
-      ->capture_default_str();
-  cmd->add_option("--cut-margin", o->cut_margin, "keypoint stage cut below the k-th keypoint, in support radii")
-      ->capture_default_str();
-  cmd->add_option("--preset", o->preset,
-                  "paper: the paper's settings for every flag not given (mesh vertices, poses as given, full-view training, "
-                  "BoK/BoG/KGH/VFH, one centre per category with L1 on the histograms, r from 6 neighbours, no "
-                  "rho1 cap, claims of rho1, boundary test over 2 r with a band of r/4, descriptors at rho1 up to "
-                  "8 r, normalised up to 25 keypoints)");
-  cmd->add_option("--support-neighbours", o->support_neighbours,
-                  "support radius r = median distance to this nearest neighbour (default 30)");
-  cmd->add_option("--min-neighbours", o->min_neighbours, "fewer neighbours within r: no surface (default 8)");
-  cmd->add_option("--keypoint-cap", o->keypoint_cap, "keypoints need rho1 <= this x r; 0: no cap (default 8)");
-  cmd->add_option("--claim-min", o->claim_min, "a keypoint claims max(rho1, this x r); 0: rho1 (default 1)");
-  cmd->add_option("--boundary-band", o->boundary_band,
-                  "no keypoint within this x r of a view's boundary point; 0: boundary points only (default 1)");
-  cmd->add_option("--descriptor-scale", o->descriptor_scale,
-                  "describe each keypoint over its rho1 clamped to [r, this x r]; 0: over r (default)");
-  cmd->add_option("--boundary-radius", o->boundary_radius,
-                  "the boundary test looks at neighbours within this x r (default 1)");
-  cmd->add_option("--boundary-gap", o->boundary_gap, "boundary point: an angular gap wider than DEG (default 90)");
-  cmd->add_option("--keypoint-response", o->keypoint_response,
-                  "lambda-min (the paper: smaller principal Harris curvature) or harris (det - k tr^2, local maxima)");
-  cmd->add_option("--normalise-up-to", o->normalise_up_to,
-                  "keypoint histograms divided by their count up to N keypoints and by N's after (sec. 4); 0: always");
-  cmd->add_option("--soft-words", o->soft_words,
-                  "BoK: each keypoint shared among its N nearest words (default 1: one word, the paper)");
-  cmd->add_option("--default-method", o->default_method,
-                  "the method of the category changes and streams (default: the recogniser's, fusion)");
-  cmd->add_flag("--keypoint-ablation", o->keypoint_ablation,
-                "also re-run the keypoint methods with one keypoint or decision setting changed at a time (rho1 cap, "
-                "claim radius, boundary band, r, vertices/samples, response, normalisation, PCA, decision, prefixes)");
+  add_source_flags(cmd, *o);
+  add_training_flags(cmd, *o);
+  add_run_flags(cmd, *o);
+  add_test_flags(cmd, *o);
+  add_keypoint_flags(cmd, *o);
   cmd->callback([o, cmd] {
     if (Status s = apply_preset(*o, [cmd](const char* flag) { return cmd->get_option(flag)->count() > 0; }); !s.ok()) {
       std::fprintf(stderr, "glimpse-lab eval: %s\n", s.error().message.c_str());

@@ -1,5 +1,5 @@
-// What the eval subcommand's pieces share: the progress bar, list parsing and the ablations run beside
-// the main evaluation (lab_ablations.cpp).
+// What the eval subcommand's pieces share: its flags, the progress bar, list parsing, the objects it
+// runs on (eval_objects.cpp) and the ablations run beside the main evaluation (ablations.cpp).
 #pragma once
 
 #include <unistd.h>
@@ -15,7 +15,7 @@
 
 namespace glimpse::lab {
 
-// Every flag of glimpse-lab eval (lab_eval.cpp declares them); negative numbers and empty strings: not given.
+// Every flag of glimpse-lab eval (eval.cpp declares them); negative numbers and empty strings: not given.
 struct EvalOptions {
   std::string data;
   std::string train;
@@ -77,11 +77,20 @@ struct EvalOptions {
   size_t matrix_views = 0;  // 0: 1 per object for the small matrix (the default run stays within 5 minutes), 2 for full
 };
 
-// --preset paper: the paper's settings for every flag `given` says was not on the command line
-// (lab_eval_params.cpp).
+// --preset paper: the paper's settings for every flag `given` says is not on the command line
+// (eval_params.cpp).
 Status apply_preset(EvalOptions& o, const std::function<bool(const char* flag)>& given);
 // The flags as the protocol's parameters; errors name the flag and what it takes.
 Expected<EvalParams> params_from(const EvalOptions& o);
+
+// A source named twice (its objects learnt twice, or learnt and cross-validated at once) is an error;
+// --train X --test X is not (resubstitution, which the report flags).
+Status check_sources(const EvalOptions& o);
+// The objects the flags name, with their roles, drawn (--pick-objects) and held out (--hold-out), into
+// `objects`; `source` says where they come from, for the report. 0, or the exit code once the reason is
+// printed (1: a source failed to load; 2: the flags ask for figures that would be wrong).
+int gather_objects(const EvalOptions& o, const EvalParams& params, std::vector<EvalObject>& objects,
+                   std::string& source);
 
 // A progress bar on stderr; plain lines (every 10 %) when stderr is not a terminal.
 class ProgressBar {

@@ -38,8 +38,10 @@ Status apply_preset(EvalOptions& o, const std::function<bool(const char* flag)>&
   return {};
 }
 
-Expected<EvalParams> params_from(const EvalOptions& o) {
-  EvalParams p;
+namespace {
+
+// The object clouds and their views: --points, --views, --train-elevations, --train-sensors.
+Status views_from(const EvalOptions& o, EvalParams& p) {
   if (o.points == "vertices") {
     p.points_per_object = 0;
   } else {
@@ -51,22 +53,23 @@ Expected<EvalParams> params_from(const EvalOptions& o) {
   // The report prints the count asked for: one the protocol would clamp is refused instead.
   if (o.views < 1 || o.views > 6) return invalid_argument("--views takes 1-6 (of the paper's 6 viewpoints), not " + std::to_string(o.views));
   p.views_per_object = o.views;
-  {
-    std::stringstream list(o.train_elevations);
-    for (std::string item; std::getline(list, item, ',');) {
-      char* end = nullptr;
-      const double e = std::strtod(item.c_str(), &end);
-      if (item.empty() || *end || !(e >= -90 && e <= 90))
-        return invalid_argument("--train-elevations takes degrees in [-90, 90], not '" + item + "'");
-      p.train_elevations_deg.push_back(float(e));
-    }
+  std::stringstream list(o.train_elevations);
+  for (std::string item; std::getline(list, item, ',');) {
+    char* end = nullptr;
+    const double e = std::strtod(item.c_str(), &end);
+    if (item.empty() || *end || !(e >= -90 && e <= 90))
+      return invalid_argument("--train-elevations takes degrees in [-90, 90], not '" + item + "'");
+    p.train_elevations_deg.push_back(float(e));
   }
-  {
-    auto sensors = parse_training_sensors(o.train_sensors);
-    if (!sensors.ok()) return Error{sensors.error().code, "--train-sensors: " + sensors.error().message};
-    p.train_conditions = *sensors;
-  }
-  p.folds = o.folds;
+  auto sensors = parse_training_sensors(o.train_sensors);
+  if (!sensors.ok()) return Error{sensors.error().code, "--train-sensors: " + sensors.error().message};
+  p.train_conditions = *sensors;
+  return {};
+}
+
+// What is learnt and how it is decided: --methods, --train-on, --train-prefixes, --decision, --fusion-of,
+// --fusion-head-c, --neighbours, --train-tilt, --pca-variance, --pca-dims.
+Status training_from(const EvalOptions& o, EvalParams& p) {
   p.methods.clear();
   std::stringstream list(o.methods);
   for (std::string name; std::getline(list, name, ',');) {
@@ -105,36 +108,33 @@ Expected<EvalParams> params_from(const EvalOptions& o) {
   if (o.tilt >= 0) p.train.tilt_deg = o.tilt;
   if (o.pca_variance > 0) p.train.decision.pca_explained_variance = o.pca_variance;
   if (o.pca_dims > 0) p.train.decision.max_pca_dims = o.pca_dims;
-  p.threads = o.threads;
-  p.seed = o.seed;
-  p.explore_step = o.explore_step;
+  return {};
+}
+
+// --stages: full, Nkp and N% items, none twice (a stage twice would write its decisions twice, and
+// compare could not pair them).
+Status stages_from(const std::string& stages, EvalParams& p) {
   p.stages.clear();
-  for (const std::string& name : [&] {
-         std::vector<std::string> v;
-         std::stringstream list(o.stages);
-         for (std::string item; std::getline(list, item, ',');) v.push_back(item);
-         return v;
-       }()) {
+  std::vector<std::string> names;
+  std::stringstream list(stages);
+  for (std::string item; std::getline(list, item, ',');) names.push_back(item);
+  for (const std::string& name : names) {
     char* end = nullptr;
     const double x = std::strtod(name.c_str(), &end);
     if (name == "full") p.stages.push_back({StageKind::kFull, 0});
     else if (end && std::string(end) == "kp" && x >= 1 && std::isfinite(x)) p.stages.push_back({StageKind::kKeypoints, x});
     else if (end && std::string(end) == "%" && x > 0 && x <= 100) p.stages.push_back({StageKind::kFraction, x / 100});
     else return invalid_argument("--stages takes full, Nkp and N% items, not '" + name + "'");
-    // A stage twice would write its decisions twice (and compare could not pair them).
     for (size_t k = 0; k + 1 < p.stages.size(); ++k)
       if (stage_name(p.stages[k]) == stage_name(p.stages.back()))
         return invalid_argument("--stages names " + stage_name(p.stages.back()) + " twice");
   }
-  // The size-blind ablation runs after the whole evaluation: its methods are checked before it starts.
-  for (const std::string& name : split_list(o.size_blind == "none" ? "" : o.size_blind))
-    if (auto m = parse_method(name); !m.ok()) return Error{m.error().code, "--size-blind: " + m.error().message};
-  if (!std::any_of(p.stages.begin(), p.stages.end(), [](const Stage& s) { return s.kind == StageKind::kKeypoints; }))
-    p.explore_max_keypoints = 0;
-  if (!(o.stream_chunk >= 0 && o.stream_chunk < 1)) return invalid_argument("--stream-chunk must be in [0, 1)");
-  p.stream_chunk_fraction = o.stream_chunk;
-  p.export_histograms_dir = o.export_histograms;
-  p.cut_margin_supports = o.cut_margin;
+  return {};
+}
+
+// The test views' condition and the robustness matrix: --sensor, --distance, --elevation, --tilt,
+// --outliers, --floor, --matrix, --matrix-views.
+Status test_condition_from(const EvalOptions& o, EvalParams& p) {
   auto sensor = parse_sensor(o.sensor);
   if (!sensor.ok()) return Error{sensor.error().code, "--sensor: " + sensor.error().message};
   ScanCondition& c = p.test_condition;
@@ -150,6 +150,13 @@ Expected<EvalParams> params_from(const EvalOptions& o) {
     return invalid_argument("--matrix must be none, small or full, not '" + o.matrix + "'");
   p.matrix = robustness_conditions(o.matrix);
   p.matrix_views_per_object = o.matrix_views ? o.matrix_views : o.matrix == "full" ? 2 : 1;
+  return {};
+}
+
+// Keypoints, descriptors and histograms (sec. 2.2, 3.2.1-3.2.2, 4): --support-neighbours,
+// --min-neighbours, --keypoint-cap, --claim-min, --boundary-*, --descriptor-scale, --keypoint-response,
+// --normalise-up-to, --soft-words; and --pca-variance below 0 (no PCA).
+Status keypoints_from(const EvalOptions& o, EvalParams& p) {
   FeatureParams& fp = p.train.features;
   if (o.support_neighbours >= 0) {
     if (o.support_neighbours < 3) return invalid_argument("--support-neighbours must be at least 3");
@@ -179,6 +186,32 @@ Expected<EvalParams> params_from(const EvalOptions& o) {
   if (o.soft_words < 0) return invalid_argument("--soft-words must be 1 or more");
   if (o.soft_words > 0) p.train.bok_soft_words = o.soft_words;
   if (o.pca_variance < 0) p.train.decision.pca_explained_variance = 0;  // none: L1 on the histograms
+  return {};
+}
+
+}  // namespace
+
+// Each group of flags in the order they are checked, so the first wrong flag is the one named.
+Expected<EvalParams> params_from(const EvalOptions& o) {
+  EvalParams p;
+  if (Status s = views_from(o, p); !s.ok()) return s.error();
+  p.folds = o.folds;
+  if (Status s = training_from(o, p); !s.ok()) return s.error();
+  p.threads = o.threads;
+  p.seed = o.seed;
+  p.explore_step = o.explore_step;
+  if (Status s = stages_from(o.stages, p); !s.ok()) return s.error();
+  // The size-blind ablation runs after the whole evaluation: its methods are checked before it starts.
+  for (const std::string& name : split_list(o.size_blind == "none" ? "" : o.size_blind))
+    if (auto m = parse_method(name); !m.ok()) return Error{m.error().code, "--size-blind: " + m.error().message};
+  if (!std::any_of(p.stages.begin(), p.stages.end(), [](const Stage& s) { return s.kind == StageKind::kKeypoints; }))
+    p.explore_max_keypoints = 0;
+  if (!(o.stream_chunk >= 0 && o.stream_chunk < 1)) return invalid_argument("--stream-chunk must be in [0, 1)");
+  p.stream_chunk_fraction = o.stream_chunk;
+  p.export_histograms_dir = o.export_histograms;
+  p.cut_margin_supports = o.cut_margin;
+  if (Status s = test_condition_from(o, p); !s.ok()) return s.error();
+  if (Status s = keypoints_from(o, p); !s.ok()) return s.error();
   if (!o.default_method.empty()) {
     auto m = parse_method(o.default_method);
     if (!m.ok()) return Error{m.error().code, "--default-method: " + m.error().message};

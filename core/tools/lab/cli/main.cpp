@@ -1,11 +1,11 @@
-// glimpse-lab: offline tools over the core library. Each subcommand lives in its own lab_*.cpp and
-// registers itself here.
+// glimpse-lab: offline tools over the core library and the lab library. Each subcommand lives in its own
+// file of cli/ and registers itself here.
 #include <CLI/CLI.hpp>
 
 namespace glimpse::lab {
-void add_eval_command(CLI::App& app);   // lab_eval.cpp
-void add_views_command(CLI::App& app);  // lab_views.cpp
-void add_compare_command(CLI::App& app);  // lab_compare.cpp
+void add_eval_command(CLI::App& app);   // eval.cpp
+void add_views_command(CLI::App& app);  // views.cpp
+void add_compare_command(CLI::App& app);  // compare.cpp
 }  // namespace glimpse::lab
 
 int main(int argc, char** argv) {

@@ -63,41 +63,100 @@ Status export_histograms(const Protocol& P, int fold, const ModelImpl& impl, con
 }
 
 // ---- 5. per fold: train on the other folds' (or the training sources') views, classify its test views ----
-Status train_and_classify(Protocol& P) {
-  EvalResult& r = P.r;
-  const size_t n_cat = r.categories.size();
-  double train_seconds = 0, classify_seconds = 0;
-  size_t train_samples = 0;
-  // Augmented (TrainingCloud::augmented: learnt, but not what novelty measures against): a simulated
-  // sensor's training views, and the procedural zoo's objects when added to real ones (--also-train zoo:N).
+
+// The samples fold `fold`'s model learns from (each learnt view whole, then its prefixes, with the same
+// clouds as seen when they differ), and into `test_views` the views it tests. Augmented
+// (TrainingCloud::augmented: learnt, but not what novelty measures against): a simulated sensor's
+// training views, and the procedural zoo's objects when added to real ones (--also-train zoo:N).
+std::vector<TrainingSample> fold_samples(const Protocol& P, int fold, std::vector<size_t>& test_views) {
   const bool zoo_added = std::any_of(P.objects.begin(), P.objects.end(), [](const EvalObject& o) {
     return (o.role == EvalRole::kCrossValidate || o.role == EvalRole::kTrainOnly) && o.source != "zoo";
   });
+  std::vector<TrainingSample> samples;
+  for (size_t v = 0; v < P.views.size(); ++v) {
+    const int o = P.views[v].object;
+    if (P.r.object_fold[static_cast<size_t>(o)] == fold) {
+      if (!P.views[v].train_only) test_views.push_back(v);
+      continue;
+    }
+    if (!P.learnt(v)) continue;
+    const EvalObject& object = P.objects[static_cast<size_t>(o)];
+    const std::string id = object.source + "/" + object.id;
+    for (size_t k = 0; k < P.train_slots[v].size(); ++k) {  // the whole (learnt) view, then its prefixes
+      const FeatureSlot& slot = P.slots[static_cast<size_t>(P.train_slots[v][k])];
+      if (!slot.ok) continue;
+      const bool augmented = P.params.novelty_models &&
+                             (P.views[v].train_condition >= 0 || (zoo_added && object.source == "zoo"));
+      samples.push_back({object.category, id, slot.features, k == 0, std::nullopt, augmented});
+      const FeatureSlot& seen = P.slots[static_cast<size_t>(P.seen_slots[v][k])];
+      if (&seen != &slot && seen.ok) samples.back().as_seen = seen.features;
+    }
+  }
+  return samples;
+}
+
+// What the report shows of a fold model's calibration.
+void record_calibration(EvalResult& r, const ModelImpl& impl) {
+  r.settle_margins.push_back(impl.calibration.settle_margin);
+  r.calibration_accuracy.push_back(impl.calibration.held_out_accuracy);
+  r.fusion_head_shares.push_back(impl.fusion_head ? impl.calibration.fusion_head_share : 0.0);
+  r.novelty_thresholds.push_back(novelty_calibration(impl).novelty_threshold);
+  r.novelty_models += impl.novelty != nullptr;
+}
+
+// Fold `fold`'s test views decided by its model, every stage by every method, in preallocated slots
+// (view, stage, method); `to_ours` maps the model's categories to the report's.
+std::vector<StageDecision> classify_fold(const Protocol& P, int fold, const Model& model, const std::vector<int>& to_ours,
+                                         const std::vector<size_t>& test_views, const std::string& tag) {
+  const EvalResult& r = P.r;
+  const size_t n_cat = r.categories.size();
+  const ModelImpl& impl = *model.impl;
+  const size_t n_methods = P.params.methods.size(), per_view = P.stages.size() * n_methods;
+  std::vector<StageDecision> decisions(test_views.size() * per_view);
+  parallel_for(test_views.size() * P.stages.size(), P.threads, tag + ": classify", P.progress, [&](size_t item) {
+    const size_t t = item / P.stages.size(), s = item % P.stages.size();
+    const size_t v = test_views[t];
+    const int id = P.stage_slot[v][s];
+    const bool ok = id >= 0 && P.slots[id].ok;
+    for (size_t m = 0; m < n_methods; ++m) {
+      StageDecision& d = decisions[t * per_view + s * n_methods + m];
+      d.fold = fold;
+      d.object = P.views[v].object;
+      d.view = P.views[v].view;
+      d.stage = stage_name(P.stages[s]);
+      d.method = P.params.methods[m];
+      d.truth = r.object_truth[static_cast<size_t>(d.object)];
+      d.unknown_class = r.object_unknown_class[static_cast<size_t>(d.object)];
+      d.points = id >= 0 ? P.slots[id].count : 0;
+      d.visible_fraction = double(d.points) / double(P.full_points(v));
+      if (!ok) continue;
+      d.keypoints = P.slots[id].features.positions.size();
+      const MethodDecision decision = method_decision(impl, d.method, P.slots[id].features);
+      const Eigen::VectorXd& scores = decision.scores;
+      d.scores.assign(n_cat, 0.0);
+      for (int c = 0; c < static_cast<int>(scores.size()); ++c) d.scores[to_ours[c]] = scores[c];
+      Classification c;
+      c.method = d.method;
+      c.winner = argmax(scores);
+      judge_unknown(model, decision, P.slots[id].features, c);
+      d.winner = to_ours[c.winner];
+      d.novelty = c.novelty;
+      d.unknown = c.unknown;
+    }
+  });
+  return decisions;
+}
+
+Status train_and_classify(Protocol& P) {
+  EvalResult& r = P.r;
+  double train_seconds = 0, classify_seconds = 0;
+  size_t train_samples = 0;
   for (int fold = 0; fold < P.folds; ++fold) {
     const std::string tag = r.cross_source ? std::string("all sources") : "fold " + std::to_string(fold + 1) + "/" + std::to_string(P.folds);
     auto t0 = Clock::now();
     if (P.progress) P.progress({tag + ": train", 0, 1});
-    std::vector<TrainingSample> samples;
     std::vector<size_t> test_views;
-    for (size_t v = 0; v < P.views.size(); ++v) {
-      const int o = P.views[v].object;
-      if (r.object_fold[static_cast<size_t>(o)] == fold) {
-        if (!P.views[v].train_only) test_views.push_back(v);
-        continue;
-      }
-      if (!P.learnt(v)) continue;
-      const EvalObject& object = P.objects[static_cast<size_t>(o)];
-      const std::string id = object.source + "/" + object.id;
-      for (size_t k = 0; k < P.train_slots[v].size(); ++k) {  // the whole (learnt) view, then its prefixes
-        const FeatureSlot& slot = P.slots[static_cast<size_t>(P.train_slots[v][k])];
-        if (!slot.ok) continue;
-        const bool augmented = P.params.novelty_models &&
-                               (P.views[v].train_condition >= 0 || (zoo_added && object.source == "zoo"));
-        samples.push_back({object.category, id, slot.features, k == 0, std::nullopt, augmented});
-        const FeatureSlot& seen = P.slots[static_cast<size_t>(P.seen_slots[v][k])];
-        if (&seen != &slot && seen.ok) samples.back().as_seen = seen.features;
-      }
-    }
+    std::vector<TrainingSample> samples = fold_samples(P, fold, test_views);
     train_samples += samples.size();
     TrainParams tp = P.tp;  // the model records the density its training views had (scan filters)
     tp.filters.relative_density = r.trained_density[size_t(fold)];
@@ -105,11 +164,7 @@ Status train_and_classify(Protocol& P) {
     if (!trained.ok()) return Error{trained.error().code, tag + ": training failed: " + trained.error().message};
     const auto model = std::make_shared<const Model>(std::move(*trained));
     P.fold_models.push_back(model);
-    r.settle_margins.push_back(model->impl->calibration.settle_margin);
-    r.calibration_accuracy.push_back(model->impl->calibration.held_out_accuracy);
-    r.fusion_head_shares.push_back(model->impl->fusion_head ? model->impl->calibration.fusion_head_share : 0.0);
-    r.novelty_thresholds.push_back(novelty_calibration(*model->impl).novelty_threshold);
-    r.novelty_models += model->impl->novelty != nullptr;
+    record_calibration(r, *model->impl);
     train_seconds += seconds_since(t0);
     if (P.progress) P.progress({tag + ": train", 1, 1});
 
@@ -120,40 +175,7 @@ Status train_and_classify(Protocol& P) {
     for (const std::string& c : model->categories)
       to_ours.push_back(static_cast<int>(std::find(r.categories.begin(), r.categories.end(), c) - r.categories.begin()));
     P.fold_to_ours.push_back(to_ours);
-    const ModelImpl& impl = *model->impl;
-    const size_t n_methods = P.params.methods.size(), per_view = P.stages.size() * n_methods;
-    std::vector<StageDecision> decisions(test_views.size() * per_view);
-    parallel_for(test_views.size() * P.stages.size(), P.threads, tag + ": classify", P.progress, [&](size_t item) {
-      const size_t t = item / P.stages.size(), s = item % P.stages.size();
-      const size_t v = test_views[t];
-      const int id = P.stage_slot[v][s];
-      const bool ok = id >= 0 && P.slots[id].ok;
-      for (size_t m = 0; m < n_methods; ++m) {
-        StageDecision& d = decisions[t * per_view + s * n_methods + m];
-        d.fold = fold;
-        d.object = P.views[v].object;
-        d.view = P.views[v].view;
-        d.stage = stage_name(P.stages[s]);
-        d.method = P.params.methods[m];
-        d.truth = r.object_truth[static_cast<size_t>(d.object)];
-        d.unknown_class = r.object_unknown_class[static_cast<size_t>(d.object)];
-        d.points = id >= 0 ? P.slots[id].count : 0;
-        d.visible_fraction = double(d.points) / double(P.full_points(v));
-        if (!ok) continue;
-        d.keypoints = P.slots[id].features.positions.size();
-        const MethodDecision decision = method_decision(impl, d.method, P.slots[id].features);
-        const Eigen::VectorXd& scores = decision.scores;
-        d.scores.assign(n_cat, 0.0);
-        for (int c = 0; c < static_cast<int>(scores.size()); ++c) d.scores[to_ours[c]] = scores[c];
-        Classification c;
-        c.method = d.method;
-        c.winner = argmax(scores);
-        judge_unknown(*model, decision, P.slots[id].features, c);
-        d.winner = to_ours[c.winner];
-        d.novelty = c.novelty;
-        d.unknown = c.unknown;
-      }
-    });
+    std::vector<StageDecision> decisions = classify_fold(P, fold, *model, to_ours, test_views, tag);
     r.decisions.insert(r.decisions.end(), std::make_move_iterator(decisions.begin()),
                        std::make_move_iterator(decisions.end()));
     classify_seconds += seconds_since(t0);

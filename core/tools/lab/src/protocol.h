@@ -1,5 +1,5 @@
-// The evaluation protocol's shared state and helpers (evaluation_protocol.cpp runs the phases;
-// evaluation_robustness.cpp adds the robustness matrix with the same views, features and models).
+// The evaluation protocol's shared state and helpers (protocol.cpp runs the phases; robustness.cpp adds
+// the robustness matrix with the same views, features and models) and the report's sections.
 #pragma once
 
 #include <omp.h>
@@ -124,7 +124,7 @@ struct Protocol {
 
 void compute_slot(Protocol& P, FeatureSlot& slot, const Cloud& cloud);
 
-// The protocol's phases before training (evaluation_views.cpp, evaluation_features.cpp), in the order
+// The protocol's phases before training (protocol_views.cpp, protocol_features.cpp), in the order
 // run_evaluation calls them.
 Status validate(const std::vector<EvalObject>& objects, const EvalParams& p);
 void assign_folds(Protocol& P);        // 0. categories, folds, sources
@@ -140,11 +140,13 @@ void stage_statistics(Protocol& P);    // over the tested views
 void robustness_matrix(Protocol& P);
 // The report's sections on a sensor's test views and on the robustness matrix ("" when neither).
 std::string robustness_section(const EvalResult& r);
-// evaluation_report_ablations.cpp: "How much is size", keypoints per view, the keypoint ablation.
+// report_protocol.cpp: the protocol table, every setting beside the paper's.
+std::string protocol_section(const EvalResult& r);
+// report_ablations.cpp: "How much is size", keypoints per view, the keypoint ablation.
 std::string size_section(const EvalResult& r);
 std::string keypoints_section(const EvalResult& r);
 std::string keypoint_ablation_section(const EvalResult& r);
-// evaluation_report_streams.cpp: category changes along the exploration, streams' settling.
+// report_streams.cpp: category changes along the exploration, streams' settling.
 std::string changes_section(const EvalResult& r);
 std::string streams_section(const EvalResult& r);
 

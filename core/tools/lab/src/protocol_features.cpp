@@ -1,4 +1,4 @@
-// run_evaluation's features, phases 3-4 (evaluation_protocol.cpp runs them in order): every full view's
+// run_evaluation's features, phases 3-4 (protocol.cpp runs them in order): every full view's
 // features and keypoint cut margin, the stage cuts of tested views and the training prefixes of learnt
 // ones (each computed once, in parallel over clouds), and the stage statistics over the tested views.
 #include <omp.h>

@@ -1,4 +1,4 @@
-// run_evaluation's data, phases 0-2 (evaluation_protocol.cpp runs them in order): the objects checked,
+// run_evaluation's data, phases 0-2 (protocol.cpp runs them in order): the objects checked,
 // categories and folds, every object's full 3D cloud (sec. 3.4), its single views from the paper's
 // viewpoints, the density each model learns, and test views from a simulated sensor when asked.
 #include <omp.h>

@@ -1,6 +1,5 @@
 // The report's ablation sections: how much is size (the size-only method and the size-blind rows),
-// keypoints and visible fraction per view, and the keypoint ablation (evaluation_report.cpp puts them in
-// order).
+// keypoints and visible fraction per view, and the keypoint ablation (report.cpp puts them in order).
 #include <algorithm>
 #include <sstream>
 #include <string>

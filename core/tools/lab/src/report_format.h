@@ -1,5 +1,5 @@
-// Formatting shared by the evaluation report's writers (evaluation_report.cpp: the markdown sections;
-// evaluation_writers.cpp: CSV, SVG, the terminal summary and the report folder; evaluation_robustness.cpp).
+// Formatting shared by the evaluation report's writers (report*.cpp: the markdown sections;
+// report_writers.cpp: CSV, SVG, the terminal summary and the report folder; robustness.cpp).
 #pragma once
 
 #include <cmath>

@@ -1,5 +1,5 @@
 // The report's sections on the exploration (sec. 4): how often the decision changes category as
-// keypoints appear, and when a streamed decision settles (evaluation_report.cpp puts them in order).
+// keypoints appear, and when a streamed decision settles (report.cpp puts them in order).
 #include <map>
 #include <sstream>
 #include <string>

@@ -1,4 +1,4 @@
-// Test views as real sensors take them (sensors.h) and the robustness matrix: the trained fold models
+// Test views as real sensors take them (views/sensors.h) and the robustness matrix: the trained fold models
 // classify each tested object's views under each scan condition, after the same filters.
 #include <algorithm>
 #include <cmath>
@@ -55,11 +55,94 @@ std::vector<ScanCondition> robustness_conditions(std::string_view matrix) {
 
 namespace eval_internal {
 
+namespace {
+
+// One view of the matrix under a condition: its points before and after the scan filters, and whether a
+// ground plane was removed.
+struct ConditionView {
+  size_t raw_points = 0, kept_points = 0;
+  bool ground = false;
+};
+
+// Tested view v taken under `condition`, filtered to its fold model's density and decided by that model
+// at each of `stages` (cut at the same share of its points as of the ideal view's), into `decisions`.
+ConditionView decide_condition_view(const Protocol& P, const ScanCondition& condition, const std::vector<Stage>& stages,
+                                    size_t v, size_t n_views, StageDecision* decisions) {
+  const EvalParams& params = P.params;
+  const EvalResult& r = P.r;
+  const MethodId method = r.change_method;
+  const size_t o = static_cast<size_t>(P.views[v].object);
+  const int fold = r.object_fold[o];
+  const Cloud raw = condition_view(P.objects[o].mesh, P.objects[o].any_pose, P.full[o], size_t(P.views[v].view), n_views, P.object_seed(o),
+                                   condition, params.points_per_object, params.hpr_radius_factor);
+  ScanFilterParams fp = params.filters;
+  fp.relative_density = r.trained_density[size_t(fold)];
+  ScanFilterReport report;
+  const Cloud cloud = filter_scan(raw, fp, &report);
+  const ConditionView seen{raw.points.size(), cloud.points.size(), report.ground > 0};
+  const size_t ideal = std::max<size_t>(1, P.views[v].ideal_points ? P.views[v].ideal_points : P.views[v].cloud.points.size());
+  const double full_equivalent = double(P.full[o].size()) * double(cloud.points.size()) / double(ideal);
+  const ModelImpl& impl = *P.fold_models[size_t(fold)]->impl;
+  for (size_t s = 0; s < stages.size(); ++s) {
+    StageDecision& d = decisions[s];
+    d.fold = fold, d.object = int(o), d.view = P.views[v].view, d.stage = stage_name(stages[s]), d.method = method;
+    d.truth = r.object_truth[o];
+    size_t count = cloud.points.size();
+    if (stages[s].kind == StageKind::kFraction)
+      count = std::min(count, size_t(std::llround(stages[s].value * full_equivalent)));
+    d.points = count;
+    if (count == 0) continue;
+    auto f = cloud_features(reveal_top_down(cloud, count), P.features, P.base, 1);
+    if (!f.ok()) continue;
+    const Eigen::VectorXd scores = method_scores(impl, method, *f);
+    d.keypoints = f->positions.size();
+    d.scores.assign(r.categories.size(), 0.0);
+    const std::vector<int>& to_ours = P.fold_to_ours[size_t(fold)];
+    for (int c = 0; c < int(scores.size()); ++c) d.scores[size_t(to_ours[size_t(c)])] = scores[c];
+    d.winner = to_ours[size_t(argmax(scores))];
+  }
+  return seen;
+}
+
+double median_of(std::vector<size_t> x) {
+  if (x.empty()) return 0.0;
+  std::nth_element(x.begin(), x.begin() + std::ptrdiff_t(x.size() / 2), x.end());
+  return double(x[x.size() / 2]);
+}
+
+// The matrix's row of a condition: accuracy per main stage (none for keypoint stages), views whose first
+// stage failed, views with a ground plane removed, median points before and after the filters.
+RobustnessRow robustness_row(const EvalResult& r, const ScanCondition& condition, size_t n_stages,
+                             const std::vector<StageDecision>& decisions, const std::vector<ConditionView>& seen) {
+  const MethodId method = r.change_method;
+  RobustnessRow row;
+  row.condition = condition;
+  row.views = seen.size();
+  for (const Stage& s : r.params.stages) {
+    if (s.kind == StageKind::kKeypoints) {
+      row.accuracy.push_back(NAN), row.balanced.push_back(NAN);
+      continue;
+    }
+    row.accuracy.push_back(accuracy(decisions, stage_name(s), method).percent());
+    row.balanced.push_back(balanced_accuracy(decisions, stage_name(s), method, r.categories.size()));
+  }
+  std::vector<size_t> raw_points, kept_points;
+  for (size_t i = 0; i < seen.size(); ++i) {
+    row.failed += decisions[i * n_stages].winner < 0;
+    row.ground_views += seen[i].ground;
+    raw_points.push_back(seen[i].raw_points), kept_points.push_back(seen[i].kept_points);
+  }
+  row.median_points_raw = median_of(raw_points);
+  row.median_points = median_of(kept_points);
+  return row;
+}
+
+}  // namespace
+
 void robustness_matrix(Protocol& P) {
   const EvalParams& params = P.params;
   if (params.matrix.empty() || P.fold_models.empty()) return;
   EvalResult& r = P.r;
-  const MethodId method = r.change_method;
   const size_t n_views = std::clamp<size_t>(params.views_per_object, 1, 6);
   const size_t k = std::clamp<size_t>(params.matrix_views_per_object, 1, n_views);
   std::vector<size_t> chosen;  // k of each tested object's views, evenly spaced
@@ -72,63 +155,11 @@ void robustness_matrix(Protocol& P) {
   for (const ScanCondition& condition : params.matrix) {
     const auto t0 = Clock::now();
     std::vector<StageDecision> decisions(chosen.size() * stages.size());
-    std::vector<size_t> raw_points(chosen.size()), kept_points(chosen.size()), ground(chosen.size());
+    std::vector<ConditionView> seen(chosen.size());
     parallel_for(chosen.size(), P.threads, "robustness: " + describe(condition), P.progress, [&](size_t i) {
-      const size_t v = chosen[i];
-      const size_t o = static_cast<size_t>(P.views[v].object);
-      const int fold = r.object_fold[o];
-      const Cloud raw = condition_view(P.objects[o].mesh, P.objects[o].any_pose, P.full[o], size_t(P.views[v].view), n_views, P.object_seed(o),
-                                       condition, params.points_per_object, params.hpr_radius_factor);
-      ScanFilterParams fp = params.filters;
-      fp.relative_density = r.trained_density[size_t(fold)];
-      ScanFilterReport report;
-      const Cloud cloud = filter_scan(raw, fp, &report);
-      raw_points[i] = raw.points.size(), kept_points[i] = cloud.points.size(), ground[i] = report.ground > 0;
-      // The stage cuts: the same share of this view's points as of the ideal view's.
-      const size_t ideal = std::max<size_t>(1, P.views[v].ideal_points ? P.views[v].ideal_points : P.views[v].cloud.points.size());
-      const double full_equivalent = double(P.full[o].size()) * double(cloud.points.size()) / double(ideal);
-      const ModelImpl& impl = *P.fold_models[size_t(fold)]->impl;
-      for (size_t s = 0; s < stages.size(); ++s) {
-        StageDecision& d = decisions[i * stages.size() + s];
-        d.fold = fold, d.object = int(o), d.view = P.views[v].view, d.stage = stage_name(stages[s]), d.method = method;
-        d.truth = r.object_truth[o];
-        size_t count = cloud.points.size();
-        if (stages[s].kind == StageKind::kFraction)
-          count = std::min(count, size_t(std::llround(stages[s].value * full_equivalent)));
-        d.points = count;
-        if (count == 0) continue;
-        auto f = cloud_features(reveal_top_down(cloud, count), P.features, P.base, 1);
-        if (!f.ok()) continue;
-        const Eigen::VectorXd scores = method_scores(impl, method, *f);
-        d.keypoints = f->positions.size();
-        d.scores.assign(r.categories.size(), 0.0);
-        const std::vector<int>& to_ours = P.fold_to_ours[size_t(fold)];
-        for (int c = 0; c < int(scores.size()); ++c) d.scores[size_t(to_ours[size_t(c)])] = scores[c];
-        d.winner = to_ours[size_t(argmax(scores))];
-      }
+      seen[i] = decide_condition_view(P, condition, stages, chosen[i], n_views, decisions.data() + i * stages.size());
     });
-    RobustnessRow row;
-    row.condition = condition;
-    row.views = chosen.size();
-    for (const Stage& s : params.stages) {
-      if (s.kind == StageKind::kKeypoints) {
-        row.accuracy.push_back(NAN), row.balanced.push_back(NAN);
-        continue;
-      }
-      row.accuracy.push_back(accuracy(decisions, stage_name(s), method).percent());
-      row.balanced.push_back(balanced_accuracy(decisions, stage_name(s), method, r.categories.size()));
-    }
-    for (size_t i = 0; i < chosen.size(); ++i) {
-      row.failed += decisions[i * stages.size()].winner < 0;
-      row.ground_views += ground[i];
-    }
-    auto median = [](std::vector<size_t> x) {
-      if (x.empty()) return 0.0;
-      std::nth_element(x.begin(), x.begin() + std::ptrdiff_t(x.size() / 2), x.end());
-      return double(x[x.size() / 2]);
-    };
-    row.median_points_raw = median(raw_points);
-    row.median_points = median(kept_points);
+    RobustnessRow row = robustness_row(r, condition, stages.size(), decisions, seen);
     row.seconds = seconds_since(t0);
     r.robustness.push_back(std::move(row));
   }

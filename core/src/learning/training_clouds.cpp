@@ -1,0 +1,167 @@
+// train() (model.h): the features of every training cloud, whole and as its top-down prefixes, computed in
+// parallel, then train_on_features (training.cpp) learns from them.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <string>
+
+#include "glimpse/clock.h"
+#include "glimpse/learning/model.h"
+#include "glimpse/learning/train_params.h"
+#include "glimpse/learning/training.h"
+#include "glimpse/threads.h"
+#include "glimpse/views/exploration.h"
+#include "glimpse/views/placement.h"
+#include "glimpse/views/sampling.h"
+#include "learning/training_checks.h"
+
+namespace glimpse {
+
+Cloud training_view(const Cloud& cloud, const TrainParams& params, uint64_t salt) {
+  if (!(params.tilt_deg > 0)) return cloud;
+  uint64_t z = params.seed + 0x9E3779B97F4A7C15ull * (salt + 1);  // splitmix64 of (seed, salt)
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return rotate_about_centroid(cloud, random_tilt(z ^ (z >> 31), params.tilt_deg));
+}
+
+namespace {
+
+// One cloud to learn: a training cloud whole (prefix 0) or its top `prefix` points.
+struct Job {
+  size_t cloud;
+  size_t prefix;
+};
+
+// The clouds to learn from: each training cloud whole, then its top-down prefixes; `learnt` receives each
+// training cloud as it is learnt (training_view).
+std::vector<Job> learning_jobs(const std::vector<TrainingCloud>& data, const TrainParams& params,
+                               std::vector<Cloud>& learnt) {
+  std::vector<Job> jobs;
+  learnt.assign(data.size(), Cloud{});
+  std::map<std::string, uint64_t> seen;  // clouds so far per object
+  for (size_t i = 0; i < data.size(); ++i) {
+    // The tilt is seeded by the object's name and the cloud's place among its views, not by its
+    // place in the list: the same views learnt anywhere (the lab, the service) get the same tilts.
+    const uint64_t salt = data[i].object_id.empty() ? i : object_seed(params.seed, data[i].object_id) + seen[data[i].object_id]++;
+    learnt[i] = training_view(data[i].cloud, params, salt);
+    jobs.push_back({i, 0});
+    const size_t n = data[i].cloud.points.size();
+    for (double f : params.partial_prefixes) {
+      const auto count = static_cast<size_t>(std::lround(f * static_cast<double>(n)));
+      if (count >= params.features.min_points && count < n) jobs.push_back({i, count});
+    }
+  }
+  return jobs;
+}
+
+// Every job's features, in parallel; batches keep progress and cancel responsive. `tilted`: the clouds
+// learnt are turned, and `as_seen` receives the features of the clouds as given, what calibration
+// decides (what a sensor sends).
+Status job_features(const std::vector<TrainingCloud>& data, const std::vector<Cloud>& learnt,
+                    const std::vector<Job>& jobs, const TrainParams& params, bool tilted,
+                    std::vector<Expected<CloudFeatures>>& feats, std::vector<Expected<CloudFeatures>>& as_seen,
+                    const ProgressFn& progress, const CancelFn& cancel) {
+  const std::vector<MethodId> base = base_methods(params);
+  const int threads = resolve_threads(params.threads);
+  feats.assign(jobs.size(), internal_error("not computed"));
+  as_seen.assign(tilted ? jobs.size() : 0, internal_error("not computed"));
+  const MethodFeatureParams as_given = method_feature_params(params);
+  MethodFeatureParams learnt_only = as_given;
+  learnt_only.top_prefix_fraction = 0;
+  const size_t batch = static_cast<size_t>(threads) * 4;
+  for (size_t begin = 0; begin < jobs.size(); begin += batch) {
+    if (cancel && cancel()) return cancelled("training cancelled");
+    const int64_t end = static_cast<int64_t>(std::min(jobs.size(), begin + batch));
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 1)
+    for (int64_t j = static_cast<int64_t>(begin); j < end; ++j) {
+      auto features_of = [&](const Cloud& cloud, const MethodFeatureParams& p) {
+        return jobs[j].prefix ? cloud_features(reveal_top_down(cloud, jobs[j].prefix), p, base, 1, cancel)
+                              : cloud_features(cloud, p, base, 1, cancel);
+      };
+      // Tilted, calibration decides the clouds as given: only they need the novelty's top-down prefix.
+      feats[j] = features_of(learnt[jobs[j].cloud], tilted ? learnt_only : as_given);
+      if (tilted) as_seen[j] = features_of(data[jobs[j].cloud].cloud, as_given);
+    }
+    if (progress) progress({"features", static_cast<size_t>(end), jobs.size()});
+  }
+  return {};
+}
+
+// The jobs' features as samples to learn from. A whole cloud must work; a prefix too small or too thin
+// for a method is only skipped.
+Expected<std::vector<TrainingSample>> training_samples(const std::vector<TrainingCloud>& data,
+                                                       const std::vector<Job>& jobs,
+                                                       std::vector<Expected<CloudFeatures>>& feats,
+                                                       std::vector<Expected<CloudFeatures>>& as_seen, bool tilted) {
+  std::vector<TrainingSample> samples;
+  samples.reserve(jobs.size());
+  for (size_t j = 0; j < jobs.size(); ++j) {
+    const TrainingCloud& d = data[jobs[j].cloud];
+    if (!feats[j].ok()) {
+      if (jobs[j].prefix && feats[j].error().code == ErrorCode::kInvalidArgument) continue;
+      return Error{feats[j].error().code, "training cloud " + std::to_string(jobs[j].cloud) + " (category '" +
+                                              d.category + "', object '" + d.object_id + "')" +
+                                              (jobs[j].prefix ? ", top " + std::to_string(jobs[j].prefix) + " points" : "") +
+                                              ": " + feats[j].error().message};
+    }
+    samples.push_back({d.category, d.object_id, std::move(*feats[j]), jobs[j].prefix == 0, std::nullopt, d.augmented});
+    if (tilted && as_seen[j].ok()) samples.back().as_seen = std::move(*as_seen[j]);
+  }
+  return samples;
+}
+
+// The parameters learnt with: the density clouds are classified at, when the scan filters need one and
+// none is given, is the median relative density of the training clouds as given.
+TrainParams with_learnt_density(const std::vector<TrainingCloud>& data, const TrainParams& params) {
+  TrainParams learnt_params = params;
+  if (params.filter_scans && params.filters.relative_density <= 0) {
+    const int threads = resolve_threads(params.threads);
+    std::vector<double> density(data.size(), 0.0);
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 4)
+    for (int64_t i = 0; i < static_cast<int64_t>(data.size()); ++i) density[i] = relative_density(data[i].cloud.points);
+    std::erase(density, 0.0);
+    if (!density.empty()) {
+      std::nth_element(density.begin(), density.begin() + std::ptrdiff_t(density.size() / 2), density.end());
+      learnt_params.filters.relative_density = density[density.size() / 2];
+    }
+  }
+  return learnt_params;
+}
+
+// Statistics count the clouds given, not the prefixes made of them.
+void count_given_clouds(Model& model, const std::vector<TrainingCloud>& data) {
+  model.stats.clouds = data.size();
+  std::fill(model.stats.clouds_per_category.begin(), model.stats.clouds_per_category.end(), 0);
+  for (const TrainingCloud& d : data)
+    ++model.stats.clouds_per_category[static_cast<size_t>(
+        std::find(model.categories.begin(), model.categories.end(), d.category) - model.categories.begin())];
+}
+
+}  // namespace
+
+Expected<Model> train(const std::vector<TrainingCloud>& data, const TrainParams& params, const ProgressFn& progress,
+                      const CancelFn& cancel) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (Status s = check_training_set(data, params); !s.ok()) return s.error();
+  std::vector<Cloud> learnt;
+  const std::vector<Job> jobs = learning_jobs(data, params, learnt);
+  // Tilted training views: the clouds as given are what calibration decides (what a sensor sends).
+  const bool tilted = params.tilt_deg > 0 && params.calibration_folds >= 2;
+  std::vector<Expected<CloudFeatures>> feats, as_seen;
+  if (Status s = job_features(data, learnt, jobs, params, tilted, feats, as_seen, progress, cancel); !s.ok())
+    return s.error();
+  auto samples = training_samples(data, jobs, feats, as_seen, tilted);
+  if (!samples.ok()) return samples.error();
+  feats.clear();
+  as_seen.clear();
+  auto model = train_on_features(std::move(*samples), with_learnt_density(data, params), progress, cancel);
+  if (model.ok()) {
+    count_given_clouds(*model, data);
+    model->stats.seconds = ms_since(t0) / 1000.0;
+  }
+  return model;
+}
+
+}  // namespace glimpse

@@ -1,0 +1,111 @@
+// The evaluation protocol on real collections, reduced: SHREC 2007 cross-validated and SHREC -> PSB, with
+// floors just under what is measured (skipped when the data is absent).
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "glimpse/lab/evaluation.h"
+#include "reduced_params.h"
+
+namespace glimpse {
+namespace {
+
+using testing::reduced_params;
+
+std::string shrec_dir() {
+  if (const char* env = std::getenv("GLIMPSE_SHREC_DIR")) return env;
+  return GLIMPSE_SOURCE_DIR "/../shared/data/shrec07";
+}
+
+TEST(RunEvaluation, ReducedProtocolOnShrec) {
+  const std::string dir = shrec_dir();
+  if (!std::filesystem::is_directory(dir))
+    GTEST_SKIP() << "SHREC 2007 not found at " << dir << " (set GLIMPSE_SHREC_DIR to run this test)";
+  auto objects = load_dataset_objects(dir, 42, 10);
+  ASSERT_TRUE(objects.ok()) << objects.error().message;
+  EvalParams p = reduced_params();
+  p.methods = {MethodId::kBoK, MethodId::kFusion};
+  p.seed = 42;
+  p.train_conditions = default_training_sensors();  // the recipe's training views
+  auto r = run_evaluation(*objects, p, "shrec");
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  // Floors just under what is measured (10 objects per category, 2 folds, 3 views, 3000 points, seed 42;
+  // 150 test views, one is 0.7 points; the recipe's training sensors and logistic decision); raise them
+  // as recognition improves. The cameras' training views are thinned to the model's one density (each to
+  // its object's own ideal views' instead: fusion 95.3 on full views; BoK, which learns the cameras' views
+  // too in this recipe, not in the paper's, 59.3: its keypoints follow the density).
+  EXPECT_GE(accuracy(r->decisions, "full", MethodId::kFusion).percent(), 97.0);  // measured 98.0
+  EXPECT_GE(accuracy(r->decisions, "20%", MethodId::kFusion).percent(), 97.0);   // measured 98.0
+  EXPECT_GE(accuracy(r->decisions, "full", MethodId::kBoK).percent(), 47.5);     // measured 48.7
+  const SettleRow settled = settle_summary(r->streams, -1);
+  // Settling needs the winner to hold a whole window, the newest chunk included: later, righter.
+  // "Unknown" settles like a category and counts wrong here (every view is known). Novelty comes from the
+  // novelty model (the cameras' views augmented: the threshold is the ideal views', not widened by the
+  // cameras'), and settling is cautious both ways: 94.0 % settled, 97.9 % right, at 12.1 % visible.
+  EXPECT_GE(settled.settled_percent(), 93.0);    // measured 94.0 (141 of 150 views)
+  EXPECT_GE(settled.precision_percent(), 97.5);  // measured 97.9 (138 of 141)
+  EXPECT_LE(settled.mean_visible_percent, 12.5); // measured 12.1
+  std::cout << "shrec reduced: full fusion " << accuracy(r->decisions, "full", MethodId::kFusion).percent()
+            << " %, 20 % fusion " << accuracy(r->decisions, "20%", MethodId::kFusion).percent() << " %, full BoK "
+            << accuracy(r->decisions, "full", MethodId::kBoK).percent() << " %; streams settled "
+            << settled.settled_percent() << " % at " << settled.mean_visible_percent << " % visible, precision "
+            << settled.precision_percent() << " %\n";
+}
+
+std::string psb_dir() {
+  if (const char* env = std::getenv("GLIMPSE_PSB_DIR")) return env;
+  return GLIMPSE_SOURCE_DIR "/../shared/data/psb";
+}
+
+// The world is not SHREC: a model of SHREC objects judged on another collection (PSB and ABC parts).
+TEST(RunEvaluation, ReducedCrossSourceShrecToPsb) {
+  const std::string train_dir = shrec_dir(), test_dir = psb_dir();
+  if (!std::filesystem::is_directory(train_dir) || !std::filesystem::is_directory(test_dir))
+    GTEST_SKIP() << "SHREC 2007 (" << train_dir << ") or PSB (" << test_dir
+                 << ") not found (set GLIMPSE_SHREC_DIR / GLIMPSE_PSB_DIR to run this test)";
+  auto train = load_dataset_objects(train_dir, 42, 10);
+  auto test = load_dataset_objects(test_dir, 42, 8);
+  ASSERT_TRUE(train.ok()) << train.error().message;
+  ASSERT_TRUE(test.ok()) << test.error().message;
+  std::vector<EvalObject> objects;
+  for (EvalObject& o : *train) o.role = EvalRole::kTrainOnly, objects.push_back(std::move(o));
+  for (EvalObject& o : *test) o.role = EvalRole::kTestOnly, objects.push_back(std::move(o));
+  EvalParams p = reduced_params();
+  p.methods = {MethodId::kSize, MethodId::kFusion};
+  p.stages = {{StageKind::kFull, 0}, {StageKind::kFraction, 0.1}, {StageKind::kFraction, 0.2}};
+  p.explore_max_keypoints = 0;
+  p.seed = 42;
+  p.train_conditions = default_training_sensors();  // the recipe's training views
+  auto r = run_evaluation(objects, p, "shrec -> psb");
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  const double full = accuracy(r->decisions, "full", MethodId::kFusion).percent();
+  const double p10 = accuracy(r->decisions, "10%", MethodId::kFusion).percent();
+  const double p20 = accuracy(r->decisions, "20%", MethodId::kFusion).percent();
+  const double size = accuracy(r->decisions, "full", MethodId::kSize).percent();
+  const SettleRow settled = settle_summary(r->streams, -1);
+  std::cout << "shrec -> psb reduced: fusion full " << full << " %, 10 % " << p10 << " %, 20 % " << p20
+            << " %, size only full " << size << " %; streams settled " << settled.settled_percent() << " % at "
+            << settled.mean_visible_percent << " % visible, precision " << settled.precision_percent() << " %\n";
+  // 10 SHREC objects per category -> 8 PSB objects per category (6 parts), 3 views, 3000 points, seed 42:
+  // 114 test views, one is 0.9 points. Measured with the recipe's training sensors and the fusion's logistic
+  // decision, the cameras' training views thinned to the model's one density: fusion 99.1 / 97.4 / 99.1
+  // (full / 10 % / 20 %), size only 72.8 on full views (it learns the cameras' extents too); streams
+  // settle on 93.0 % of views, 98.1 % of them right.
+  EXPECT_GE(full, 98.0);  // measured 99.1
+  EXPECT_GE(p10, 96.0);   // measured 97.4
+  EXPECT_GE(p20, 98.0);   // measured 99.1
+  EXPECT_GT(full, size + 15);  // shape adds to what a ruler gets right
+  EXPECT_GE(settled.settled_percent(), 92.0);    // measured 93.0
+  // Settled as "unknown" counts wrong. Novelty comes from the novelty model (the cameras' views
+  // augmented: PSB views look more novel to a model of SHREC's ideal views alone), and settling is
+  // cautious both ways (fewer known views settle "unknown", and a category settles only on a novelty well
+  // inside the threshold).
+  EXPECT_GE(settled.precision_percent(), 97.0);  // measured 98.1
+}
+
+}  // namespace
+}  // namespace glimpse
