@@ -32,6 +32,7 @@ if [[ $MODE == zoo ]]; then
   run 2 eval --zoo 3 --methods vfh,ush --keypoint-ablation --out "$TMP/x" && has "$TMP/err" "needs bok, bog or kgh"
   run 2 eval --zoo 3 --hold-out dragon --out "$TMP/x" && has "$TMP/err" "--hold-out: no object of category 'dragon' \(categories: chair, fourleg"
   run 2 eval --zoo 3 --hold-out human,chair,table,mechanic --out "$TMP/x" && has "$TMP/err" "at least two learnt categories must remain"
+  run 2 eval --leave-one-out zoo:3 --out "$TMP/x" && has "$TMP/err" "--leave-one-out needs at least two sources"
   run 105 eval --zoo 3 --poses upright --out "$TMP/x" && has "$TMP/err" "--poses: upright not in \{dataset,given\}"
   # What would make the figures wrong is refused before the run, not found after it (or never).
   run 2 eval --zoo 3 --views 0 --out "$TMP/x" && has "$TMP/err" "--views takes 1-6"
@@ -174,6 +175,16 @@ elif [[ $MODE == shrec ]]; then
     has "$TMP/resub/report.md" "the tested objects were learnt too"
     has "$TMP/out" "tested on 15 objects of .* \(learnt too: resubstitution, not a held-out figure\):"
     ge "$(acc BoK 2)" 76 "BoK full, 3 objects per category learnt and tested"  # measured 77.8 (paper 89; 90 views: 1.1 points each)
+  fi
+  # Leave one source out: SHREC tested by a model of the zoo, the zoo by a model of SHREC; a report each
+  # and the table over both (3 objects per category, one view each).
+  if run 0 eval --leave-one-out "zoo:3,$DIR" --max-objects 3 --views 1 --methods fusion --stages full \
+      --stream-chunk 0 --size-blind none --matrix none --train-sensors none --out "$TMP/loso"; then
+    L="$TMP/loso/leave-one-out.md"
+    [[ -s $TMP/loso/zoo-3/report.md && -s $TMP/loso/shrec07/report.md ]] || fail "--leave-one-out: a source's report is missing"
+    has "$L" "^\| zoo \| shrec07 \| full \| 15 \| 15 \| [0-9.]+ \[[0-9.]+, [0-9.]+\] \| [0-9.]+ \["
+    has "$L" "^\| shrec07 \| zoo \| full \| 15 \| 15 \| "
+    has "$L" "^\| zoo \| fourleg \| full \| 3 \| "
   fi
 else
   echo "unknown mode $MODE" >&2

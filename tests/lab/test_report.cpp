@@ -263,6 +263,50 @@ TEST(OpenSet, SummaryOnAHandMadeList) {
   EXPECT_NEAR(r.auroc, (20 + 11 + 20) / 60.0, 1e-9);
 }
 
+// ---- leave one source out -------------------------------------------------------------------------
+
+TEST(LeaveOneSourceOut, ClosestBesideRightAndAcceptedPerSourceAndCategory) {
+  SourceRun run{"psb", {}};
+  run.result.categories = {"chair", "table"};
+  run.result.params.stages = {{StageKind::kFull, 0}};
+  run.result.test_sources = {"psb"};
+  run.result.train_sources = {"shrec07", "zoo"};
+  auto& ds = run.result.decisions;
+  // chair: objects 0-1, 4 views: 3 right, one of them called unknown. table: object 2, 2 views: 1 right.
+  ds.push_back(decision("full", MethodId::kFusion, 0, 0, 0));
+  ds.push_back(decision("full", MethodId::kFusion, 0, 0, 0));
+  ds.push_back(decision("full", MethodId::kFusion, 0, 0, 1));
+  ds.back().unknown = true;
+  ds.push_back(decision("full", MethodId::kFusion, 0, 1, 1));
+  ds.push_back(decision("full", MethodId::kFusion, 1, 1, 2));
+  ds.push_back(decision("full", MethodId::kFusion, 1, 0, 2));
+  ds.back().unknown = true;                                     // wrong and unknown: wrong both ways
+  ds.push_back(decision("full", MethodId::kVFH, 1, 1, 2));     // another method: not counted
+  ds.push_back(decision("full", MethodId::kFusion, -1, 0, 3));  // an unknown object: not a known view
+  const std::vector<SourceRow> rows = leave_one_source_out_rows({run}, MethodId::kFusion);
+  ASSERT_EQ(rows.size(), 3u);  // every category, then chair, then table
+  EXPECT_EQ(rows[0].category, "");
+  EXPECT_EQ(rows[0].views, 6u);
+  EXPECT_EQ(rows[0].objects, 3u);
+  EXPECT_EQ(rows[0].closest.correct, 4u);
+  EXPECT_EQ(rows[0].accepted_right.correct, 3u);
+  EXPECT_EQ(rows[0].rejected, 2u);
+  EXPECT_EQ(rows[1].category, "chair");
+  EXPECT_DOUBLE_EQ(rows[1].closest.percent(), 75.0);
+  EXPECT_DOUBLE_EQ(rows[1].accepted_right.percent(), 50.0);
+  EXPECT_LE(rows[1].accepted_interval.low, 50.0);
+  EXPECT_GE(rows[1].accepted_interval.high, 50.0);
+  EXPECT_EQ(rows[2].category, "table");
+  EXPECT_DOUBLE_EQ(rows[2].closest.percent(), 50.0);
+  EXPECT_DOUBLE_EQ(rows[2].accepted_right.percent(), 50.0);
+  // One object: every resample is that object.
+  EXPECT_DOUBLE_EQ(rows[2].closest_interval.low, 50.0);
+  EXPECT_DOUBLE_EQ(rows[2].closest_interval.high, 50.0);
+  const std::string md = leave_one_source_out_report({run}, MethodId::kFusion);
+  EXPECT_NE(md.find("| psb | shrec07, zoo | full | 3 | 6 | 66.7 ["), std::string::npos) << md;
+  EXPECT_NE(md.find("| psb | chair | full | 2 | 75.0 ["), std::string::npos) << md;
+}
+
 TEST(Objects, CommonHeightMakesEveryObjectOneHeightOnTheGround) {
   for (const EvalObject& o : common_height(zoo_objects(1, 5), 1.0f)) {
     const Bounds b = bounds(o.mesh.vertices);

@@ -10,7 +10,9 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <memory>
+#include <set>
 
 #include "glimpse/lab/evaluation.h"
 #include "eval.h"
@@ -79,7 +81,9 @@ void print_summary(const EvalResult& result, const EvalOptions& o, const EvalPar
   std::printf("report: %s\n", (std::filesystem::path(o.out) / "report.md").string().c_str());
 }
 
-int run_eval(const EvalOptions& o) {
+// One run of the protocol as `o` names it, its report written to o.out: 0 with the result in `kept`
+// (when given), or the exit code once the reason is printed.
+int run_one(const EvalOptions& o, EvalResult* kept) {
   auto params = params_from(o);
   if (!params.ok()) {
     std::fprintf(stderr, "glimpse-lab eval: %s\n", params.error().message.c_str());
@@ -122,8 +126,58 @@ int run_eval(const EvalOptions& o) {
     return 1;
   }
   print_summary(*result, o, *params, objects.size());
+  if (kept) *kept = std::move(*result);
   return 0;
 }
+
+// A source's folder name in the leave-one-out report: the folder's last name (then -2, -3 ... when
+// taken), or zoo:N as zoo-N.
+std::string source_label(const std::string& source, const std::set<std::string>& taken) {
+  std::filesystem::path p = std::filesystem::path(source).lexically_normal();
+  if (p.filename().empty()) p = p.parent_path();
+  const std::string base = source.rfind("zoo:", 0) == 0 ? "zoo-" + source.substr(4) : p.filename().string();
+  std::string label = base;
+  for (int k = 2; taken.count(label); ++k) label = base + "-" + std::to_string(k);
+  return label;
+}
+
+// --leave-one-out: each source tested by a model of the others, one report each in OUT/<source>, and
+// OUT/leave-one-out.md over them.
+int run_leave_one_out(const EvalOptions& o) {
+  const std::vector<std::string> sources = split_list(o.leave_one_out);
+  if (sources.size() < 2) {
+    std::fprintf(stderr, "glimpse-lab eval: --leave-one-out needs at least two sources, not '%s'\n", o.leave_one_out.c_str());
+    return 2;
+  }
+  if (int rc = make_report_folder(o.out); rc != 0) return rc;
+  std::vector<SourceRun> runs;
+  std::set<std::string> labels;
+  for (size_t i = 0; i < sources.size(); ++i) {
+    EvalOptions one = o;
+    one.leave_one_out.clear();
+    one.train.clear();
+    for (size_t j = 0; j < sources.size(); ++j)
+      if (j != i) one.train += (one.train.empty() ? "" : ",") + sources[j];
+    one.test = sources[i];
+    const std::string label = source_label(sources[i], labels);
+    labels.insert(label);
+    one.out = (std::filesystem::path(o.out) / label).string();
+    std::fprintf(stderr, "leave one source out: testing %s, trained on %s\n", one.test.c_str(), one.train.c_str());
+    runs.push_back({sources[i], {}});
+    if (int rc = run_one(one, &runs.back().result); rc != 0) return rc;
+  }
+  const std::filesystem::path path = std::filesystem::path(o.out) / "leave-one-out.md";
+  std::ofstream file(path);
+  file << leave_one_source_out_report(runs, runs.front().result.change_method);
+  if (!file.flush()) {
+    std::fprintf(stderr, "glimpse-lab eval: cannot write %s\n", path.string().c_str());
+    return 1;
+  }
+  std::printf("leave one source out: %s\n", path.string().c_str());
+  return 0;
+}
+
+int run_eval(const EvalOptions& o) { return o.leave_one_out.empty() ? run_one(o, nullptr) : run_leave_one_out(o); }
 
 // ---- glimpse-lab eval's flags, in the order its help lists them ----
 
@@ -135,6 +189,11 @@ void add_source_flags(CLI::App* cmd, EvalOptions& o) {
   auto* train = cmd->add_option("--train", o.train, "cross-source: train on every object of these folders DIR[,DIR...]");
   auto* test = cmd->add_option("--test", o.test, "cross-source: test on every view of these folders DIR[,DIR...]");
   auto* zoo = cmd->add_option("--zoo", o.zoo, "use the procedural zoo with N objects per category instead");
+  auto* loo = cmd->add_option("--leave-one-out", o.leave_one_out,
+                              "leave one source out: SOURCE,SOURCE[,...] (folders or zoo:N); each is tested by a model "
+                              "of the others (and --also-train), its report in OUT/<source>, and OUT/leave-one-out.md "
+                              "gives every source and category, closest beside right and accepted");
+  loo->excludes(data)->excludes(train)->excludes(test)->excludes(zoo);
   data->excludes(zoo)->excludes(train)->excludes(test);
   zoo->excludes(data)->excludes(train)->excludes(test);
   train->needs(test);
@@ -186,7 +245,7 @@ void add_training_flags(CLI::App* cmd, EvalOptions& o) {
   cmd->add_option("--fusion-of", o.fusion_of, "comma-separated components of fusion (default: the recogniser's)");
   cmd->add_option("--fusion-head-c", o.fusion_head_c,
                   "C of the fusion's logistic decision (its share is calibrated per model; measured with 10); 0: none, the "
-                  "nearest references alone (default: the recogniser's, none)");
+                  "nearest references alone (default: the recogniser's, 10)");
   cmd->add_option("--neighbours", o.neighbours, "k of the k-NN decision (0: the recogniser's default)");
   cmd->add_option("--pca-variance", o.pca_variance,
                   "explained variance the decision stage's PCA keeps (0: default; negative: no PCA, L1 on the histograms)");
@@ -289,8 +348,9 @@ void add_eval_command(CLI::App& app) {
       std::fprintf(stderr, "glimpse-lab eval: %s\n", s.error().message.c_str());
       throw CLI::RuntimeError(2);
     }
-    if (o->data.empty() && o->train.empty() && o->zoo == 0) {
-      std::fprintf(stderr, "glimpse-lab eval: give --data DIR, --train DIR --test DIR, or --zoo N\n%s", cmd->help().c_str());
+    if (o->data.empty() && o->train.empty() && o->zoo == 0 && o->leave_one_out.empty()) {
+      std::fprintf(stderr, "glimpse-lab eval: give --data DIR, --train DIR --test DIR, --leave-one-out DIR,DIR or --zoo N\n%s",
+                   cmd->help().c_str());
       throw CLI::RuntimeError(2);
     }
     if (int rc = run_eval(*o); rc != 0) throw CLI::RuntimeError(rc);

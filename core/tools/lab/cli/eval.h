@@ -23,6 +23,7 @@ struct EvalOptions {
   std::string size_blind = "fusion";
   std::string also_train;
   std::string unknown;  // --unknown: objects of categories no model learns
+  std::string leave_one_out;  // --leave-one-out: sources each tested by a model of the others
   std::string hold_out;  // --hold-out: categories of the evaluated sources no model learns, tested as unknown
   float tilt = -1;
   size_t zoo = 0;

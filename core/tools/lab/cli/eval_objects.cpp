@@ -160,7 +160,7 @@ Status check_sources(const EvalOptions& o) {
     return invalid_argument("--unknown and --also-train go with --data or --train (the zoo as a source: --data zoo:N)");
   std::map<std::string, std::string> seen;  // source -> the flag that named it
   auto key = [](const std::string& dir) {
-    if (dir.rfind("zoo:", 0) == 0) return dir;
+    if (dir.rfind("zoo:", 0) == 0) return std::string("the zoo");  // zoo:3 and zoo:5 share their first objects
     std::error_code ec;
     const auto canonical = std::filesystem::weakly_canonical(dir, ec);
     return ec ? dir : canonical.string();

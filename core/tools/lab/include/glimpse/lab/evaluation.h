@@ -242,6 +242,27 @@ std::string summary_table(const EvalResult& result);
 // were learnt too, so its figures are resubstitution, not held out.
 bool tests_learnt_objects(const EvalResult& result);
 
+// ---- Leave one source out: each source tested by a model of the others --------------------------------
+
+struct SourceRun {
+  std::string left_out;  // the source tested ("psb", "zoo:20"), every other one learnt
+  EvalResult result;     // its cross-source run
+};
+// Per left-out source, stage and category of `method`: "closest" (the winner right, "unknown" ignored)
+// beside "right and accepted" (right and not called unknown), each with the interval holding 95 % of
+// object-bootstrap resamples, and the known views called unknown.
+struct SourceRow {
+  std::string left_out;                   // the tested source's name (EvalResult::test_sources)
+  std::string stage, category;            // category empty: every category of the source
+  size_t views = 0, objects = 0;
+  Tally closest, accepted_right;
+  AccuracyInterval closest_interval, accepted_interval;
+  size_t rejected = 0;  // known views called unknown
+};
+std::vector<SourceRow> leave_one_source_out_rows(const std::vector<SourceRun>& runs, MethodId method);
+// leave-one-out.md: the table of every source, then per category.
+std::string leave_one_source_out_report(const std::vector<SourceRun>& runs, MethodId method);
+
 // report.md, decisions.csv, evolution_correct.svg, evolution_incorrect.svg, streams.csv in `dir` (created).
 Status write_report(const EvalResult& result, const std::string& dir);
 
