@@ -33,6 +33,8 @@ if [[ $MODE == zoo ]]; then
   run 2 eval --zoo 3 --hold-out dragon --out "$TMP/x" && has "$TMP/err" "--hold-out: no object of category 'dragon' \(categories: chair, fourleg"
   run 2 eval --zoo 3 --hold-out human,chair,table,mechanic --out "$TMP/x" && has "$TMP/err" "at least two learnt categories must remain"
   run 2 eval --leave-one-out zoo:3 --out "$TMP/x" && has "$TMP/err" "--leave-one-out needs at least two sources"
+  run 2 eval --leave-one-out zoo:3,"$TMP/dragons" --also-train zoo:5 --out "$TMP/x" &&
+    has "$TMP/err" "--leave-one-out zoo:3,.*dragons \(testing zoo:3\): --test: zoo:3 is named already \(--also-train\)"
   run 105 eval --zoo 3 --poses upright --out "$TMP/x" && has "$TMP/err" "--poses: upright not in \{dataset,given\}"
   # What would make the figures wrong is refused before the run, not found after it (or never).
   run 2 eval --zoo 3 --views 0 --out "$TMP/x" && has "$TMP/err" "--views takes 1-6"

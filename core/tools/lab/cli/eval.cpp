@@ -149,8 +149,8 @@ int run_leave_one_out(const EvalOptions& o) {
     std::fprintf(stderr, "glimpse-lab eval: --leave-one-out needs at least two sources, not '%s'\n", o.leave_one_out.c_str());
     return 2;
   }
-  if (int rc = make_report_folder(o.out); rc != 0) return rc;
-  std::vector<SourceRun> runs;
+  // Every run's options, checked before the first one starts.
+  std::vector<EvalOptions> folds;
   std::set<std::string> labels;
   for (size_t i = 0; i < sources.size(); ++i) {
     EvalOptions one = o;
@@ -162,9 +162,19 @@ int run_leave_one_out(const EvalOptions& o) {
     const std::string label = source_label(sources[i], labels);
     labels.insert(label);
     one.out = (std::filesystem::path(o.out) / label).string();
-    std::fprintf(stderr, "leave one source out: testing %s, trained on %s\n", one.test.c_str(), one.train.c_str());
+    if (Status s = check_sources(one); !s.ok()) {
+      std::fprintf(stderr, "glimpse-lab eval: --leave-one-out %s (testing %s): %s\n", o.leave_one_out.c_str(),
+                   sources[i].c_str(), s.error().message.c_str());
+      return 2;
+    }
+    folds.push_back(std::move(one));
+  }
+  if (int rc = make_report_folder(o.out); rc != 0) return rc;
+  std::vector<SourceRun> runs;
+  for (size_t i = 0; i < folds.size(); ++i) {
+    std::fprintf(stderr, "leave one source out: testing %s, trained on %s\n", folds[i].test.c_str(), folds[i].train.c_str());
     runs.push_back({sources[i], {}});
-    if (int rc = run_one(one, &runs.back().result); rc != 0) return rc;
+    if (int rc = run_one(folds[i], &runs.back().result); rc != 0) return rc;
   }
   const std::filesystem::path path = std::filesystem::path(o.out) / "leave-one-out.md";
   std::ofstream file(path);
