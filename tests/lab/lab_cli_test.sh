@@ -180,13 +180,21 @@ elif [[ $MODE == shrec ]]; then
   fi
   # Leave one source out: SHREC tested by a model of the zoo, the zoo by a model of SHREC; a report each
   # and the table over both (3 objects per category, one view each).
-  if run 0 eval --leave-one-out "zoo:3,$DIR" --max-objects 3 --views 1 --methods fusion --stages full \
+  # psb-other's classes, when present, are tested as unknown beside each source.
+  OTHER=$(dirname "$DIR")/psb-other
+  UNKNOWN=()
+  [[ -d $OTHER ]] && UNKNOWN=(--unknown "$OTHER")
+  if run 0 eval --leave-one-out "zoo:3,$DIR" "${UNKNOWN[@]}" --max-objects 3 --views 1 --methods fusion --stages full \
       --stream-chunk 0 --size-blind none --matrix none --train-sensors none --out "$TMP/loso"; then
     L="$TMP/loso/leave-one-out.md"
     [[ -s $TMP/loso/zoo-3/report.md && -s $TMP/loso/shrec07/report.md ]] || fail "--leave-one-out: a source's report is missing"
     has "$L" "^\| zoo \| shrec07 \| full \| 15 \| 15 \| [0-9.]+ \[[0-9.]+, [0-9.]+\] \| [0-9.]+ \["
     has "$L" "^\| shrec07 \| zoo \| full \| 15 \| 15 \| "
     has "$L" "^\| zoo \| fourleg \| full \| 3 \| "
+    if [[ -d $OTHER ]]; then
+      has "$L" "^## Open set across sources"
+      has "$L" "^\| shrec07 \| full \| [01]\.[0-9]{3} \| [0-9.]+ \| [0-9.]+ \| 15 / 30 \|"
+    fi
   fi
 else
   echo "unknown mode $MODE" >&2

@@ -302,7 +302,15 @@ TEST(LeaveOneSourceOut, ClosestBesideRightAndAcceptedPerSourceAndCategory) {
   // One object: every resample is that object.
   EXPECT_DOUBLE_EQ(rows[2].closest_interval.low, 50.0);
   EXPECT_DOUBLE_EQ(rows[2].closest_interval.high, 50.0);
-  const std::string md = leave_one_source_out_report({run}, MethodId::kFusion);
+  std::string md = leave_one_source_out_report({run}, MethodId::kFusion);
+  EXPECT_EQ(md.find("## Open set across sources"), std::string::npos);  // no unknown object tested
+  run.result.unknown_categories = {"bed"};
+  for (StageDecision& d : run.result.decisions) {
+    d.novelty = d.truth < 0 ? 9.0 : 1.0;  // the unknown view more novel than every known one
+    if (d.truth < 0) d.unknown_class = 0, d.unknown = true;
+  }
+  md = leave_one_source_out_report({run}, MethodId::kFusion);
+  EXPECT_NE(md.find("| psb | full | 1.000 | 66.7 | 0.0 | 6 / 1 |"), std::string::npos) << md;
   EXPECT_NE(md.find("| psb | shrec07, zoo | full | 3 | 6 | 66.7 ["), std::string::npos) << md;
   EXPECT_NE(md.find("| psb | chair | full | 2 | 75.0 ["), std::string::npos) << md;
 }

@@ -1,5 +1,6 @@
 // Leave one source out (evaluation.h): each source tested by a model of every other one, per category,
 // "closest" beside "right and accepted", with object-bootstrap intervals.
+#include <algorithm>
 #include <cstdio>
 #include <set>
 #include <sstream>
@@ -82,6 +83,25 @@ std::string leave_one_source_out_report(const std::vector<SourceRun>& runs, Meth
         o << "| " << r.left_out << " | " << trained << " | " << r.stage << " | " << r.objects << " | " << r.views << " | "
           << cell(r.closest, r.closest_interval) << " | " << cell(r.accepted_right, r.accepted_interval) << " | "
           << share(r.rejected, r.views) << " |\n";
+  }
+  if (std::any_of(runs.begin(), runs.end(), [](const SourceRun& r) { return !r.result.unknown_categories.empty(); })) {
+    o << "\n## Open set across sources\n\nThe objects of no learnt category tested beside each source (each run's "
+         "report has them per class). AUROC: an unknown view more novel than a known one; accepted: at the "
+         "model's default operating point.\n\n"
+      << "| source left out | stage | AUROC | known accepted % | unknown accepted % | known / unknown views |\n"
+      << "|---|---|---:|---:|---:|---:|\n";
+    for (const SourceRun& run : runs) {
+      if (run.result.unknown_categories.empty()) continue;
+      std::string tested;
+      for (const std::string& s : run.result.test_sources) tested += (tested.empty() ? "" : ", ") + s;
+      for (const OpenSetRow& row : open_set_summary(run.result.decisions, run.result.params.stages, method,
+                                                    run.result.unknown_categories.size())) {
+        char buf[160];
+        std::snprintf(buf, sizeof buf, "| %s | %s | %.3f | %.1f | %.1f | %zu / %zu |\n", tested.c_str(), row.stage.c_str(),
+                      row.auroc, row.known_acceptance, row.false_acceptance, row.known, row.unknown);
+        o << buf;
+      }
+    }
   }
   o << "\n## Per category\n\n| source left out | category | stage | objects | closest | right and accepted | known called unknown % |\n"
     << "|---|---|---|---:|---|---|---:|\n";
