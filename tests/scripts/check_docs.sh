@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The documentation a newcomer reads stays readable and current: README.md at most 200 lines, no line
-# over 160 characters outside code blocks; no work-history references ("stop 47") outside
+# over 160 characters outside code blocks; no work-history references ("stop" and a number) outside
 # docs/notebook.md; every relative link of README.md and docs/*.md names a file that exists.
 #   check_docs.sh SOURCE_DIR
 set -euo pipefail
