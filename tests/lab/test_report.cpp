@@ -266,12 +266,12 @@ TEST(OpenSet, SummaryOnAHandMadeList) {
 // ---- leave one source out -------------------------------------------------------------------------
 
 TEST(LeaveOneSourceOut, ClosestBesideRightAndAcceptedPerSourceAndCategory) {
-  SourceRun run{"psb", {}};
-  run.result.categories = {"chair", "table"};
-  run.result.params.stages = {{StageKind::kFull, 0}};
-  run.result.test_sources = {"psb"};
-  run.result.train_sources = {"shrec07", "zoo"};
-  auto& ds = run.result.decisions;
+  EvalResult run;
+  run.categories = {"chair", "table"};
+  run.params.stages = {{StageKind::kFull, 0}};
+  run.test_sources = {"psb"};
+  run.train_sources = {"shrec07", "zoo"};
+  auto& ds = run.decisions;
   // chair: objects 0-1, 4 views: 3 right, one of them called unknown. table: object 2, 2 views: 1 right.
   ds.push_back(decision("full", MethodId::kFusion, 0, 0, 0));
   ds.push_back(decision("full", MethodId::kFusion, 0, 0, 0));
@@ -304,8 +304,8 @@ TEST(LeaveOneSourceOut, ClosestBesideRightAndAcceptedPerSourceAndCategory) {
   EXPECT_DOUBLE_EQ(rows[2].closest_interval.high, 50.0);
   std::string md = leave_one_source_out_report({run}, MethodId::kFusion);
   EXPECT_EQ(md.find("## Open set across sources"), std::string::npos);  // no unknown object tested
-  run.result.unknown_categories = {"bed"};
-  for (StageDecision& d : run.result.decisions) {
+  run.unknown_categories = {"bed"};
+  for (StageDecision& d : run.decisions) {
     d.novelty = d.truth < 0 ? 9.0 : 1.0;  // the unknown view more novel than every known one
     if (d.truth < 0) d.unknown_class = 0, d.unknown = true;
   }

@@ -170,15 +170,15 @@ int run_leave_one_out(const EvalOptions& o) {
     folds.push_back(std::move(one));
   }
   if (int rc = make_report_folder(o.out); rc != 0) return rc;
-  std::vector<SourceRun> runs;
+  std::vector<EvalResult> runs;
   for (size_t i = 0; i < folds.size(); ++i) {
     std::fprintf(stderr, "leave one source out: testing %s, trained on %s\n", folds[i].test.c_str(), folds[i].train.c_str());
-    runs.push_back({sources[i], {}});
-    if (int rc = run_one(folds[i], &runs.back().result); rc != 0) return rc;
+    runs.emplace_back();
+    if (int rc = run_one(folds[i], &runs.back()); rc != 0) return rc;
   }
   const std::filesystem::path path = std::filesystem::path(o.out) / "leave-one-out.md";
   std::ofstream file(path);
-  file << leave_one_source_out_report(runs, runs.front().result.change_method);
+  file << leave_one_source_out_report(runs, runs.front().change_method);
   if (!file.flush()) {
     std::fprintf(stderr, "glimpse-lab eval: cannot write %s\n", path.string().c_str());
     return 1;

@@ -24,13 +24,19 @@ std::vector<StageDecision> known_views(const std::vector<StageDecision>& decisio
   return out;
 }
 
-SourceRow source_row(const SourceRun& run, const std::string& stage, MethodId method, int category) {
-  const std::vector<StageDecision> all = known_views(run.result.decisions, stage, method, category, false);
-  const std::vector<StageDecision> accepted = known_views(run.result.decisions, stage, method, category, true);
+std::string joined(const std::vector<std::string>& names) {
+  std::string out;
+  for (const std::string& n : names) out += (out.empty() ? "" : ", ") + n;
+  return out;
+}
+
+SourceRow source_row(const EvalResult& run, const std::string& stage, MethodId method, int category) {
+  const std::vector<StageDecision> all = known_views(run.decisions, stage, method, category, false);
+  const std::vector<StageDecision> accepted = known_views(run.decisions, stage, method, category, true);
   SourceRow row;
-  for (const std::string& s : run.result.test_sources) row.left_out += (row.left_out.empty() ? "" : ", ") + s;
+  row.left_out = joined(run.test_sources);
   row.stage = stage;
-  if (category >= 0) row.category = run.result.categories[size_t(category)];
+  if (category >= 0) row.category = run.categories[size_t(category)];
   std::set<int> objects;
   for (const StageDecision& d : all) objects.insert(d.object), row.rejected += d.unknown;
   row.views = all.size();
@@ -54,18 +60,27 @@ std::string share(size_t part, size_t whole) {
   return buf;
 }
 
-}  // namespace
-
-std::vector<SourceRow> leave_one_source_out_rows(const std::vector<SourceRun>& runs, MethodId method) {
+// One run's rows: every category together, then each, at every stage.
+std::vector<SourceRow> run_rows(const EvalResult& run, MethodId method) {
   std::vector<SourceRow> rows;
-  for (const SourceRun& run : runs)
-    for (int c = -1; c < int(run.result.categories.size()); ++c)
-      for (const Stage& stage : run.result.params.stages)
-        if (SourceRow row = source_row(run, stage_name(stage), method, c); row.views > 0) rows.push_back(std::move(row));
+  for (int c = -1; c < int(run.categories.size()); ++c)
+    for (const Stage& stage : run.params.stages)
+      if (SourceRow row = source_row(run, stage_name(stage), method, c); row.views > 0) rows.push_back(std::move(row));
   return rows;
 }
 
-std::string leave_one_source_out_report(const std::vector<SourceRun>& runs, MethodId method) {
+}  // namespace
+
+std::vector<SourceRow> leave_one_source_out_rows(const std::vector<EvalResult>& runs, MethodId method) {
+  std::vector<SourceRow> rows;
+  for (const EvalResult& run : runs)
+    for (SourceRow& row : run_rows(run, method)) rows.push_back(std::move(row));
+  return rows;
+}
+
+std::string leave_one_source_out_report(const std::vector<EvalResult>& runs, MethodId method) {
+  std::vector<std::vector<SourceRow>> rows;  // per run
+  for (const EvalResult& run : runs) rows.push_back(run_rows(run, method));
   std::ostringstream o;
   o << "# Leave one source out (" << method_name(method) << ")\n\n"
     << "Each source is tested by a model of every other one (their objects, plus what every run learns "
@@ -75,41 +90,36 @@ std::string leave_one_source_out_report(const std::vector<SourceRun>& runs, Meth
        "is in the folder named after the source.\n\n";
   o << "| source left out | trained on | stage | objects | views | closest | right and accepted | known called unknown % |\n"
     << "|---|---|---|---:|---:|---|---|---:|\n";
-  for (const SourceRun& run : runs) {
-    std::string trained;
-    for (const std::string& s : run.result.train_sources) trained += (trained.empty() ? "" : ", ") + s;
-    for (const SourceRow& r : leave_one_source_out_rows({run}, method))
+  for (size_t i = 0; i < runs.size(); ++i)
+    for (const SourceRow& r : rows[i])
       if (r.category.empty())
-        o << "| " << r.left_out << " | " << trained << " | " << r.stage << " | " << r.objects << " | " << r.views << " | "
-          << cell(r.closest, r.closest_interval) << " | " << cell(r.accepted_right, r.accepted_interval) << " | "
-          << share(r.rejected, r.views) << " |\n";
-  }
-  if (std::any_of(runs.begin(), runs.end(), [](const SourceRun& r) { return !r.result.unknown_categories.empty(); })) {
+        o << "| " << r.left_out << " | " << joined(runs[i].train_sources) << " | " << r.stage << " | " << r.objects
+          << " | " << r.views << " | " << cell(r.closest, r.closest_interval) << " | "
+          << cell(r.accepted_right, r.accepted_interval) << " | " << share(r.rejected, r.views) << " |\n";
+  if (std::any_of(runs.begin(), runs.end(), [](const EvalResult& r) { return !r.unknown_categories.empty(); })) {
     o << "\n## Open set across sources\n\nThe objects of no learnt category tested beside each source (each run's "
          "report has them per class). AUROC: an unknown view more novel than a known one; accepted: at the "
          "model's default operating point.\n\n"
       << "| source left out | stage | AUROC | known accepted % | unknown accepted % | known / unknown views |\n"
       << "|---|---|---:|---:|---:|---:|\n";
-    for (const SourceRun& run : runs) {
-      if (run.result.unknown_categories.empty()) continue;
-      std::string tested;
-      for (const std::string& s : run.result.test_sources) tested += (tested.empty() ? "" : ", ") + s;
-      for (const OpenSetRow& row : open_set_summary(run.result.decisions, run.result.params.stages, method,
-                                                    run.result.unknown_categories.size())) {
+    for (const EvalResult& run : runs) {
+      if (run.unknown_categories.empty()) continue;
+      for (const OpenSetRow& row : open_set_summary(run.decisions, run.params.stages, method, run.unknown_categories.size())) {
         char buf[160];
-        std::snprintf(buf, sizeof buf, "| %s | %s | %.3f | %.1f | %.1f | %zu / %zu |\n", tested.c_str(), row.stage.c_str(),
-                      row.auroc, row.known_acceptance, row.false_acceptance, row.known, row.unknown);
+        std::snprintf(buf, sizeof buf, "| %s | %s | %.3f | %.1f | %.1f | %zu / %zu |\n", joined(run.test_sources).c_str(),
+                      row.stage.c_str(), row.auroc, row.known_acceptance, row.false_acceptance, row.known, row.unknown);
         o << buf;
       }
     }
   }
   o << "\n## Per category\n\n| source left out | category | stage | objects | closest | right and accepted | known called unknown % |\n"
     << "|---|---|---|---:|---|---|---:|\n";
-  for (const SourceRow& r : leave_one_source_out_rows(runs, method))
-    if (!r.category.empty())
-      o << "| " << r.left_out << " | " << r.category << " | " << r.stage << " | " << r.objects << " | "
-        << cell(r.closest, r.closest_interval) << " | " << cell(r.accepted_right, r.accepted_interval) << " | "
-        << share(r.rejected, r.views) << " |\n";
+  for (const std::vector<SourceRow>& run_rows : rows)
+    for (const SourceRow& r : run_rows)
+      if (!r.category.empty())
+        o << "| " << r.left_out << " | " << r.category << " | " << r.stage << " | " << r.objects << " | "
+          << cell(r.closest, r.closest_interval) << " | " << cell(r.accepted_right, r.accepted_interval) << " | "
+          << share(r.rejected, r.views) << " |\n";
   return o.str();
 }
 

@@ -244,13 +244,10 @@ bool tests_learnt_objects(const EvalResult& result);
 
 // ---- Leave one source out: each source tested by a model of the others --------------------------------
 
-struct SourceRun {
-  std::string left_out;  // the source tested ("psb", "zoo:20"), every other one learnt
-  EvalResult result;     // its cross-source run
-};
-// Per left-out source, stage and category of `method`: "closest" (the winner right, "unknown" ignored)
-// beside "right and accepted" (right and not called unknown), each with the interval holding 95 % of
-// object-bootstrap resamples, and the known views called unknown.
+// `runs`: one cross-source run per source left out, tested on it. Per left-out source, stage and category
+// of `method`: "closest" (the winner right, "unknown" ignored) beside "right and accepted" (right and not
+// called unknown), each with the interval holding 95 % of object-bootstrap resamples, and the known views
+// called unknown.
 struct SourceRow {
   std::string left_out;                   // the tested source's name (EvalResult::test_sources)
   std::string stage, category;            // category empty: every category of the source
@@ -259,9 +256,9 @@ struct SourceRow {
   AccuracyInterval closest_interval, accepted_interval;
   size_t rejected = 0;  // known views called unknown
 };
-std::vector<SourceRow> leave_one_source_out_rows(const std::vector<SourceRun>& runs, MethodId method);
+std::vector<SourceRow> leave_one_source_out_rows(const std::vector<EvalResult>& runs, MethodId method);
 // leave-one-out.md: the table of every source, then per category.
-std::string leave_one_source_out_report(const std::vector<SourceRun>& runs, MethodId method);
+std::string leave_one_source_out_report(const std::vector<EvalResult>& runs, MethodId method);
 
 // report.md, decisions.csv, evolution_correct.svg, evolution_incorrect.svg, streams.csv in `dir` (created).
 Status write_report(const EvalResult& result, const std::string& dir);
