@@ -1,8 +1,8 @@
-// Model bytes of formats 3 to 9 made from a format-10 model (of no augmented cloud for 7 and older), for tests and benchmarks of models
+// Model bytes of formats 3 to 10 made from a format-11 model (of no augmented cloud for 7 and older), for tests and benchmarks of models
 // written before novelty existed ("none of these"; format 3 has no novelty block), before novelty was
 // divided by the decision's score (format 4 lacks that byte), before it was measured over several
-// training objects (format 5 lacks the reference objects that end the payload) or before it joined the
-// top-down prefix's (format 9).
+// training objects (format 5 lacks the reference objects that end the payload), before it joined the
+// top-down prefix's (format 9) or before the model's probabilities were calibrated (format 10).
 #pragma once
 
 #include <algorithm>
@@ -47,9 +47,19 @@ inline std::vector<uint8_t> without_parameter(std::vector<uint8_t> bytes, const 
   return with_version(std::move(bytes), version, payload);
 }
 
+// Format 10 is format 11 without the probability temperature (f64) that ends the payload: it reads with
+// no probabilities.
+inline std::vector<uint8_t> as_format_10(std::vector<uint8_t> bytes) {
+  if (bytes.size() < 32) return {};
+  const size_t payload = bytes.size() - 24;
+  bytes.erase(bytes.end() - 12, bytes.end() - 4);
+  return with_version(std::move(bytes), 10, payload - 8);
+}
+
 // Format 9 is format 10's bytes: it reads without the top-down prefix's novelty
 // (TrainParams::novelty_prefix 0).
 inline std::vector<uint8_t> as_format_9(std::vector<uint8_t> bytes) {
+  bytes = as_format_10(std::move(bytes));
   if (bytes.size() < 25) return {};
   const size_t payload = bytes.size() - 24;
   return with_version(std::move(bytes), 9, payload);
@@ -58,6 +68,7 @@ inline std::vector<uint8_t> as_format_9(std::vector<uint8_t> bytes) {
 // Format 8 is format 9 without the byte that ends the payload (serialize.cpp: 1, novelty adds its two
 // evidences; format 8 reads the larger).
 inline std::vector<uint8_t> as_format_8(std::vector<uint8_t> bytes) {
+  bytes = as_format_9(std::move(bytes));
   if (bytes.size() < 25 || bytes[bytes.size() - 5] > 1) return {};
   const size_t payload = bytes.size() - 24;
   bytes.erase(bytes.end() - 5);

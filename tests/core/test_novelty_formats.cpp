@@ -87,8 +87,8 @@ TEST(Novelty, AModelOfFormat8KeepsTheLargerOfTheTwoEvidences) {
     }
   }
   EXPECT_GT(differ, 0u);
-  // The combination byte that ends the payload is 0 or 1; anything else is damage.
-  std::vector<uint8_t> bytes = serialize(s.model);
+  // The combination byte that ends a format-10 payload is 0 or 1; anything else is damage.
+  std::vector<uint8_t> bytes = test::as_format_10(serialize(s.model));
   ASSERT_EQ(bytes[bytes.size() - 5], 1);
   bytes[bytes.size() - 5] = 2;
   auto damaged = test::read_as_format(bytes, 10);

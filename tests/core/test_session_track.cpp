@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "glimpse/learning/probabilities.h"
 #include "glimpse/session/session.h"
 
 namespace glimpse {
@@ -28,6 +29,28 @@ struct ScoreTrack {
     return t.decision;
   }
 };
+
+// With the model's temperature, a category's confidence is the winner's calibrated probability times
+// the share of the window it won, and it settles at settle_probability.
+TEST(DecisionTrack, AModelWithProbabilitiesSettlesOnTheWinnersProbability) {
+  ScoreTrack track(1.0, 2, 0.4, 0.5);
+  track.p.probability_temperature = 0.25;
+  track.p.settle_probability = 0.9;
+  StreamDecision d = track.step({0.5, 0.3, 0.2});
+  const double p_first = temperature_probabilities(std::vector<double>{0.5, 0.3, 0.2}, 0.25)[0];  // 0.82
+  EXPECT_NEAR(d.confidence, p_first * 0.5, 1e-12);  // held 1 of 2
+  d = track.step({0.5, 0.3, 0.2});
+  EXPECT_NEAR(d.confidence, p_first, 1e-12);
+  EXPECT_FALSE(d.settled) << "0.82 < 0.9, though the margin rule (0.2 of 0.4) would settle";
+  d = track.step({0.6, 0.2, 0.2});
+  EXPECT_GT(d.confidence, 0.9);  // 0.6^4 / (0.6^4 + 2 x 0.2^4) = 0.976
+  EXPECT_TRUE(d.settled);
+  d = track.step({0.5, 0.3, 0.2});
+  EXPECT_TRUE(d.settled) << "0.82 stays within unsettle_margin of 0.9";
+  track.p.probability_temperature = 0;  // no probabilities: the margin rule
+  d = track.step({0.5, 0.3, 0.2});
+  EXPECT_NEAR(d.confidence, 0.5, 1e-12);
+}
 
 TEST(DecisionTrack, CountsChangesAndSettlesOnAStableMargin) {
   ScoreTrack track(1.0, 3, 0.4, 0.6);  // no smoothing: the script reads directly

@@ -13,6 +13,7 @@
 #include "glimpse/learning/calibration.h"
 
 #include "glimpse/learning/novelty.h"
+#include "glimpse/learning/probabilities.h"
 #include "glimpse/learning/scores.h"
 
 namespace glimpse {
@@ -296,13 +297,14 @@ double choose_head_share(const std::vector<double>& shares, const HeldOut& h, do
   return share;
 }
 
-// The held-out decisions at the head's share: their winners, the share right and the settle margin (the
-// lowest margin at which `precision` of them are right).
+// The held-out decisions at the head's share: their winners, the share right, the settle margin (the
+// lowest margin at which `precision` of them are right) and the temperature of their probabilities.
 void settle_on_held_out(Calibration& c, HeldOut& h, int categories, double precision) {
   std::vector<std::pair<double, bool>> decisions;
+  std::vector<Eigen::VectorXd> fused;
   size_t correct = 0;
   for (size_t i = 0; i < h.scores.size(); ++i) {
-    const Eigen::VectorXd s = fused_scores(h.scores[i], h.head_probabilities[i], c.fusion_head_share);
+    const Eigen::VectorXd& s = fused.emplace_back(fused_scores(h.scores[i], h.head_probabilities[i], c.fusion_head_share));
     const int winner = argmax(s);
     double second = 0;
     for (int k = 0; k < categories; ++k)
@@ -315,6 +317,7 @@ void settle_on_held_out(Calibration& c, HeldOut& h, int categories, double preci
   c.held_out = decisions.size();
   c.held_out_accuracy = double(correct) / double(decisions.size());
   c.settle_margin = settle_margin(std::move(decisions), precision, 20);
+  c.probability_temperature = fit_temperature(fused, h.truths);
 }
 
 // Per component, each reference of the model's own stage (which learnt every row): whether it is a whole

@@ -21,6 +21,7 @@
 #include "glimpse/learning/model.h"
 #include "glimpse/learning/model_internals.h"
 #include "glimpse/learning/novelty.h"
+#include "glimpse/learning/probabilities.h"
 #include "glimpse/learning/scores.h"
 
 namespace glimpse {
@@ -151,6 +152,7 @@ Expected<Classification> decide_after_filters(const Model& model, const Cloud& c
   c.categories = model.categories;
   c.scores.assign(scores.data(), scores.data() + scores.size());
   c.winner = argmax(scores);
+  c.probabilities = calibrated_probabilities(impl.calibration, m, c.scores);
   judge_cloud(model, decision, *f, points, c);  // after the filters: a stray point is not the object's size
   c.points = f->points;
   c.keypoints = f->positions.size();

@@ -10,6 +10,9 @@
 
 #include "glimpse/learning/classify.h"
 
+#include "glimpse/learning/model_internals.h"
+#include "glimpse/learning/probabilities.h"
+
 namespace glimpse {
 
 std::vector<std::vector<uint32_t>> scan_views(const Cloud& cloud, const std::vector<std::optional<Vec3>>& point_sensors) {
@@ -80,6 +83,7 @@ Expected<Classification> classify_views_apart(const Model& model, const Cloud& c
     out.filters.voxel_m = std::max(out.filters.voxel_m, c.filters.voxel_m);
   }
   out.winner = static_cast<int>(std::max_element(out.scores.begin(), out.scores.end()) - out.scores.begin());
+  out.probabilities = calibrated_probabilities(model.impl->calibration, out.method, out.scores);
   out.novelty = novelty ? out.category_novelty[static_cast<size_t>(out.winner)] : std::numeric_limits<double>::quiet_NaN();
   out.unknown = false;
   out.unknown_reason.clear();

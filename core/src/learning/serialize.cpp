@@ -41,7 +41,9 @@ constexpr char kMagic[8] = {'G', 'L', 'M', 'P', 'S', 'M', 'D', 'L'};
 // older read 0, what their quantiles were taken with.
 // 10: the same bytes; the novelty joins that of the cloud's top-down prefix (TrainParams::novelty_prefix,
 // a training parameter); format 9 and older read no prefix, what their quantiles were taken with.
-constexpr uint32_t kFormatVersion = 10;
+// 11: after the novelty combination, f64 the temperature of the model's probabilities
+// (Calibration::probability_temperature); format 10 and older read 0: no probabilities.
+constexpr uint32_t kFormatVersion = 11;
 constexpr uint32_t kOldestReadableVersion = 1;
 
 uint32_t crc32(const uint8_t* data, size_t n) {

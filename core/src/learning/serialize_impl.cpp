@@ -256,6 +256,7 @@ void write_impl(Writer& w, const ModelImpl& m, bool nested) {
   w.u8(m.novelty ? 1 : 0);
   if (m.novelty) write_impl(w, *m.novelty, true);
   if (!nested) w.u8(m.calibration.novelty_adds_evidence ? 1 : 0);
+  if (!nested) w.f64(m.calibration.probability_temperature);
 }
 
 std::shared_ptr<ModelImpl> read_impl(Reader& r, uint32_t ncat, uint32_t version, bool nested) {
@@ -274,6 +275,11 @@ std::shared_ptr<ModelImpl> read_impl(Reader& r, uint32_t ncat, uint32_t version,
     const uint8_t adds = r.u8("novelty combination");
     if (adds > 1) r.fail("unknown novelty combination");
     impl->calibration.novelty_adds_evidence = adds == 1;
+  }
+  if (version >= 11 && !nested && !r.failed()) {
+    impl->calibration.probability_temperature = r.f64("probability temperature");
+    if (!(impl->calibration.probability_temperature >= 0 && impl->calibration.probability_temperature <= 100))
+      r.fail("probability temperature out of range");
   }
   if (novelty) {
     novelty->calibration.novelty_adds_evidence = impl->calibration.novelty_adds_evidence;

@@ -14,6 +14,7 @@
 #include "glimpse/learning/classify.h"
 #include "glimpse/learning/model_internals.h"
 #include "glimpse/learning/novelty.h"
+#include "glimpse/learning/probabilities.h"
 #include "glimpse/learning/scores.h"
 
 namespace glimpse {
@@ -30,6 +31,8 @@ class Session final : public ScanSession {
     if (const Calibration& c = impl_.calibration;
         params_.use_model_calibration && c.method == method_ && c.settle_margin > 0 && params_.settle_confidence > 0)
       params_.full_margin = c.settle_margin / params_.settle_confidence;
+    if (const Calibration& c = impl_.calibration; params_.use_model_calibration && c.method == method_)
+      params_.probability_temperature = c.probability_temperature;
     const Calibration& c = novelty_calibration(impl_);
     threshold_ = c.method == method_ ? novelty_threshold(c, params_.known_acceptance > 0 ? params_.known_acceptance
                                                                                         : c.known_acceptance)
@@ -174,6 +177,7 @@ void Session::track(ChunkEvidence e) {
   track_decision(track_, e, std::any_of(components_.begin(), components_.end(), uses_keypoints), threshold_, params_);
   const StreamDecision& d = track_.decision;
   last_.scores = d.scores;
+  last_.probabilities = calibrated_probabilities(impl_.calibration, method_, last_.scores);
   last_.winner = d.winner;
   last_.category_changes = d.category_changes;
   last_.winner_held_chunks = d.winner_held_chunks;
@@ -290,6 +294,7 @@ Expected<StreamDecision> Session::finish() {
   // not the running average.
   (void)set_known_acceptance(*model_, c, params_.known_acceptance);  // checked by create()
   last_.scores = last_.raw_scores;
+  last_.probabilities = calibrated_probabilities(impl_.calibration, method_, last_.scores);
   const int before = track_.winners.empty() ? -1 : track_.winners.back();
   const int now = c.unknown ? static_cast<int>(last_.scores.size()) : c.winner;
   if (before >= 0 && now != before) {  // the running average had not caught up: not settled on it

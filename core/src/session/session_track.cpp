@@ -9,6 +9,8 @@
 
 #include "glimpse/session/session.h"
 
+#include "glimpse/learning/probabilities.h"
+
 namespace glimpse {
 
 namespace {
@@ -56,10 +58,14 @@ void track_decision(DecisionTrack& t, const ChunkEvidence& e, bool keypoints_mat
   d.raw_scores = e.scores;
   t.winners.push_back(decided);
 
-  // Confidence from the tendency of the history: the margin (between the best two smoothed scores; for
-  // unknown, of the novelty over its threshold), times the share of the recent decisions it won.
+  // Confidence from the tendency of the history: the winner's calibrated probability, or the margin
+  // (between the best two smoothed scores; for unknown, of the novelty over its threshold), times the
+  // share of the recent decisions it won.
+  const bool in_probability = !d.unknown && params.settle_probability > 0 && params.probability_temperature > 0;
   double margin = 0;
-  if (d.unknown) {
+  if (in_probability) {
+    margin = temperature_probabilities(t.smoothed, params.probability_temperature)[static_cast<size_t>(winner)];
+  } else if (d.unknown) {
     if (e.cannot_judge.empty())
       margin = (d.novelty / threshold - 1) / std::max(1e-9, params.unknown_full_excess);
   } else {
@@ -73,7 +79,9 @@ void track_decision(DecisionTrack& t, const ChunkEvidence& e, bool keypoints_mat
   const double stability = static_cast<double>(held) / static_cast<double>(window);
   d.confidence = std::clamp(margin, 0.0, 1.0) * stability;
   const bool enough = !keypoints_matter || e.keypoints >= params.min_keypoints;
-  const double settle_at = d.unknown ? params.unknown_settle_confidence : params.settle_confidence;
+  const double settle_at = d.unknown        ? params.unknown_settle_confidence
+                           : in_probability ? params.settle_probability
+                                            : params.settle_confidence;
   if (was_settled) {
     d.settled = enough && d.confidence >= settle_at - params.unsettle_margin;
     return;

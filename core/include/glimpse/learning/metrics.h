@@ -28,6 +28,7 @@ struct StageDecision {
   int unknown_class = -1;       // that object's index into the unknown categories tested
   int winner = -1;              // -1: no decision (features failed, e.g. too few points)
   std::vector<double> scores;   // per category, same order; empty without a decision
+  std::vector<double> probabilities;  // the scores calibrated (Classification::probabilities); empty: none
   double novelty = std::numeric_limits<double>::quiet_NaN();  // NaN: the method has no novelty calibrated
   bool unknown = false;         // the model said "none of these" at its own operating point
 };

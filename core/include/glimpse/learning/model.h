@@ -104,6 +104,9 @@ struct Calibration {
   // The share of the fusion's logistic decision in its scores (TrainParams::fusion_head_shares), chosen
   // on the held-out decisions above; 0: none (a model of format 6 or older, or no head).
   double fusion_head_share = 0;
+  // The temperature that turns the held-out decisions' scores (at the head's share) into probabilities
+  // with the least log loss (probabilities.h); 0: none (a model of format 10 or older, or too few objects).
+  double probability_temperature = 0;
 };
 
 struct ModelImpl;  // codebooks, bases, centres: defined in model_internals.h
@@ -123,6 +126,10 @@ struct Classification {
   MethodId method = MethodId::kFusion;
   std::vector<std::string> categories;
   std::vector<double> scores;  // one per category, in [0, 1], summing to 1; higher is more likely
+  // The scores as calibrated probabilities (Calibration::probability_temperature): of the views the
+  // model held out in training, those given p were right p of the time. Empty: not calibrated (a method
+  // other than the model's default, or a model of format 10 or older).
+  std::vector<double> probabilities;
   int winner = -1;             // index into categories
   size_t points = 0;           // after cleaning
   size_t keypoints = 0;

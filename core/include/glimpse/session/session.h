@@ -50,6 +50,13 @@ struct SessionParams {
   // settle_confidence: more of the object narrows the margin a little (the top of a human and of a
   // four-legged animal look alike less than their whole), which must not make the answer flicker.
   double unsettle_margin = 0.2;
+  // A model with calibrated probabilities (Calibration::probability_temperature, copied here by the
+  // session unless use_model_calibration is false) states a category's confidence in them: the
+  // probability of the smoothed scores' winner times the share of the last stability_window decisions it
+  // won, settling at settle_probability (and staying settled above settle_probability - unsettle_margin)
+  // under the same conditions. 0 (either): the margin rule above.
+  double settle_probability = 0;
+  double probability_temperature = 0;
   size_t min_keypoints = 10;         // keypoint methods never settle on fewer keypoints
   // "None of these": the operating point, the share of known clouds accepted (held out in training;
   // in (0, 1], 0: the model's default). "Unknown" settles as a category does, its margin being how far
@@ -78,6 +85,9 @@ struct StreamDecision {
   std::vector<double> scores;       // one per category, in [0, 1]: smoothed over the chunks so far
                                     // (final: Classify's scores of the whole scan)
   std::vector<double> raw_scores;   // this chunk's own scores (after finish: Classify's of the cloud)
+  // `scores` as calibrated probabilities (Classification::probabilities; final: Classify's); empty: the
+  // model has none for the session's method.
+  std::vector<double> probabilities;
   bool final = false;               // the answer of finish(): every feature of the whole scan
   int winner = -1;                  // -1 while there is nothing to decide on
   int category_changes = 0;         // how often the winner changed so far
