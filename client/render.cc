@@ -37,9 +37,23 @@ std::string JsonScores(const Scores& scores) {
   return out + "}";
 }
 
+// ,"probabilities":{category: p, ...} when the answer has calibrated probabilities, else nothing.
+template <class Scores>
+std::string JsonProbabilities(const Scores& scores) {
+  std::string out;
+  for (const v1::CategoryScore& s : scores) {
+    if (!s.has_probability()) return {};
+    out += (out.empty() ? "" : ",") + JsonString(s.category()) + ":" + JsonNumber(s.probability());
+  }
+  return out.empty() ? out : ",\"probabilities\":{" + out + "}";
+}
+
+// What a person is shown of a category: its calibrated probability, or its score when the model has none.
+double Shown(const v1::CategoryScore& s) { return s.has_probability() ? s.probability() : s.score(); }
+
 double WinnerScore(const v1::Decision& d) {
   if (d.winner_index() < 0 || d.winner_index() >= d.scores_size()) return 0.0;
-  return d.scores(d.winner_index()).score();
+  return Shown(d.scores(d.winner_index()));
 }
 
 std::string Join(const std::vector<std::string>& items, std::string_view sep) {
@@ -66,7 +80,7 @@ std::string WinnerText(const Answer& a, double winner_score) {
 
 double WinnerScore(const v1::ClassifyResponse& r) {
   if (r.winner_index() < 0 || r.winner_index() >= r.scores_size()) return 0.0;
-  return r.scores(r.winner_index()).score();
+  return Shown(r.scores(r.winner_index()));
 }
 
 // ,"unknown":..,"novelty":..,"unknown_reason":.. (novelty null when the method has none)
@@ -193,7 +207,7 @@ std::string ClassifyTable(const std::vector<ClassifyRow>& rows) {
     for (const std::string& c : categories) {
       std::string cell = "-";
       for (const v1::CategoryScore& s : r.response.scores())
-        if (s.category() == c) cell = Score(s.score());
+        if (s.category() == c) cell = Score(Shown(s));
       line.push_back(cell);
     }
     if (novelty) line.push_back(r.response.has_novelty() ? Fixed(r.response.novelty(), 2) : "-");
@@ -209,7 +223,7 @@ std::string ClassifyJson(const ClassifyRow& row) {
   const v1::ClassifyResponse& r = row.response;
   return "{\"file\":" + JsonString(row.file) + ",\"model\":" + JsonString(r.model().name()) +
          ",\"version\":" + std::to_string(r.model().version()) + ",\"method\":" + JsonString(wire::MethodName(r.method())) +
-         ",\"winner\":" + JsonString(r.winner()) + ",\"scores\":" + JsonScores(r.scores()) +
+         ",\"winner\":" + JsonString(r.winner()) + ",\"scores\":" + JsonScores(r.scores()) + JsonProbabilities(r.scores()) +
          ",\"points\":" + std::to_string(r.points()) + ",\"keypoints\":" + std::to_string(r.keypoints()) +
          ",\"total_ms\":" + JsonNumber(r.timings().total_ms()) + ",\"warning\":" + JsonString(r.warning()) +
          UnknownJson(r) + "}";
@@ -266,8 +280,8 @@ std::string DecisionPanel(const v1::Decision& d, size_t chunks_total, std::strin
   for (const v1::CategoryScore& s : d.scores()) name_width = std::max(name_width, Width(s.category()));
   for (int i = 0; i < d.scores_size(); ++i) {
     const v1::CategoryScore& s = d.scores(i);
-    out += (i == d.winner_index() ? "> " : "  ") + Pad(s.category(), name_width) + "  " + Bar(s.score(), bar_width) +
-           "  " + Score(s.score()) + "\n";
+    out += (i == d.winner_index() ? "> " : "  ") + Pad(s.category(), name_width) + "  " + Bar(Shown(s), bar_width) +
+           "  " + Score(Shown(s)) + "\n";
   }
   return out;
 }
@@ -275,7 +289,7 @@ std::string DecisionPanel(const v1::Decision& d, size_t chunks_total, std::strin
 std::string DecisionJson(const v1::Decision& d, size_t chunks_total) {
   return "{\"chunk\":" + std::to_string(d.chunk_index() + 1) + ",\"chunks\":" + std::to_string(chunks_total) +
          ",\"points\":" + std::to_string(d.points()) + ",\"keypoints\":" + std::to_string(d.keypoints()) +
-         ",\"winner\":" + JsonString(d.winner()) + ",\"scores\":" + JsonScores(d.scores()) +
+         ",\"winner\":" + JsonString(d.winner()) + ",\"scores\":" + JsonScores(d.scores()) + JsonProbabilities(d.scores()) +
          ",\"raw_scores\":" + JsonScores(d.raw_scores()) + ",\"final\":" + (d.final() ? "true" : "false") +
          ",\"changes\":" + std::to_string(d.category_changes()) + ",\"held\":" + std::to_string(d.winner_held_chunks()) +
          ",\"settled\":" + (d.settled() ? "true" : "false") + ",\"confidence\":" + JsonNumber(d.confidence()) +

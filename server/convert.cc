@@ -62,12 +62,16 @@ void ToProto(const ModelRecord& r, v1::ModelInfo* out) {
 }
 
 namespace {
+// Every category's score, and its calibrated probability where the model has them (`probabilities`
+// empty: none).
 template <class Msg>
-void AddScores(const std::vector<std::string>& categories, const std::vector<double>& scores, int winner, Msg* out) {
+void AddScores(const std::vector<std::string>& categories, const std::vector<double>& scores,
+               const std::vector<double>& probabilities, int winner, Msg* out) {
   for (size_t i = 0; i < categories.size(); ++i) {
     v1::CategoryScore* s = out->add_scores();
     s->set_category(categories[i]);
     s->set_score(i < scores.size() ? scores[i] : 0.0);
+    if (probabilities.size() == categories.size()) s->set_probability(probabilities[i]);
   }
   const bool decided = winner >= 0 && static_cast<size_t>(winner) < categories.size();
   out->set_winner_index(decided ? winner : -1);
@@ -77,7 +81,7 @@ void AddScores(const std::vector<std::string>& categories, const std::vector<dou
 
 void ToProto(const Classification& c, v1::ClassifyResponse* out) {
   out->set_method(wire::MethodToProto(c.method));
-  AddScores(c.categories, c.scores, c.winner, out);
+  AddScores(c.categories, c.scores, c.probabilities, c.winner, out);
   out->set_points(c.points);
   out->set_keypoints(c.keypoints);
   out->mutable_timings()->set_feature_ms(c.feature_ms);
@@ -92,7 +96,7 @@ void ToProto(const StreamDecision& d, v1::Decision* out) {
   out->set_chunk_index(d.chunk_index);
   out->set_points(d.points);
   out->set_keypoints(d.keypoints);
-  AddScores(d.categories, d.scores, d.winner, out);
+  AddScores(d.categories, d.scores, d.probabilities, d.winner, out);
   if (d.raw_scores.size() == d.categories.size())
     for (size_t i = 0; i < d.categories.size(); ++i) {
       v1::CategoryScore* s = out->add_raw_scores();

@@ -111,6 +111,20 @@ TEST(Render, ClassifyJsonIsOneObjectWithScoresByCategory) {
   EXPECT_NE(ClassifyJson(warned).find(",\"warning\":\"the cloud spans 1.7e+03 m: millimetres?\","), std::string::npos);
 }
 
+// A calibrated answer shows its probabilities where it would show scores; JSON gives both.
+TEST(Render, CalibratedAnswersShowProbabilities) {
+  ClassifyRow row = MakeRow("p.ply");
+  row.response.mutable_scores(0)->set_probability(0.02);
+  row.response.mutable_scores(1)->set_probability(0.98);
+  EXPECT_EQ(ClassifyTable({row}),
+            "FILE   WINNER  human  chair  POINTS  KEYPOINTS  MS\n"
+            "p.ply  chair   0.020  0.980  900     12         4.2\n");
+  EXPECT_NE(ClassifyJson(row).find("\"scores\":{\"human\":0.125,\"chair\":0.875},\"probabilities\":{\"human\":0.02,"
+                                   "\"chair\":0.98},"),
+            std::string::npos)
+      << ClassifyJson(row);
+}
+
 // "None of these": the winner stays the closest known category, shown beside the word unknown.
 TEST(Render, UnknownAnswersNameTheClosestCategory) {
   ClassifyRow known = MakeRow("chair.ply");

@@ -206,6 +206,36 @@ TEST(TrainParams, EveryFieldGoesToCoreAndBack) {
   EXPECT_EQ(large.error().message, "neighbours is too large");
 }
 
+// Each score keeps its raw value under `score`, and carries its calibrated probability only when the
+// answer has one per category (a model's default method); a stream's raw_scores never do.
+TEST(ToProto, ScoresCarryTheirProbabilitiesOnlyWhenCalibrated) {
+  Classification c;
+  c.categories = {"chair", "table"};
+  c.scores = {0.6, 0.4};
+  c.winner = 0;
+  v1::ClassifyResponse plain;
+  ToProto(c, &plain);
+  ASSERT_EQ(plain.scores_size(), 2);
+  for (const v1::CategoryScore& s : plain.scores()) EXPECT_FALSE(s.has_probability());
+  c.probabilities = {0.9, 0.1};
+  v1::ClassifyResponse calibrated;
+  ToProto(c, &calibrated);
+  EXPECT_DOUBLE_EQ(calibrated.scores(0).score(), 0.6);
+  EXPECT_DOUBLE_EQ(calibrated.scores(0).probability(), 0.9);
+  EXPECT_DOUBLE_EQ(calibrated.scores(1).probability(), 0.1);
+  StreamDecision d;
+  d.categories = c.categories;
+  d.scores = c.scores;
+  d.raw_scores = {0.7, 0.3};
+  d.probabilities = {0.95, 0.05};
+  d.winner = 0;
+  v1::Decision decision;
+  ToProto(d, &decision);
+  EXPECT_DOUBLE_EQ(decision.scores(1).probability(), 0.05);
+  ASSERT_EQ(decision.raw_scores_size(), 2);
+  EXPECT_FALSE(decision.raw_scores(0).has_probability());
+}
+
 TEST(ToGrpcStatus, MapsEveryErrorCode) {
   using grpc::StatusCode;
   const std::pair<ErrorCode, StatusCode> table[] = {
