@@ -131,8 +131,8 @@ TEST(Writers, CsvHasOneRowPerDecision) {
   const std::string csv = decisions_csv(r);
   EXPECT_EQ(occurrences(csv, "\n"), r.decisions.size() + 1);
   EXPECT_EQ(csv.rfind("fold,object,view,stage,method,visible_fraction,points,keypoints,truth,winner,score_human,score_chair,"
-                      "novelty,unknown\n", 0), 0u);
-  EXPECT_NE(csv.find("0,chair/2,0,full,bok,0.3750,0,0,chair,human,0.5000,0.5000,,0\n"), std::string::npos) << csv;
+                      "novelty,unknown,probability_human,probability_chair\n", 0), 0u);
+  EXPECT_NE(csv.find("0,chair/2,0,full,bok,0.3750,0,0,chair,human,0.5000,0.5000,,0,,\n"), std::string::npos) << csv;
 }
 
 TEST(Writers, SvgIsWellFormedWithOneLinePerView) {

@@ -18,6 +18,7 @@
 #include "glimpse/lab/evaluation.h"
 #include "glimpse/geometry/neighbourhoods.h"
 #include "glimpse/geometry/surface_fit.h"
+#include "glimpse/learning/probabilities.h"
 #include "glimpse/views/exploration.h"
 #include "protocol.h"
 #include "glimpse/threads.h"
@@ -100,6 +101,7 @@ void record_calibration(EvalResult& r, const ModelImpl& impl) {
   r.settle_margins.push_back(impl.calibration.settle_margin);
   r.calibration_accuracy.push_back(impl.calibration.held_out_accuracy);
   r.fusion_head_shares.push_back(impl.fusion_head ? impl.calibration.fusion_head_share : 0.0);
+  r.probability_temperatures.push_back(impl.calibration.probability_temperature);
   r.novelty_thresholds.push_back(novelty_calibration(impl).novelty_threshold);
   r.novelty_models += impl.novelty != nullptr;
 }
@@ -135,6 +137,9 @@ std::vector<StageDecision> classify_fold(const Protocol& P, int fold, const Mode
       const Eigen::VectorXd& scores = decision.scores;
       d.scores.assign(n_cat, 0.0);
       for (int c = 0; c < static_cast<int>(scores.size()); ++c) d.scores[to_ours[c]] = scores[c];
+      const std::vector<double> p = calibrated_probabilities(impl.calibration, d.method, {scores.data(), size_t(scores.size())});
+      if (!p.empty()) d.probabilities.assign(n_cat, 0.0);
+      for (size_t c = 0; c < p.size(); ++c) d.probabilities[size_t(to_ours[c])] = p[c];
       Classification c;
       c.method = d.method;
       c.winner = argmax(scores);

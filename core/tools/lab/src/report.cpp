@@ -195,6 +195,7 @@ std::string markdown_report(const EvalResult& r) {
   o << eval_internal::changes_section(r);
   o << eval_internal::streams_section(r);
   o << open_set_section(r);
+  o << probabilities_section(r);
   o << "## Things that look wrong\n\n";
   if (r.notes.empty()) o << "Nothing flagged.\n";
   for (const std::string& n : r.notes) o << "- " << n << "\n";

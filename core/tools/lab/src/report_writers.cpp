@@ -37,7 +37,9 @@ std::string decisions_csv(const EvalResult& r) {
   std::ostringstream o;
   o << "fold,object,view,stage,method,visible_fraction,points,keypoints,truth,winner";
   for (const std::string& c : r.categories) o << ",score_" << c;
-  o << ",novelty,unknown\n";
+  o << ",novelty,unknown";
+  for (const std::string& c : r.categories) o << ",probability_" << c;
+  o << "\n";
   for (const StageDecision& d : r.decisions) {
     o << d.fold << "," << r.object_ids[d.object] << "," << d.view << "," << d.stage << "," << method_name(d.method) << ","
       << fmt("%.4f", d.visible_fraction) << "," << d.points << "," << d.keypoints << ","
@@ -45,7 +47,10 @@ std::string decisions_csv(const EvalResult& r) {
       << (d.winner >= 0 ? r.categories[d.winner] : std::string("none"));
     for (size_t c = 0; c < r.categories.size(); ++c)
       o << "," << (c < d.scores.size() ? fmt("%.4f", d.scores[c]) : std::string());
-    o << "," << (std::isfinite(d.novelty) ? fmt("%.4f", d.novelty) : std::string()) << "," << (d.unknown ? 1 : 0) << "\n";
+    o << "," << (std::isfinite(d.novelty) ? fmt("%.4f", d.novelty) : std::string()) << "," << (d.unknown ? 1 : 0);
+    for (size_t c = 0; c < r.categories.size(); ++c)
+      o << "," << (c < d.probabilities.size() ? fmt("%.4f", d.probabilities[c]) : std::string());
+    o << "\n";
   }
   return o.str();
 }
@@ -153,13 +158,14 @@ Status write_report(const EvalResult& r, const std::string& dir) {
     if (!f) return internal_error("cannot write " + path);
     return {};
   };
-  const char* kFiles[] = {"report.md", "decisions.csv", "evolution_correct.svg", "evolution_incorrect.svg", "streams.csv"};
+  const char* kFiles[] = {"report.md", "decisions.csv", "evolution_correct.svg", "evolution_incorrect.svg", "streams.csv",
+                          "reliability.svg"};
   const std::string method = method_label(r.change_method);
   const std::string texts[] = {
       markdown_report(r), decisions_csv(r),
       evolution_svg(r.traces, r.categories, true, "Finally correct views: decided category along the exploration (" + method + ")"),
       evolution_svg(r.traces, r.categories, false, "Finally incorrect views: decided category along the exploration (" + method + ")"),
-      streams_csv(r)};
+      streams_csv(r), reliability_svg(r)};
   for (size_t i = 0; i < std::size(kFiles); ++i)
     if (Status s = write(kFiles[i], texts[i]); !s.ok()) return s;
   return {};

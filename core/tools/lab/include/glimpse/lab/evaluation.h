@@ -194,6 +194,7 @@ struct EvalResult {
   std::vector<double> settle_margins;       // per model: calibrated on held-out folds of its training set
   std::vector<double> calibration_accuracy; // per model: its held-out decisions' share right
   std::vector<double> fusion_head_shares;   // per model: the logistic decision's share in the fusion (Calibration)
+  std::vector<double> probability_temperatures;  // per model: its probabilities' temperature (0: none)
   std::vector<PhaseTiming> timings;
   double total_seconds = 0;
   int threads = 1;
@@ -236,6 +237,11 @@ std::string evolution_svg(const std::vector<ExplorationTrace>& traces, const std
                           bool correct, std::string_view title);
 // The report's open-set section (empty without objects of an unknown category).
 std::string open_set_section(const EvalResult& result);
+// The report's section on the calibrated probabilities of the default method: per main stage, expected
+// calibration error, log loss and Brier score of the raw scores and of the probabilities (empty when
+// no decision has probabilities), and its reliability diagram (one panel per main stage).
+std::string probabilities_section(const EvalResult& result);
+std::string reliability_svg(const EvalResult& result);
 // A short plain-text accuracy table (method x main stage) for a terminal.
 std::string summary_table(const EvalResult& result);
 // A cross-source run whose test sources include a training one (--train X --test X): the tested objects
