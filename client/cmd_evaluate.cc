@@ -102,6 +102,8 @@ StageDecision Decision(const EvaluationReport& r, const Item& item, size_t full_
   d.winner = resp.winner_index();  // the report's categories start with the model's, in its order
   d.scores.assign(r.categories.size(), 0.0);
   for (int c = 0; c < resp.scores_size() && size_t(c) < d.scores.size(); ++c) d.scores[size_t(c)] = resp.scores(c).score();
+  if (resp.scores_size() > 0 && resp.scores(0).has_probability())
+    for (const v1::CategoryScore& s : resp.scores()) d.probabilities.push_back(s.probability());
   return d;
 }
 

@@ -7,6 +7,7 @@
 #include <set>
 
 #include "client/render.h"
+#include "glimpse/learning/probabilities.h"
 #include "glimpse/views/exploration.h"
 
 namespace glimpse::client {
@@ -70,18 +71,36 @@ std::vector<std::string> ReportCategories(const std::vector<std::string>& model_
   return out;
 }
 
+namespace {
+// The stage's known views that got probabilities: how well those keep their word (none: 0 decisions).
+ProbabilityQuality StageProbabilityQuality(const EvaluationReport& r, const std::string& stage) {
+  std::vector<std::vector<double>> probabilities;
+  std::vector<int> truths;
+  for (const StageDecision& d : r.decisions)
+    if (d.stage == stage && d.method == r.method_id && !d.probabilities.empty())
+      probabilities.push_back(d.probabilities), truths.push_back(d.truth);
+  return probability_quality(probabilities, truths);
+}
+
+std::string CalibrationErrorJson(const ProbabilityQuality& q) {
+  return q.decisions ? JsonNumber(q.expected_calibration_error) : "null";
+}
+}  // namespace
+
 std::string EvaluationText(const EvaluationReport& r) {
   const size_t views = r.objects.size() * r.views_per_object;
   std::string out = "model " + r.model + ", method " + r.method + ": " + std::to_string(r.objects.size()) +
                     " objects of " + r.folder + ", " + std::to_string(r.views_per_object) + " views each (" +
                     std::to_string(views) + " views), " + Fixed(r.seconds, 1) + " s\n";
-  std::vector<std::vector<std::string>> table = {{"stage", "accuracy", "balanced", "right/views"}};
+  std::vector<std::vector<std::string>> table = {{"stage", "accuracy", "balanced", "right/views", "calibration error"}};
   for (const Stage& s : r.stages) {
     const std::string name = stage_name(s);
     const Tally t = accuracy(r.decisions, name, r.method_id);
     const double balanced = balanced_accuracy(r.decisions, name, r.method_id, r.categories.size());
+    const ProbabilityQuality q = StageProbabilityQuality(r, name);
     table.push_back({name, Fixed(t.percent(), 1) + " %", Fixed(balanced, 1) + " %",
-                     std::to_string(t.correct) + "/" + std::to_string(t.total)});
+                     std::to_string(t.correct) + "/" + std::to_string(t.total),
+                     q.decisions ? Fixed(q.expected_calibration_error, 3) : "-"});
   }
   out += Table(table);
   for (size_t c = r.model_categories; c < r.categories.size(); ++c)
@@ -134,7 +153,8 @@ std::string EvaluationJson(const EvaluationReport& r) {
     out += std::string(i ? "," : "") + "{\"stage\":" + JsonString(name) + ",\"accuracy\":" + JsonNumber(t.percent()) +
            ",\"balanced_accuracy\":" +
            JsonNumber(balanced_accuracy(r.decisions, name, r.method_id, r.categories.size())) +
-           ",\"correct\":" + std::to_string(t.correct) + ",\"total\":" + std::to_string(t.total) + ",\"confusion\":{";
+           ",\"correct\":" + std::to_string(t.correct) + ",\"total\":" + std::to_string(t.total) +
+           ",\"calibration_error\":" + CalibrationErrorJson(StageProbabilityQuality(r, name)) + ",\"confusion\":{";
     bool first_row = true;
     for (size_t tr = 0; tr < r.categories.size(); ++tr) {
       if (std::find(r.object_truth.begin(), r.object_truth.end(), int(tr)) == r.object_truth.end()) continue;

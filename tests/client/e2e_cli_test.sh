@@ -164,8 +164,8 @@ run 2 train "$PLAIN" --name bad --unit mm --height 2
 # ---- evaluate another folder through the service ----
 run 0 evaluate "$EVAL" --model boxes --stages full,20 --views 3 --mesh-points 1500 &&
   out_has "^model boxes:1, method fusion: 4 objects of $EVAL, 3 views each \(12 views\)"
-out_has "^stage +accuracy +balanced +right/views$" && out_has "^full +[0-9.]+ % +[0-9.]+ % +[0-9]+/12$" &&
-  out_has "^20% +[0-9.]+ % +[0-9.]+ % +[0-9]+/12$" && out_has "^confusion at full" && out_has "^misclassified at full: "
+out_has "^stage +accuracy +balanced +right/views +calibration error$" &&
+  out_has "^full +[0-9.]+ % +[0-9.]+ % +[0-9]+/12 +([0-9.]+|-)$" && out_has "^20% +[0-9.]+ % +[0-9.]+ % +[0-9]+/12 +([0-9.]+|-)$" && out_has "^confusion at full" && out_has "^misclassified at full: "
 err_has "^evaluate: 100% \(4/4 objects\)$"  # progress on stderr, plain lines off a terminal
 run 0 evaluate "$EVAL" --model boxes --stages full --views 2 --mesh-points 1500 --json -q
 /usr/bin/python3 -c 'import json, sys; r = json.load(sys.stdin); s = r["stages"][0]

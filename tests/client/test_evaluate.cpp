@@ -85,6 +85,19 @@ TEST(Evaluate, TextReportHasAccuracyConfusionAndTheMisclassified) {
   EXPECT_NE(text.find("lamp/3 view 1 at full: INVALID_ARGUMENT: too few points"), std::string::npos);
 }
 
+// Answers with probabilities give each stage its calibration error; without them, none ("-", null).
+TEST(Evaluate, ReportsTheCalibrationErrorOfTheProbabilities) {
+  EvaluationReport r = SmallReport();
+  EXPECT_NE(EvaluationJson(r).find("\"calibration_error\":null"), std::string::npos);
+  // Known views: chair/1 right at 0.9 and wrong at 0.6 (human); human/2 right at 0.9 twice. Bins 0.9:
+  // 3 views, 3 right, mean 0.9 -> 0.3 / 4; bin 0.6: 1 view, 0 right -> 0.6 / 4. ECE 0.225.
+  const std::vector<std::vector<double>> p = {{0.9, 0.1}, {0.4, 0.6}, {0.1, 0.9}, {0.1, 0.9}};
+  for (size_t i = 0; i < p.size(); ++i) r.decisions[i].probabilities = p[i];
+  const std::string text = EvaluationText(r);
+  EXPECT_NE(text.find("3/6          0.225"), std::string::npos) << text;
+  EXPECT_NE(EvaluationJson(r).find("\"calibration_error\":0.225"), std::string::npos) << EvaluationJson(r);
+}
+
 TEST(Evaluate, JsonReportCarriesTheSameNumbers) {
   const std::string json = EvaluationJson(SmallReport());
   EXPECT_EQ(json.front(), '{');
