@@ -47,13 +47,13 @@ inline std::vector<uint8_t> without_parameter(std::vector<uint8_t> bytes, const 
   return with_version(std::move(bytes), version, payload);
 }
 
-// Format 10 is format 11 without the probability temperature (f64) that ends the payload: it reads with
-// no probabilities.
+// Format 10 is format 11 without the probability temperature and settle probability (two f64) that end
+// the payload: it reads with no probabilities.
 inline std::vector<uint8_t> as_format_10(std::vector<uint8_t> bytes) {
-  if (bytes.size() < 32) return {};
+  if (bytes.size() < 40) return {};
   const size_t payload = bytes.size() - 24;
-  bytes.erase(bytes.end() - 12, bytes.end() - 4);
-  return with_version(std::move(bytes), 10, payload - 8);
+  bytes.erase(bytes.end() - 20, bytes.end() - 4);
+  return with_version(std::move(bytes), 10, payload - 16);
 }
 
 // Format 9 is format 10's bytes: it reads without the top-down prefix's novelty

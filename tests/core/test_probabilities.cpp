@@ -87,6 +87,8 @@ TEST(Probabilities, EveryAnswerOfTheDefaultMethodCarriesThem) {
   const Calibration& c = calibration(s.model);
   ASSERT_GT(c.probability_temperature, 0.0);
   EXPECT_LT(c.probability_temperature, 5.0);
+  EXPECT_GT(c.settle_probability, 0.2);  // above chance of two categories' probability, at most 1
+  EXPECT_LE(c.settle_probability, 1.0 + 1e-6);
   for (const TrainingCloud& cloud : s.known) {
     auto r = classify(s.model, cloud.cloud);
     ASSERT_TRUE(r.ok()) << r.error().message;
@@ -100,9 +102,11 @@ TEST(Probabilities, EveryAnswerOfTheDefaultMethodCarriesThem) {
   auto again = deserialize(serialize(s.model));
   ASSERT_TRUE(again.ok()) << again.error().message;
   EXPECT_EQ(calibration(*again).probability_temperature, c.probability_temperature);
+  EXPECT_EQ(calibration(*again).settle_probability, c.settle_probability);
   auto ten = deserialize(test::as_format_10(serialize(s.model)));
   ASSERT_TRUE(ten.ok()) << ten.error().message;
   EXPECT_EQ(calibration(*ten).probability_temperature, 0.0);
+  EXPECT_EQ(calibration(*ten).settle_probability, 0.0);
   auto old = classify(*ten, s.known.front().cloud);
   ASSERT_TRUE(old.ok());
   EXPECT_TRUE(old->probabilities.empty());

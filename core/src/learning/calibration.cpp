@@ -317,7 +317,7 @@ void settle_on_held_out(Calibration& c, HeldOut& h, int categories, double preci
   c.held_out = decisions.size();
   c.held_out_accuracy = double(correct) / double(decisions.size());
   c.settle_margin = settle_margin(std::move(decisions), precision, 20);
-  c.probability_temperature = fit_temperature(fused, h.truths);
+  calibrate_probabilities(c, fused, h.truths, precision);
 }
 
 // Per component, each reference of the model's own stage (which learnt every row): whether it is a whole

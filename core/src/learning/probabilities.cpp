@@ -57,6 +57,18 @@ double fit_temperature(const std::vector<Eigen::VectorXd>& scores, const std::ve
   return 1.0 / std::exp((lo + hi) / 2);
 }
 
+void calibrate_probabilities(Calibration& c, const std::vector<Eigen::VectorXd>& scores, const std::vector<int>& truths,
+                             double precision) {
+  c.probability_temperature = fit_temperature(scores, truths);
+  std::vector<std::pair<double, bool>> decisions;
+  for (size_t i = 0; i < scores.size() && i < truths.size(); ++i) {
+    const std::vector<double> p = temperature_probabilities({scores[i].data(), size_t(scores[i].size())}, c.probability_temperature);
+    const size_t winner = static_cast<size_t>(std::max_element(p.begin(), p.end()) - p.begin());
+    decisions.push_back({p[winner], winner == static_cast<size_t>(truths[i])});
+  }
+  c.settle_probability = settle_margin(std::move(decisions), precision, 20);
+}
+
 std::vector<double> calibrated_probabilities(const Calibration& calibration, MethodId method,
                                              std::span<const double> scores) {
   if (calibration.method != method || !(calibration.probability_temperature > 0)) return {};

@@ -42,7 +42,8 @@ constexpr char kMagic[8] = {'G', 'L', 'M', 'P', 'S', 'M', 'D', 'L'};
 // 10: the same bytes; the novelty joins that of the cloud's top-down prefix (TrainParams::novelty_prefix,
 // a training parameter); format 9 and older read no prefix, what their quantiles were taken with.
 // 11: after the novelty combination, f64 the temperature of the model's probabilities
-// (Calibration::probability_temperature); format 10 and older read 0: no probabilities.
+// (Calibration::probability_temperature) and f64 its settle probability; format 10 and older read 0:
+// no probabilities, streams settle on the score margin.
 constexpr uint32_t kFormatVersion = 11;
 constexpr uint32_t kOldestReadableVersion = 1;
 

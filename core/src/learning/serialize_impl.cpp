@@ -257,6 +257,7 @@ void write_impl(Writer& w, const ModelImpl& m, bool nested) {
   if (m.novelty) write_impl(w, *m.novelty, true);
   if (!nested) w.u8(m.calibration.novelty_adds_evidence ? 1 : 0);
   if (!nested) w.f64(m.calibration.probability_temperature);
+  if (!nested) w.f64(m.calibration.settle_probability);
 }
 
 std::shared_ptr<ModelImpl> read_impl(Reader& r, uint32_t ncat, uint32_t version, bool nested) {
@@ -278,8 +279,11 @@ std::shared_ptr<ModelImpl> read_impl(Reader& r, uint32_t ncat, uint32_t version,
   }
   if (version >= 11 && !nested && !r.failed()) {
     impl->calibration.probability_temperature = r.f64("probability temperature");
+    impl->calibration.settle_probability = r.f64("settle probability");
     if (!(impl->calibration.probability_temperature >= 0 && impl->calibration.probability_temperature <= 100))
       r.fail("probability temperature out of range");
+    if (!(impl->calibration.settle_probability >= 0 && impl->calibration.settle_probability <= 1 + 1e-6))
+      r.fail("settle probability out of range");
   }
   if (novelty) {
     novelty->calibration.novelty_adds_evidence = impl->calibration.novelty_adds_evidence;

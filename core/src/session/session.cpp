@@ -31,8 +31,11 @@ class Session final : public ScanSession {
     if (const Calibration& c = impl_.calibration;
         params_.use_model_calibration && c.method == method_ && c.settle_margin > 0 && params_.settle_confidence > 0)
       params_.full_margin = c.settle_margin / params_.settle_confidence;
-    if (const Calibration& c = impl_.calibration; params_.use_model_calibration && c.method == method_)
+    if (const Calibration& c = impl_.calibration;
+        params_.use_model_calibration && params_.settle_on_probability && c.method == method_ && c.settle_probability > 0) {
       params_.probability_temperature = c.probability_temperature;
+      params_.settle_probability = c.settle_probability;
+    }
     const Calibration& c = novelty_calibration(impl_);
     threshold_ = c.method == method_ ? novelty_threshold(c, params_.known_acceptance > 0 ? params_.known_acceptance
                                                                                         : c.known_acceptance)

@@ -61,7 +61,8 @@ void track_decision(DecisionTrack& t, const ChunkEvidence& e, bool keypoints_mat
   // Confidence from the tendency of the history: the winner's calibrated probability, or the margin
   // (between the best two smoothed scores; for unknown, of the novelty over its threshold), times the
   // share of the recent decisions it won.
-  const bool in_probability = !d.unknown && params.settle_probability > 0 && params.probability_temperature > 0;
+  const bool in_probability =
+      !d.unknown && params.settle_on_probability && params.settle_probability > 0 && params.probability_temperature > 0;
   double margin = 0;
   if (in_probability) {
     margin = temperature_probabilities(t.smoothed, params.probability_temperature)[static_cast<size_t>(winner)];

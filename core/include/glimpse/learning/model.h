@@ -107,6 +107,10 @@ struct Calibration {
   // The temperature that turns the held-out decisions' scores (at the head's share) into probabilities
   // with the least log loss (probabilities.h); 0: none (a model of format 10 or older, or too few objects).
   double probability_temperature = 0;
+  // The lowest winner's probability (at that temperature) at which the held-out decisions were at least
+  // TrainParams::settle_precision right: where a streamed decision in probabilities settles
+  // (SessionParams::settle_on_probability). 0: none.
+  double settle_probability = 0;
 };
 
 struct ModelImpl;  // codebooks, bases, centres: defined in model_internals.h

@@ -22,6 +22,12 @@ std::vector<double> temperature_probabilities(std::span<const double> scores, do
 // (one row per decision). 1 when there are none.
 double fit_temperature(const std::vector<Eigen::VectorXd>& scores, const std::vector<int>& truths);
 
+// The model's temperature (fit_temperature) and settle probability (the lowest winner's probability at
+// which the held-out decisions are at least `precision` right, as settle_margin) from its held-out
+// decisions' scores and truths.
+void calibrate_probabilities(Calibration& calibration, const std::vector<Eigen::VectorXd>& scores,
+                             const std::vector<int>& truths, double precision);
+
 // A model's calibrated probabilities for `scores` of `method`: empty when the model has no temperature
 // for it (only its calibrated default method has one; a model of format 10 or older has none).
 std::vector<double> calibrated_probabilities(const Calibration& calibration, MethodId method,

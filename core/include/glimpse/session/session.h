@@ -33,8 +33,9 @@ struct SessionParams {
   // describe the whole cloud and cost what it holds, so on this path they are recomputed when the
   // scan grew by this fraction since the last time and always by finish(); USH and size every chunk.
   double global_refresh_growth = 0.2;
-  // Settling (sec. 4, "the decision is consolidating"): confidence combines the margin between the
-  // best two smoothed scores and how steadily the winner held over the last decisions.
+  // Settling (sec. 4, "the decision is consolidating"): confidence combines the winner's calibrated
+  // probability (or, for a model without probabilities, the margin between the best two smoothed
+  // scores) and how steadily the winner held over the last decisions.
   double smoothing = 0.5;            // weight of the newest scores in the running average
   int stability_window = 4;          // decisions the stability looks back on
   // Smoothed margin giving full margin confidence. A model calibrated on held-out folds of its training
@@ -50,11 +51,13 @@ struct SessionParams {
   // settle_confidence: more of the object narrows the margin a little (the top of a human and of a
   // four-legged animal look alike less than their whole), which must not make the answer flicker.
   double unsettle_margin = 0.2;
-  // A model with calibrated probabilities (Calibration::probability_temperature, copied here by the
-  // session unless use_model_calibration is false) states a category's confidence in them: the
-  // probability of the smoothed scores' winner times the share of the last stability_window decisions it
-  // won, settling at settle_probability (and staying settled above settle_probability - unsettle_margin)
-  // under the same conditions. 0 (either): the margin rule above.
+  // A model with calibrated probabilities states a category's confidence in them: the probability of
+  // the smoothed scores' winner times the share of the last stability_window decisions it won, settling
+  // at settle_probability (and staying settled above settle_probability - unsettle_margin) under the
+  // same conditions. The session copies both from the model (Calibration::probability_temperature and
+  // settle_probability: where held-out decisions were settle_precision right) unless
+  // use_model_calibration or settle_on_probability is false. Either 0: the margin rule above.
+  bool settle_on_probability = true;
   double settle_probability = 0;
   double probability_temperature = 0;
   size_t min_keypoints = 10;         // keypoint methods never settle on fewer keypoints

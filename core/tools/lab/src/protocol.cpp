@@ -102,6 +102,7 @@ void record_calibration(EvalResult& r, const ModelImpl& impl) {
   r.calibration_accuracy.push_back(impl.calibration.held_out_accuracy);
   r.fusion_head_shares.push_back(impl.fusion_head ? impl.calibration.fusion_head_share : 0.0);
   r.probability_temperatures.push_back(impl.calibration.probability_temperature);
+  r.settle_probabilities.push_back(impl.calibration.settle_probability);
   r.novelty_thresholds.push_back(novelty_calibration(impl).novelty_threshold);
   r.novelty_models += impl.novelty != nullptr;
 }

@@ -1,5 +1,6 @@
 // The report's sections on the exploration (sec. 4): how often the decision changes category as
 // keypoints appear, and when a streamed decision settles (report.cpp puts them in order).
+#include <algorithm>
 #include <map>
 #include <sstream>
 #include <string>
@@ -51,20 +52,32 @@ std::string streams_section(const EvalResult& r) {
       << pct(s.precision_percent(), 1) << " % | " << pct(s.mean_visible_percent, 1) << " | "
       << pct(s.median_visible_percent, 1) << " |\n";
   };
+  // Every model has a settle probability (and the session uses it): decisions settle in probabilities.
+  const bool in_probability = sp.settle_on_probability && sp.use_model_calibration && !r.settle_probabilities.empty() &&
+                              std::all_of(r.settle_probabilities.begin(), r.settle_probabilities.end(), [](double p) { return p > 0; });
   if (!r.settle_margins.empty()) {
     o << "Each model calibrated where its decisions settle on held-out folds of its own training objects ("
-      << r.params.train.calibration_folds << " inner folds by object; nothing of the test views): the smallest margin "
-         "between the best two scores at which held-out decisions were " << pct(100 * r.params.train.settle_precision)
-      << " % right. Settle margin per model:";
-    for (size_t i = 0; i < r.settle_margins.size(); ++i)
-      o << (i ? "," : "") << " " << fmt("%.3f", r.settle_margins[i]) << " (held out "
+      << r.params.train.calibration_folds << " inner folds by object; nothing of the test views): "
+      << (in_probability ? "the smallest probability of the winner (calibrated probabilities)"
+                         : "the smallest margin between the best two scores")
+      << " at which held-out decisions were " << pct(100 * r.params.train.settle_precision)
+      << " % right; a category's confidence is that "
+      << (in_probability ? "probability" : "margin over it") << " of the smoothed scores times the share of the last "
+      << sp.stability_window << " decisions its winner won. Settle " << (in_probability ? "probability" : "margin")
+      << " per model:";
+    const std::vector<double>& at = in_probability ? r.settle_probabilities : r.settle_margins;
+    for (size_t i = 0; i < at.size(); ++i)
+      o << (i ? "," : "") << " " << fmt("%.3f", at[i]) << " (held out "
         << pct(100 * r.calibration_accuracy[i], 1) << " % right)";
     o << ". The sweep below recomputes settling at fixed confidences from the recorded ones (without the session's "
          "hold rule), for comparison only.\n\n";
     o << "| settled when | views settled | precision | mean visible % | median visible % |\n|---|---:|---:|---:|---:|\n";
   }
   const SettleRow session = settle_summary(r.streams, -1);
-  row("**session default** (calibrated margin, confidence >= " + fmt("%.2f", sp.settle_confidence) + ", the winner held " +
+  row("**session default** (" +
+          (in_probability ? std::string("confidence >= the calibrated probability")
+                          : "calibrated margin, confidence >= " + fmt("%.2f", sp.settle_confidence)) +
+          ", the winner held " +
           std::to_string(sp.stability_window) + " chunks, the newest included, its novelty at most " +
           fmt("%.2f", sp.settle_novelty_share) + " x the threshold" +
           (session.unknown ? "; " + std::to_string(session.unknown) + " settled as unknown, counted wrong" : std::string()) + ")",

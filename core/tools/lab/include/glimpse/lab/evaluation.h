@@ -195,6 +195,7 @@ struct EvalResult {
   std::vector<double> calibration_accuracy; // per model: its held-out decisions' share right
   std::vector<double> fusion_head_shares;   // per model: the logistic decision's share in the fusion (Calibration)
   std::vector<double> probability_temperatures;  // per model: its probabilities' temperature (0: none)
+  std::vector<double> settle_probabilities;      // per model: where its streams settle (0: on the margin)
   std::vector<PhaseTiming> timings;
   double total_seconds = 0;
   int threads = 1;
