@@ -1,6 +1,7 @@
 // Calibrated probabilities on held-out zoo objects: each model fits its temperature on inner folds of
 // its own training objects, and its probabilities keep their word on the objects its fold held out,
-// far better than the raw scores; the report's section and reliability diagram show them.
+// far better than the raw scores; the report's section and reliability diagram show them, and its
+// streams settle on each model's settle probability.
 #include <gtest/gtest.h>
 
 #include <iostream>
@@ -17,12 +18,14 @@ TEST(RunEvaluation, ProbabilitiesKeepTheirWordOnHeldOutZooObjects) {
   p.methods = {MethodId::kFusion};
   p.stages = {{StageKind::kFull, 0}, {StageKind::kFraction, 0.2}};
   p.explore_max_keypoints = 0;
-  p.stream_chunk_fraction = 0;
+  p.stream_chunk_fraction = 0.1;
   p.matrix.clear();
   auto r = run_evaluation(zoo_objects(16, 5), p, "zoo");
   ASSERT_TRUE(r.ok()) << r.error().message;
   ASSERT_EQ(r->probability_temperatures.size(), 2u);
   for (double t : r->probability_temperatures) EXPECT_GT(t, 0.0);
+  ASSERT_EQ(r->settle_probabilities.size(), 2u);
+  for (double s : r->settle_probabilities) EXPECT_GT(s, 0.2);
   std::vector<std::vector<double>> probabilities, scores;
   std::vector<int> truths;
   for (const StageDecision& d : r->decisions) {
@@ -45,6 +48,9 @@ TEST(RunEvaluation, ProbabilitiesKeepTheirWordOnHeldOutZooObjects) {
   EXPECT_LT(calibrated.log_loss, raw.log_loss);
   const std::string report = markdown_report(*r);
   EXPECT_NE(report.find("## Calibrated probabilities (Fusion)"), std::string::npos);
+  // Its streams settle on each model's settle probability, and the report says so.
+  EXPECT_NE(report.find("Settle probability per model:"), std::string::npos);
+  EXPECT_NE(report.find("confidence >= the calibrated probability"), std::string::npos);
   const std::string svg = reliability_svg(*r);
   EXPECT_EQ(svg.rfind("<svg", 0), 0u);
   EXPECT_NE(svg.find("class=\"bin\""), std::string::npos);

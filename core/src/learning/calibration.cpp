@@ -1,8 +1,5 @@
-// Calibration: what a model learns about its own decisions from held-out folds of its training set
-// (inner cross-validation by object), so that no threshold is set on the clouds it will be judged on.
-// The score margin at which its decisions can be trusted (a streamed decision settles there), and how
-// far from anything learnt its known clouds fall, so that a cloud of no learnt category can be told
-// ("none of these") with no example of one.
+// Calibration from held-out folds of the training set (inner cross-validation by object): the settle
+// margin, the head's share, the probabilities' temperature (probabilities.cpp) and novelty's scales.
 #include <algorithm>
 #include <cmath>
 #include <limits>

@@ -34,6 +34,37 @@ std::string changes_section(const EvalResult& r) {
   return o.str();
 }
 
+namespace {
+
+// Every model has a settle probability and the sessions use it: decisions settle in probabilities.
+bool settles_in_probability(const EvalResult& r) {
+  const SessionParams& sp = r.params.session;
+  return sp.settle_on_probability && sp.use_model_calibration && !r.settle_probabilities.empty() &&
+         std::all_of(r.settle_probabilities.begin(), r.settle_probabilities.end(), [](double p) { return p > 0; });
+}
+
+// Where each model's streams settle, and how it was calibrated.
+std::string settle_calibration_text(const EvalResult& r, bool in_probability) {
+  std::ostringstream o;
+  o << "Each model calibrated where its decisions settle on held-out folds of its own training objects ("
+    << r.params.train.calibration_folds << " inner folds by object; nothing of the test views): "
+    << (in_probability ? "the smallest probability of the winner (calibrated probabilities)"
+                       : "the smallest margin between the best two scores")
+    << " at which held-out decisions were " << pct(100 * r.params.train.settle_precision)
+    << " % right; a category's confidence is that " << (in_probability ? "probability" : "margin over it")
+    << " of the smoothed scores times the share of the last " << r.params.session.stability_window
+    << " decisions its winner won. Settle " << (in_probability ? "probability" : "margin") << " per model:";
+  const std::vector<double>& at = in_probability ? r.settle_probabilities : r.settle_margins;
+  for (size_t i = 0; i < at.size(); ++i)
+    o << (i ? "," : "") << " " << fmt("%.3f", at[i]) << " (held out " << pct(100 * r.calibration_accuracy[i], 1)
+      << " % right)";
+  o << ". The sweep below recomputes settling at fixed confidences from the recorded ones (without the session's "
+       "hold rule), for comparison only.\n\n";
+  return o.str();
+}
+
+}  // namespace
+
 std::string streams_section(const EvalResult& r) {
   if (r.streams.empty()) return {};
   std::ostringstream o;
@@ -52,25 +83,9 @@ std::string streams_section(const EvalResult& r) {
       << pct(s.precision_percent(), 1) << " % | " << pct(s.mean_visible_percent, 1) << " | "
       << pct(s.median_visible_percent, 1) << " |\n";
   };
-  // Every model has a settle probability (and the session uses it): decisions settle in probabilities.
-  const bool in_probability = sp.settle_on_probability && sp.use_model_calibration && !r.settle_probabilities.empty() &&
-                              std::all_of(r.settle_probabilities.begin(), r.settle_probabilities.end(), [](double p) { return p > 0; });
+  const bool in_probability = settles_in_probability(r);
   if (!r.settle_margins.empty()) {
-    o << "Each model calibrated where its decisions settle on held-out folds of its own training objects ("
-      << r.params.train.calibration_folds << " inner folds by object; nothing of the test views): "
-      << (in_probability ? "the smallest probability of the winner (calibrated probabilities)"
-                         : "the smallest margin between the best two scores")
-      << " at which held-out decisions were " << pct(100 * r.params.train.settle_precision)
-      << " % right; a category's confidence is that "
-      << (in_probability ? "probability" : "margin over it") << " of the smoothed scores times the share of the last "
-      << sp.stability_window << " decisions its winner won. Settle " << (in_probability ? "probability" : "margin")
-      << " per model:";
-    const std::vector<double>& at = in_probability ? r.settle_probabilities : r.settle_margins;
-    for (size_t i = 0; i < at.size(); ++i)
-      o << (i ? "," : "") << " " << fmt("%.3f", at[i]) << " (held out "
-        << pct(100 * r.calibration_accuracy[i], 1) << " % right)";
-    o << ". The sweep below recomputes settling at fixed confidences from the recorded ones (without the session's "
-         "hold rule), for comparison only.\n\n";
+    o << settle_calibration_text(r, in_probability);
     o << "| settled when | views settled | precision | mean visible % | median visible % |\n|---|---:|---:|---:|---:|\n";
   }
   const SettleRow session = settle_summary(r.streams, -1);
