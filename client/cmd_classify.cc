@@ -99,8 +99,10 @@ int RunClassify(const ConnectionOptions& conn, const ClassifyOptions& o) {
   }
   if (!o.json && !rows.empty()) {
     const v1::ClassifyResponse& first = rows.front().response;
-    PrintOut("model " + FormatModelRef(first.model()) + "  method " + wire::MethodName(first.method()) + "\n" +
-             ClassifyTable(rows));
+    // What the category columns hold: calibrated probabilities, or scores for a model without them.
+    const bool calibrated = first.scores_size() > 0 && first.scores(0).has_probability();
+    PrintOut("model " + FormatModelRef(first.model()) + "  method " + wire::MethodName(first.method()) +
+             (calibrated ? "  probabilities" : "  scores") + "\n" + ClassifyTable(rows));
   }
   return exit_code;
 }

@@ -175,7 +175,7 @@ run 1 evaluate "$EVAL" --model nope -q && err_has "^glimpse: evaluate $EVAL: NOT
 run 2 evaluate "$EVAL" --model boxes --stages 10kp
 
 # ---- classify ----
-run 0 classify "$BOX" "$BLOB" --model folder && out_has "^model folder:1  method esf$" && out_has "^FILE +WINNER +blob +box"
+run 0 classify "$BOX" "$BLOB" --model folder && out_has "^model folder:1  method esf  (scores|probabilities)$" && out_has "^FILE +WINNER +blob +box"
 out_has "^$BOX +box " && out_has "^$BLOB +blob "
 run 0 classify "$BOX" "$BLOB" --model tiny:1 --method bok --json && out_lines 2
 out_has '"version":1,"method":"bok"' && out_has '"scores":\{"chair":'
