@@ -27,10 +27,10 @@ double log_loss_at(const std::vector<Eigen::VectorXd>& scores, const std::vector
 std::vector<double> temperature_probabilities(std::span<const double> scores, double temperature) {
   std::vector<double> p(scores.size());
   if (scores.empty() || !(temperature > 0)) return p;
-  double top = -std::numeric_limits<double>::infinity();
-  for (size_t k = 0; k < scores.size(); ++k) top = std::max(top, std::log(std::max(scores[k], kFloor)) / temperature);
+  for (size_t k = 0; k < scores.size(); ++k) p[k] = std::log(std::max(scores[k], kFloor)) / temperature;
+  const double top = *std::max_element(p.begin(), p.end());
   double sum = 0;
-  for (size_t k = 0; k < scores.size(); ++k) sum += p[k] = std::exp(std::log(std::max(scores[k], kFloor)) / temperature - top);
+  for (double& v : p) sum += v = std::exp(v - top);
   for (double& v : p) v /= sum;
   return p;
 }
