@@ -8,8 +8,19 @@
 
 namespace glimpse {
 
+// SplitMix64 (Steele, Lea & Flood 2014): independent seeds from a seed and a counter or hash.
+inline uint64_t splitmix64(uint64_t x) {
+  x += 0x9E3779B97F4A7C15ull;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+  return x ^ (x >> 31);
+}
+// The i-th of a seeded sequence: splitmix64 of seed + i x its increment.
+inline uint64_t splitmix64(uint64_t seed, uint64_t i) { return splitmix64(seed + 0x9E3779B97F4A7C15ull * i); }
+
 // Uniform in [0, 1) from the top 53 bits.
-inline double uniform01(std::mt19937_64& rng) { return double(rng() >> 11) * 0x1.0p-53; }
+inline double uniform01(uint64_t bits) { return double(bits >> 11) * 0x1.0p-53; }
+inline double uniform01(std::mt19937_64& rng) { return uniform01(rng()); }
 
 // Standard normal, Box-Muller (one of the pair; two uniforms per draw).
 inline double standard_normal(std::mt19937_64& rng) {

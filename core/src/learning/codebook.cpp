@@ -46,14 +46,6 @@ double sum_abs_diff(const double* a, const double* b, Index d) {
   return s;
 }
 
-// SplitMix64: decorrelated seeds for the restarts from one user seed.
-uint64_t splitmix64(uint64_t x) {
-  x += 0x9e3779b97f4a7c15ULL;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-  return x ^ (x >> 31);
-}
-
 Index uniform_index(std::mt19937_64& rng, Index n) {
   return static_cast<Index>((static_cast<unsigned __int128>(rng()) * static_cast<uint64_t>(n)) >> 64);
 }

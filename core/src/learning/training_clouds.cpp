@@ -10,6 +10,7 @@
 #include "glimpse/learning/model.h"
 #include "glimpse/learning/train_params.h"
 #include "glimpse/learning/training.h"
+#include "glimpse/random.h"
 #include "glimpse/threads.h"
 #include "glimpse/views/exploration.h"
 #include "glimpse/views/placement.h"
@@ -20,10 +21,7 @@ namespace glimpse {
 
 Cloud training_view(const Cloud& cloud, const TrainParams& params, uint64_t salt) {
   if (!(params.tilt_deg > 0)) return cloud;
-  uint64_t z = params.seed + 0x9E3779B97F4A7C15ull * (salt + 1);  // splitmix64 of (seed, salt)
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  return rotate_about_centroid(cloud, random_tilt(z ^ (z >> 31), params.tilt_deg));
+  return rotate_about_centroid(cloud, random_tilt(splitmix64(params.seed, salt), params.tilt_deg));
 }
 
 namespace {

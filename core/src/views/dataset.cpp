@@ -13,6 +13,7 @@
 #include <set>
 
 #include "glimpse/io/files.h"
+#include "glimpse/random.h"
 #include "glimpse/views/placement.h"
 
 namespace glimpse {
@@ -142,14 +143,6 @@ Expected<std::vector<CategorySize>> read_category_sizes(const std::string& path)
 }
 
 namespace {
-
-// SplitMix64 (Steele, Lea & Flood 2014): decorrelates the (seed, object) pair.
-uint64_t splitmix64(uint64_t x) {
-  x += 0x9E3779B97F4A7C15ull;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-  return x ^ (x >> 31);
-}
 
 uint64_t fnv1a(std::string_view s) {
   uint64_t h = 0xcbf29ce484222325ull;

@@ -60,10 +60,7 @@ Cloud sample_surface(const Mesh& mesh, double points_per_m2, uint64_t seed) {
 uint64_t object_seed(uint64_t seed, std::string_view key) {
   uint64_t h = 0xcbf29ce484222325ull;  // FNV-1a: std::hash differs between standard libraries
   for (char c : key) h = (h ^ static_cast<unsigned char>(c)) * 0x100000001b3ull;
-  uint64_t z = seed + 0x9E3779B97F4A7C15ull * (h + 1);  // splitmix64 of the pair
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  return z ^ (z >> 31);
+  return splitmix64(seed, h);
 }
 
 Points object_cloud(const Mesh& mesh, size_t points, uint64_t seed) {

@@ -10,6 +10,7 @@
 #include <random>
 
 #include "glimpse/cloud.h"
+#include "glimpse/random.h"
 
 namespace glimpse::zoo_internal {
 
@@ -21,13 +22,6 @@ inline Mat3 rot_y(float a) { return Eigen::AngleAxisf(a, Vec3::UnitY()).toRotati
 inline Mat3 rot_z(float a) { return Eigen::AngleAxisf(a, Vec3::UnitZ()).toRotationMatrix(); }
 inline float deg(float d) { return d * kPi / 180.f; }
 
-// SplitMix64 (Steele, Lea & Flood 2014) to derive independent seeds.
-inline uint64_t splitmix64(uint64_t x) {
-  x += 0x9E3779B97F4A7C15ull;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-  return x ^ (x >> 31);
-}
 
 struct Rng {
   std::mt19937_64 g;
