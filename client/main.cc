@@ -185,7 +185,7 @@ CLI::App* AddTrain(CLI::App& app, CommandLine& cl) {
       ->check(CLI::Range(size_t{1}, size_t{10000}));
   train->add_option("--name", t.name, "model name ([A-Za-z0-9._-], 1-128)")->required()
       ->check(Checked([](const std::string& s) { return ParseModelRef(s + ":latest", /*allow_latest=*/true); }, "NAME"));
-  train->add_option("--methods", t.methods, "comma-separated: bok,bog,kgh,vfh,esf,ush,size,fusion (default: the server's)")
+  train->add_option("--methods", t.methods, "comma-separated: bok,bog,kgh,vfh,esf,ush,size,fusion (default: the server's, vfh,ush,size,fusion: the fusion, its components and the size baseline; the keypoint methods and esf take about 5 times as long to train)")
       ->check(kMethodList);
   train->add_option("--description", t.description, "free text stored with the model");
   AddViewOptions(*train, t.protocol, true);

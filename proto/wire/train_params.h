@@ -15,7 +15,7 @@ inline constexpr size_t kMaxDescriptionBytes = 4096;
 
 // What a Train header asks for, before it is mapped onto core's TrainParams.
 struct TrainSpec {
-  std::vector<MethodId> methods;  // empty: the recogniser's default set
+  std::vector<MethodId> methods;  // empty: core's kDefaultMethods
   std::optional<MethodId> default_method;
   v1::TrainParameters parameters;
 };

@@ -111,6 +111,8 @@ err_has "^train: and the same azimuths seen by a simulated depth camera 1.5 m, 1
 # The cameras' views are thinned to the median density of every mesh's ideal views, which a first pass
 # measures (10 meshes x 6 views), as glimpse-lab thins them to the model's.
 err_has "filtered to the ideal views' density \([0-9]+\.[0-9] points per extent\^2, the median over 60 views;"
+# Without --methods the model learns the default set: the fusion, its components and the size baseline.
+run 0 models show tiny:1 --json && out_has '"methods":\["METHOD_VFH","METHOD_USH","METHOD_SIZE","METHOD_FUSION"\]'
 run 0 train --zoo --per-category 2 --views 2 --methods bok,esf --name tiny --description "second one" -q --json
 out_has '"name":"tiny"' && out_has '"version":2' && out_has '"description":"second one"'
 [[ -s "$ERR" ]] && fail "train -q wrote to stderr"
@@ -177,8 +179,9 @@ run 2 evaluate "$EVAL" --model boxes --stages 10kp
 # ---- classify ----
 run 0 classify "$BOX" "$BLOB" --model folder && out_has "^model folder:1  method esf  (scores|probabilities)$" && out_has "^FILE +WINNER +blob +box"
 out_has "^$BOX +box " && out_has "^$BLOB +blob "
-run 0 classify "$BOX" "$BLOB" --model tiny:1 --method bok --json && out_lines 2
-out_has '"version":1,"method":"bok"' && out_has '"scores":\{"chair":'
+run 0 classify "$BOX" "$BLOB" --model tiny:1 --method ush --json && out_lines 2
+out_has '"version":1,"method":"ush"' && out_has '"scores":\{"chair":'
+run 1 classify "$BOX" --model tiny:1 --method bok && err_has "^glimpse: classify $BOX: FAILED_PRECONDITION: .*bok"
 run 1 classify "$BOX" --model nope && err_has "^glimpse: classify $BOX: NOT_FOUND: .*nope"
 run 1 classify "$BOX" --model tiny:9 && err_has "NOT_FOUND"
 # The proto says FAILED_PRECONDITION for a method the model lacks.

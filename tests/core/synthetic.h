@@ -129,9 +129,11 @@ inline std::vector<TrainingCloud> synthetic_views(int objects_per_category, int 
   return out;
 }
 
-// Training parameters for the synthetic problem's small models: small codebooks, trained in seconds.
+// Training parameters for the synthetic problem's small models: every method, with small codebooks,
+// trained in seconds.
 inline TrainParams small_params() {
   TrainParams p;
+  p.methods.assign(std::begin(kAllMethods), std::end(kAllMethods));
   p.bok_clusters = 12;
   p.bog_keypoint_clusters = 3;
   p.bog_volume_clusters = 2;

@@ -43,7 +43,7 @@ struct TrainParams {
   FeatureParams features;
   GlobalDescriptorParams global;
   UprightHistogramParams ush;
-  std::vector<MethodId> methods = {std::begin(kAllMethods), std::end(kAllMethods)};
+  std::vector<MethodId> methods = {std::begin(kDefaultMethods), std::end(kDefaultMethods)};
   MethodId default_method = MethodId::kFusion;
 
   double codebook_explained_variance = 0.95;  // PCA of standardised descriptors (sec. 3.2.5)
