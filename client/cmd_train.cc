@@ -37,12 +37,18 @@ bool EmitViews(const std::string& category, const std::string& object_id, const 
 
 // Every mesh of the folder as glimpse-lab loads and views it.
 Status EmitMeshes(const ViewRecipe& recipe, double sensor_density, const Folder& folder, const Emit& emit) {
-  for (const DatasetObject& object : folder.dataset.objects) {
-    auto views = ProtocolViews(object, folder.sizing, recipe, sensor_density);
-    if (!views) return views.error();
-    if (!EmitViews(object.category, ObjectKey(object), *views, emit)) return {};
-  }
-  return {};
+  const std::vector<DatasetObject>& objects = folder.dataset.objects;
+  Status failed;
+  ViewsInOrder(
+      objects.size(), [&](size_t i) { return ProtocolViews(objects[i], folder.sizing, recipe, sensor_density); },
+      [&](size_t i, Expected<ObjectViews>&& views) {
+        if (!views) {
+          failed = views.error();
+          return false;
+        }
+        return EmitViews(objects[i].category, ObjectKey(objects[i]), *views, emit);
+      });
+  return failed;
 }
 
 // The folder's cloud files, as they are or as --unit / --up place them.
@@ -63,13 +69,17 @@ Status EmitCloudFiles(const Folder& folder, const Emit& emit) {
 // but not what "unknown" measures against, as glimpse-lab's --also-train zoo:N).
 Status EmitZoo(const TrainOptions& o, const ViewRecipe& recipe, double sensor_density,
                const std::set<std::string>& categories, const Emit& emit) {
-  for (const LabelledMesh& object : make_zoo(o.per_category, recipe.seed)) {
-    if (!categories.empty() && !categories.count(object.category)) continue;
-    const std::string key = object.category + "/" + object.id;
-    if (!EmitViews(object.category, key, training_views(object.mesh, key, object.any_pose, recipe, sensor_density), emit,
-                   !categories.empty()))
-      return {};
-  }
+  std::vector<LabelledMesh> zoo = make_zoo(o.per_category, recipe.seed);
+  std::erase_if(zoo, [&](const LabelledMesh& z) { return !categories.empty() && !categories.count(z.category); });
+  auto key = [&](size_t i) { return zoo[i].category + "/" + zoo[i].id; };
+  ViewsInOrder(
+      zoo.size(),
+      [&](size_t i) -> Expected<ObjectViews> {
+        return training_views(zoo[i].mesh, key(i), zoo[i].any_pose, recipe, sensor_density);
+      },
+      [&](size_t i, Expected<ObjectViews>&& views) {
+        return EmitViews(zoo[i].category, key(i), *views, emit, !categories.empty());
+      });
   return {};
 }
 

@@ -4,6 +4,9 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <optional>
+
+#include <omp.h>
 #include <set>
 
 #include "glimpse/views/sampling.h"
@@ -114,6 +117,22 @@ Expected<ObjectViews> ProtocolViews(const DatasetObject& object, const Sizing& s
   auto mesh = load_object(object, recipe.seed, sizing);
   if (!mesh) return mesh.error();
   return training_views(*mesh, ObjectKey(object), object.size.any_pose, recipe, sensor_density);
+}
+
+bool ViewsInOrder(size_t count, const MakeViews& make, const TakeViews& take) {
+  const int threads = std::max(1, omp_get_max_threads());
+  const size_t batch = 2 * static_cast<size_t>(threads);
+  std::vector<std::optional<Expected<ObjectViews>>> made;
+  for (size_t begin = 0; begin < count; begin += batch) {
+    const size_t end = std::min(count, begin + batch);
+    made.assign(end - begin, std::nullopt);
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 1)
+    for (int64_t i = static_cast<int64_t>(begin); i < static_cast<int64_t>(end); ++i)
+      made[static_cast<size_t>(i) - begin].emplace(make(static_cast<size_t>(i)));
+    for (size_t i = begin; i < end; ++i)
+      if (!take(i, std::move(*made[i - begin]))) return false;
+  }
+  return true;
 }
 
 Status PlaceCloud(Cloud& cloud, const Placement& placement, const std::string& path) {

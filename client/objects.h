@@ -7,6 +7,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -49,6 +50,13 @@ Expected<Folder> ScanFolder(const std::string& dir, const Placement& placement);
 // `sensor_density` (0: not thinned). Errors name the mesh's path.
 Expected<ObjectViews> ProtocolViews(const DatasetObject& object, const Sizing& sizing, const ViewRecipe& recipe,
                                     double sensor_density = 0);
+
+// Calls take(i, views of object i) for i = 0 .. count - 1 in order, the views made by make(i) a few
+// objects at a time on every core: what is taken, and in which order, does not depend on the thread
+// count. Stops, returning false, when take does.
+using MakeViews = std::function<Expected<ObjectViews>(size_t)>;
+using TakeViews = std::function<bool(size_t, Expected<ObjectViews>&&)>;
+bool ViewsInOrder(size_t count, const MakeViews& make, const TakeViews& take);
 
 // A cloud file placed as the user says: --unit scales its points (and sensor) to metres, --up turns
 // that axis to +z. --height is refused: a cloud shows part of its object, not the object's height.
