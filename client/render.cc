@@ -312,6 +312,14 @@ std::string StageText(const v1::TrainProgress& p) {
   }
   return out;
 }
+
+// ", about N s left" (minutes from 2 on) when the server estimates it, else "".
+std::string TimeLeft(const v1::TrainProgress& p) {
+  const double s = p.seconds_left();
+  if (!(s > 0) || !std::isfinite(s)) return "";
+  if (s < 120) return ", about " + std::to_string(std::max(1, static_cast<int>(std::lround(s)))) + " s left";
+  return ", about " + std::to_string(static_cast<long>(std::lround(s / 60))) + " min left";
+}
 }  // namespace
 
 std::string ProgressBar(const v1::TrainProgress& p, int bar_width) {
@@ -319,18 +327,31 @@ std::string ProgressBar(const v1::TrainProgress& p, int bar_width) {
   if (pct.size() < 4) pct.insert(0, 4 - pct.size(), ' ');
   std::string out = "[";
   out += Bar(p.percent() / 100.0, bar_width);
-  return out + "] " + pct + "  " + StageText(p);
+  return out + "] " + pct + "  " + StageText(p) + TimeLeft(p);
 }
 
 std::string ProgressLine(const v1::TrainProgress& p) {
-  return "train: " + Fixed(p.percent(), 0) + "% " + StageText(p) + " (clouds " + std::to_string(p.clouds_received()) + ")";
+  return "train: " + Fixed(p.percent(), 0) + "% " + StageText(p) + " (clouds " + std::to_string(p.clouds_received()) +
+         ")" + TimeLeft(p);
 }
+
+namespace {
+// "N keypoints, " when the model learnt keypoints (BoK, BoG or KGH among its methods, or any found).
+std::string KeypointsLearnt(const v1::ModelInfo& m) {
+  bool keypoint_method = false;
+  for (int method : m.methods()) {
+    const auto id = wire::MethodFromProto(static_cast<v1::Method>(method));
+    keypoint_method = keypoint_method || (id.ok() && *id && uses_keypoints(**id));
+  }
+  if (!keypoint_method && m.stats().keypoints() == 0) return "";
+  return std::to_string(m.stats().keypoints()) + " keypoints, ";
+}
+}  // namespace
 
 std::string TrainSummary(const v1::ModelInfo& m) {
   return "trained " + m.name() + ":" + std::to_string(m.version()) + (m.is_default() ? " (default)" : "") + ": " +
          std::to_string(m.categories_size()) + " categories, " + std::to_string(m.stats().clouds()) + " clouds, " +
-         std::to_string(m.stats().keypoints()) + " keypoints, " + Fixed(m.stats().seconds(), 1) + " s, " +
-         FormatBytes(m.size_bytes());
+         KeypointsLearnt(m) + Fixed(m.stats().seconds(), 1) + " s, " + FormatBytes(m.size_bytes());
 }
 
 // ---- models ----
@@ -360,8 +381,7 @@ std::string ModelDetails(const v1::ModelInfo& m) {
       {"methods:", Methods(m) + " (default " + wire::MethodName(m.default_method()) + ")"},
       {"categories:", Join(categories, ", ")},
       {"trained on:", std::to_string(m.stats().clouds()) + " clouds of " + std::to_string(m.stats().objects()) +
-                          " objects, " + std::to_string(m.stats().keypoints()) + " keypoints, " +
-                          Fixed(m.stats().seconds(), 1) + " s"},
+                          " objects, " + KeypointsLearnt(m) + Fixed(m.stats().seconds(), 1) + " s"},
       {"size:", FormatBytes(m.size_bytes())},
       {"sha256:", m.sha256().empty() ? "-" : m.sha256()},
   };

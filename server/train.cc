@@ -108,8 +108,14 @@ double TrainPercent(std::string_view stage, size_t done, size_t total) {
   return -1;  // unknown stage: the caller keeps its last value
 }
 
+double SecondsLeft(double percent, double elapsed_s) {
+  if (!(percent >= 5 && percent < 100) || !(elapsed_s >= 0)) return 0;
+  return elapsed_s * (100 - percent) / percent;
+}
+
 void TrainProgressWriter::Received(size_t clouds) {
   std::lock_guard lock(mutex_);
+  received_ = std::chrono::steady_clock::now();
   last_.set_stage("received");
   last_.set_clouds_received(clouds);
   write_(last_);
@@ -130,6 +136,8 @@ void TrainProgressWriter::Update(const TrainingProgress& p) {
   last_.set_stage_total(p.total);
   if (!moved) return;
   last_.set_percent(percent);
+  last_.set_seconds_left(
+      SecondsLeft(percent, std::chrono::duration<double>(std::chrono::steady_clock::now() - received_).count()));
   write_(last_);
 }
 
@@ -139,6 +147,7 @@ void TrainProgressWriter::Done(const ModelRecord& record) {
   last_.set_stage_done(1);
   last_.set_stage_total(1);
   last_.set_percent(100);
+  last_.set_seconds_left(0);
   ToProto(record, last_.mutable_model());
   write_(last_);
 }

@@ -3,6 +3,7 @@
 // percentages and progress messages.
 #pragma once
 
+#include <chrono>
 #include <functional>
 #include <mutex>
 #include <string>
@@ -37,6 +38,10 @@ Expected<ModelRecord> TrainAndStore(const TrainInput& input, const Engine& engin
 // server's ("received", "storing", "done").
 double TrainPercent(std::string_view stage, size_t done, size_t total);
 
+// The seconds left when `percent` of the call is done after `elapsed_s`: elapsed x the share to do over
+// the share done; 0 below 5 % (too little to extrapolate from) and at 100 %.
+double SecondsLeft(double percent, double elapsed_s);
+
 // The call's progress as TrainProgress messages: "received" once the clouds are in, core's stages while
 // they move (only when the stage changes or the share moves by a point; core may report from worker
 // threads, so one write at a time), and "done" with the stored model.
@@ -53,6 +58,7 @@ class TrainProgressWriter {
   std::mutex mutex_;
   Write write_;
   v1::TrainProgress last_;
+  std::chrono::steady_clock::time_point received_ = std::chrono::steady_clock::now();
 };
 
 }  // namespace glimpse::server

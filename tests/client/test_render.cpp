@@ -215,7 +215,14 @@ TEST(Render, TrainingProgress) {
   EXPECT_EQ(ProgressLine(p), "train: 43% features 12/30 (clouds 30)");
   p.set_stage("receiving");
   EXPECT_EQ(ProgressLine(p), "train: 43% receiving 30 clouds (clouds 30)");
+  p.set_stage("features");
+  p.set_seconds_left(41.6);  // the server's estimate, when it has one
+  EXPECT_EQ(ProgressLine(p), "train: 43% features 12/30 (clouds 30), about 42 s left");
+  EXPECT_NE(ProgressBar(p, 10).find("features 12/30, about 42 s left"), std::string::npos) << ProgressBar(p, 10);
+  p.set_seconds_left(431);
+  EXPECT_EQ(ProgressLine(p), "train: 43% features 12/30 (clouds 30), about 7 min left");
   p.set_percent(100);
+  p.set_seconds_left(0);
   EXPECT_NE(ProgressBar(p, 10).find("██████████] 100%"), std::string::npos);
 }
 
@@ -242,6 +249,11 @@ TEST(Render, TrainSummaryAndModelDetails) {
   EXPECT_NE(details.find("methods:      bok,fusion (default fusion)"), std::string::npos) << details;
   EXPECT_NE(details.find("categories:   human, chair"), std::string::npos) << details;
   EXPECT_NE(details.find("version:      2 (default)"), std::string::npos) << details;
+  v1::ModelInfo global = MakeModel();  // no keypoint method: nothing to say of keypoints
+  global.set_methods(0, v1::METHOD_USH);
+  global.mutable_stats()->set_keypoints(0);
+  EXPECT_EQ(TrainSummary(global), "trained zoo:2 (default): 2 categories, 60 clouds, 12.3 s, 2.0 KiB");
+  EXPECT_NE(ModelDetails(global).find("60 clouds of 0 objects, 12.3 s"), std::string::npos) << ModelDetails(global);
 }
 
 TEST(Render, ModelsTable) {

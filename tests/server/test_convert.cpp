@@ -256,6 +256,15 @@ TEST(ToGrpcStatus, MapsEveryErrorCode) {
   EXPECT_EQ(wire::ToGrpcStatus(invalid_argument("x"), true).error_code(), StatusCode::INVALID_ARGUMENT);
 }
 
+TEST(TrainPercent, SecondsLeftExtrapolateTheShareDone) {
+  EXPECT_EQ(SecondsLeft(0, 10), 0);   // nothing done yet: no estimate
+  EXPECT_EQ(SecondsLeft(4.9, 10), 0);
+  EXPECT_DOUBLE_EQ(SecondsLeft(25, 30), 90);  // a quarter in 30 s: 90 s to go
+  EXPECT_DOUBLE_EQ(SecondsLeft(50, 30), 30);
+  EXPECT_EQ(SecondsLeft(100, 30), 0);
+  EXPECT_EQ(SecondsLeft(50, -1), 0);  // a clock that went back says nothing
+}
+
 TEST(TrainPercent, IsMonotonicOverTheStagesInOrder) {
   double last = 0;
   for (const char* stage : {"features", "codebooks", "centres", "calibration", "storing"}) {
