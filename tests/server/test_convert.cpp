@@ -267,7 +267,7 @@ TEST(TrainPercent, SecondsLeftExtrapolateTheShareDone) {
 
 TEST(TrainPercent, IsMonotonicOverTheStagesInOrder) {
   double last = 0;
-  for (const char* stage : {"features", "codebooks", "centres", "calibration", "storing"}) {
+  for (const char* stage : {"features", "codebooks", "centres", "calibration", "novelty", "storing"}) {
     for (size_t done = 0; done <= 4; ++done) {
       double p = TrainPercent(stage, done, 4);
       EXPECT_GE(p, last) << stage << " " << done;
