@@ -12,6 +12,7 @@
 #include "glimpse/learning/novelty.h"
 #include "glimpse/learning/probabilities.h"
 #include "glimpse/learning/scores.h"
+#include "glimpse/random.h"
 
 namespace glimpse {
 
@@ -137,6 +138,16 @@ std::vector<int> objects_per_category(const std::vector<int>& labels, const std:
   return out;
 }
 
+// Per row, whether calibration decides it: about `queries` of the n rows, each kept when a seeded hash
+// of its place falls under queries / n; empty (every row) when queries <= 0 or >= n.
+std::vector<uint8_t> decided_rows(size_t n, int queries, uint64_t seed) {
+  if (queries <= 0 || static_cast<size_t>(queries) >= n) return {};
+  const double keep = double(queries) / double(n);
+  std::vector<uint8_t> out(n);
+  for (size_t i = 0; i < n; ++i) out[i] = uniform01(splitmix64(seed, i)) < keep;
+  return out;
+}
+
 // Every category needs objects in at least two inner folds, or a fold learns nothing of it.
 bool two_objects_per_category(const std::vector<std::string>& object_categories) {
   std::map<std::string, size_t> per_category;
@@ -153,6 +164,7 @@ struct InnerFolds {
   std::vector<int> object_fold{};    // per object: its inner fold
   std::vector<MethodId> parts{};     // the calibrated method's components
   std::vector<int> novelty_objects{};  // per category (objects_per_category)
+  std::vector<uint8_t> decided{};    // per row: whether it is decided held out (empty: every row)
   bool with_head = false;            // the fusion's logistic decision takes a share of its scores
   bool measure_novelty = false;
   int threads = 1;
@@ -172,8 +184,10 @@ struct FoldRows {
 std::optional<FoldRows> fold_rows(const InnerFolds& in, int k) {
   const CalibrationRows& rows = in.rows;
   FoldRows f;
-  for (size_t i = 0; i < rows.labels.size(); ++i)
-    (in.object_fold[static_cast<size_t>(rows.objects[i])] == k ? f.test_rows : f.train_rows).push_back(static_cast<Eigen::Index>(i));
+  for (size_t i = 0; i < rows.labels.size(); ++i) {
+    if (in.object_fold[static_cast<size_t>(rows.objects[i])] != k) f.train_rows.push_back(static_cast<Eigen::Index>(i));
+    else if (in.decided.empty() || in.decided[i]) f.test_rows.push_back(static_cast<Eigen::Index>(i));
+  }
   if (f.test_rows.empty()) return std::nullopt;
   for (Eigen::Index i : f.train_rows)
     f.train_labels.push_back(rows.labels[static_cast<size_t>(i)]), f.train_groups.push_back(rows.objects[static_cast<size_t>(i)]);
@@ -347,6 +361,7 @@ Calibration calibrate(const ModelImpl& impl, MethodId method, const CalibrationR
   in.with_head = method == MethodId::kFusion && impl.fusion_head.has_value() && !p.fusion_head_shares.empty();
   in.measure_novelty = measure_novelty;
   in.threads = threads;
+  in.decided = decided_rows(rows.labels.size(), p.calibration_queries, p.seed + 103);
   HeldOut held_out;
   for (int k = 0; k < folds; ++k) {
     if (cancel && cancel()) return c;  // the caller sees the cancel and stores nothing

@@ -58,6 +58,7 @@ void visit_params(TrainParams& p, F&& f) {
   f("fusion_head.sample_interval", p.fusion_head.sample_interval);
   f("kmeans_restarts", p.kmeans_restarts);
   f("calibration_folds", p.calibration_folds);
+  f("calibration_queries", p.calibration_queries);
   f("settle_precision", p.settle_precision);
   f("known_acceptance", p.known_acceptance);
   f("novelty_objects", p.novelty_objects);

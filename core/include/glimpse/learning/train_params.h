@@ -98,6 +98,10 @@ struct TrainParams {
   // Calibration on held-out folds of the training objects (inner cross-validation by object): the
   // score margin at which the default method's decisions are settle_precision right. 0 or 1: none.
   int calibration_folds = 4;
+  // The held-out rows calibration decides: about this many, drawn by a seeded hash of each row's place
+  // (every fold, category and kind of row alike), so calibration costs this many queries against the
+  // rows, linear in them; <= 0 or more than the rows: every row.
+  int calibration_queries = 8000;
   double settle_precision = 0.98;
   // The default operating point of "unknown": the novelty threshold accepts this share of the held-out
   // known decisions (so about 1 - this of known clouds are called unknown).
