@@ -178,7 +178,7 @@ BENCHMARK(BM_ClassifySize)
 const Model* model_without_novelty() {
   static const std::unique_ptr<Model> m = [] {
     if (!model()) return std::unique_ptr<Model>();
-    auto back = deserialize(test::as_format_3(serialize(*model()), calibration(*model())));
+    auto back = deserialize(test::as_format_3(test::format_11_bytes(*model()), calibration(*model())));
     return back.ok() ? std::make_unique<Model>(std::move(*back)) : nullptr;
   }();
   return m.get();
@@ -214,7 +214,7 @@ const Model* augmented_model(bool marked) {
     auto trained = train(data, TrainParams{});
     if (!trained.ok()) return nullptr;
     if (mark) return std::make_unique<Model>(std::move(*trained));
-    auto back = deserialize(test::as_format_3(serialize(*trained), calibration(*trained)));
+    auto back = deserialize(test::as_format_3(test::format_11_bytes(*trained), calibration(*trained)));
     return back.ok() ? std::make_unique<Model>(std::move(*back)) : nullptr;
   };
   static const std::unique_ptr<Model> with = make(true), without = make(false);

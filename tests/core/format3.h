@@ -1,4 +1,4 @@
-// Model bytes of formats 3 to 10 made from a format-11 model (of no augmented cloud for 7 and older), for tests and benchmarks of models
+// Model bytes of formats 3 to 11 made from a format-12 model (of no augmented cloud for 7 and older), for tests and benchmarks of models
 // written before novelty existed ("none of these"; format 3 has no novelty block), before novelty was
 // divided by the decision's score (format 4 lacks that byte), before it was measured over several
 // training objects (format 5 lacks the reference objects that end the payload), before it joined the
@@ -6,6 +6,7 @@
 #pragma once
 
 #include <algorithm>
+#include <bit>
 #include <cstdint>
 #include <cstring>
 #include <string>
@@ -13,6 +14,7 @@
 
 #include "glimpse/features/global_descriptors.h"
 #include "glimpse/learning/model.h"
+#include "glimpse/learning/model_internals.h"
 #include "glimpse/features/upright_histogram.h"
 
 namespace glimpse::test {
@@ -46,6 +48,44 @@ inline std::vector<uint8_t> without_parameter(std::vector<uint8_t> bytes, const 
   const size_t payload = bytes.size() - 24;  // read before the move below
   return with_version(std::move(bytes), version, payload);
 }
+
+// Format 11 is format 12 with every decision stage's references (the model's and its novelty model's)
+// as binary64: each binary32 block found by its values (they are binary32 already) and widened. Empty when
+// a block is not found.
+inline std::vector<uint8_t> as_format_11(std::vector<uint8_t> bytes, const Model& model) {
+  if (bytes.size() < 24 || !model.impl) return {};
+  auto block = [](const Eigen::MatrixXd& m, bool binary32) {
+    std::vector<uint8_t> out;
+    auto put = [&out](uint64_t v, size_t n) {
+      for (size_t i = 0; i < n; ++i) out.push_back(static_cast<uint8_t>(v >> (8 * i)));
+    };
+    put(static_cast<uint64_t>(m.rows()), 4);
+    put(static_cast<uint64_t>(m.cols()), 4);
+    for (Eigen::Index r = 0; r < m.rows(); ++r)
+      for (Eigen::Index c = 0; c < m.cols(); ++c) {
+        if (binary32) put(std::bit_cast<uint32_t>(static_cast<float>(m(r, c))), 4);
+        else put(std::bit_cast<uint64_t>(m(r, c)), 8);
+      }
+    return out;
+  };
+  std::vector<const ModelImpl*> impls = {model.impl.get()};
+  if (model.impl->novelty) impls.push_back(model.impl->novelty.get());
+  for (const ModelImpl* impl : impls)
+    for (const auto& stage : impl->stages) {
+      if (!stage) continue;
+      const std::vector<uint8_t> narrow = block(stage->references, true), wide = block(stage->references, false);
+      const auto at = std::search(bytes.begin() + 20, bytes.end() - 4, narrow.begin(), narrow.end());
+      if (at == bytes.end() - 4) return {};
+      const auto pos = at - bytes.begin();
+      bytes.erase(bytes.begin() + pos, bytes.begin() + pos + static_cast<std::ptrdiff_t>(narrow.size()));
+      bytes.insert(bytes.begin() + pos, wide.begin(), wide.end());
+    }
+  const size_t payload = bytes.size() - 24;
+  return with_version(std::move(bytes), 11, payload);
+}
+
+// A format-12 model's bytes as format 11 wrote them.
+inline std::vector<uint8_t> format_11_bytes(const Model& model) { return as_format_11(serialize(model), model); }
 
 // Format 10 is format 11 without the probability temperature and settle probability (two f64) that end
 // the payload: it reads with no probabilities.

@@ -243,7 +243,8 @@ TEST(FusionHead, TheModelBytesKeepItAndAFormat6ModelReadsWithoutIt) {
   const Pair& p = models();
   // The bytes as format 7 wrote them (format 8 ends with the novelty model's flag, 0: nothing augmented).
   const std::vector<uint8_t> current = serialize(p.with);
-  const std::vector<uint8_t> bytes = test::as_format_7(current), plain = test::as_format_7(serialize(p.without));
+  const std::vector<uint8_t> bytes = test::as_format_7(test::format_11_bytes(p.with)),
+                             plain = test::as_format_7(test::format_11_bytes(p.without));
   ASSERT_FALSE(bytes.empty());
   const size_t block = head_block_bytes(p.with.categories.size());
   ASSERT_EQ(bytes.size(), plain.size() + block - 1);  // the model without a head writes its flag alone

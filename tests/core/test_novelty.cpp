@@ -201,7 +201,7 @@ TEST(Novelty, TrainingRejectsAnImpossibleKnownAcceptanceOrPrefix) {
 // the same either way, and so is the novelty of a cloud whose prefix would keep too few points.
 TEST(Novelty, JoinsThatOfTheCloudsTopDownPrefix) {
   const OpenSet& s = open_set();
-  auto before = deserialize(test::as_format_9(serialize(s.model)));
+  auto before = deserialize(test::as_format_9(test::format_11_bytes(s.model)));
   auto unnamed = deserialize(test::without_parameter(serialize(s.model), "novelty_prefix"));
   ASSERT_TRUE(before.ok() && unnamed.ok()) << before.error().message;
   std::vector<TrainingCloud> clouds = s.known;
@@ -292,7 +292,7 @@ TEST(Novelty, AugmentedCloudsAreLearntButNotMeasuredAgainst) {
   }
   // Declared format 7 (no novelty model), the novelty model's bytes are left over: damage, not a model
   // read without them.
-  auto seven = test::read_as_format(bytes, 7);
+  auto seven = test::read_as_format(test::format_11_bytes(*a), 7);
   ASSERT_FALSE(seven.ok());
   EXPECT_NE(seven.error().message.find("unexpected trailing bytes"), std::string::npos) << seven.error().message;
 }

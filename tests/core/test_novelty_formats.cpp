@@ -25,7 +25,7 @@ using test::OpenSet;
 const Model& format_6() {
   static const Model m = [] {
     const OpenSet& s = open_set();
-    auto six = deserialize(test::as_format_6(serialize(s.model), s.model.categories.size()));
+    auto six = deserialize(test::as_format_6(test::format_11_bytes(s.model), s.model.categories.size()));
     EXPECT_TRUE(six.ok()) << (six.ok() ? "" : six.error().message);
     return six.ok() ? *six : Model{};
   }();
@@ -38,7 +38,7 @@ TEST(Novelty, AModelOfFormat5KeepsTheNearestReferenceAlone) {
   const OpenSet& s = open_set();
   ASSERT_EQ(calibration(s.model).novelty_objects, std::vector<int>(2, 4));
   ASSERT_FALSE(calibration(s.model).reference_object.empty());
-  auto back = deserialize(test::as_format_5(serialize(s.model), calibration(s.model)));
+  auto back = deserialize(test::as_format_5(test::format_11_bytes(s.model), calibration(s.model)));
   ASSERT_TRUE(back.ok()) << back.error().message;
   EXPECT_TRUE(calibration(*back).novelty_objects.empty());
   EXPECT_TRUE(calibration(*back).reference_object.empty());
@@ -66,8 +66,8 @@ TEST(Novelty, AModelOfFormat5KeepsTheNearestReferenceAlone) {
 TEST(Novelty, AModelOfFormat8KeepsTheLargerOfTheTwoEvidences) {
   const OpenSet& s = open_set();
   ASSERT_TRUE(calibration(s.model).novelty_adds_evidence);
-  auto nine = deserialize(test::as_format_9(serialize(s.model)));  // no prefix either, as format 8
-  auto eight = deserialize(test::as_format_8(serialize(s.model)));
+  auto nine = deserialize(test::as_format_9(test::format_11_bytes(s.model)));  // no prefix either, as format 8
+  auto eight = deserialize(test::as_format_8(test::format_11_bytes(s.model)));
   ASSERT_TRUE(eight.ok() && nine.ok()) << eight.error().message;
   EXPECT_FALSE(calibration(*eight).novelty_adds_evidence);
   EXPECT_EQ(calibration(*eight).novelty_quantiles, calibration(s.model).novelty_quantiles);
@@ -88,7 +88,7 @@ TEST(Novelty, AModelOfFormat8KeepsTheLargerOfTheTwoEvidences) {
   }
   EXPECT_GT(differ, 0u);
   // The combination byte that ends a format-10 payload is 0 or 1; anything else is damage.
-  std::vector<uint8_t> bytes = test::as_format_10(serialize(s.model));
+  std::vector<uint8_t> bytes = test::as_format_10(test::format_11_bytes(s.model));
   ASSERT_EQ(bytes[bytes.size() - 5], 1);
   bytes[bytes.size() - 5] = 2;
   auto damaged = test::read_as_format(bytes, 10);
@@ -103,8 +103,8 @@ TEST(Novelty, AModelOfFormat4KeepsItsNoveltyWithoutTheScore) {
   const OpenSet& s = open_set();
   ASSERT_TRUE(calibration(s.model).novelty_over_score);
   const Calibration& c = calibration(s.model);
-  auto five = deserialize(test::as_format_5(serialize(s.model), c));
-  auto back = deserialize(test::as_format_4(serialize(s.model), c));
+  auto five = deserialize(test::as_format_5(test::format_11_bytes(s.model), c));
+  auto back = deserialize(test::as_format_4(test::format_11_bytes(s.model), c));
   ASSERT_TRUE(back.ok() && five.ok()) << back.error().message;
   EXPECT_FALSE(calibration(*back).novelty_over_score);
   EXPECT_EQ(calibration(*back).novelty_quantiles, calibration(s.model).novelty_quantiles);
@@ -121,7 +121,7 @@ TEST(Novelty, AModelOfFormat4KeepsItsNoveltyWithoutTheScore) {
 
 TEST(Novelty, AModelOfFormat3ReadsWithoutNovelty) {
   const OpenSet& s = open_set();
-  const std::vector<uint8_t> old = test::as_format_3(serialize(s.model), calibration(s.model));
+  const std::vector<uint8_t> old = test::as_format_3(test::format_11_bytes(s.model), calibration(s.model));
   auto back = deserialize(old);
   ASSERT_TRUE(back.ok()) << back.error().message;
   EXPECT_TRUE(calibration(*back).novelty_scale.empty());

@@ -103,7 +103,7 @@ TEST(Probabilities, EveryAnswerOfTheDefaultMethodCarriesThem) {
   ASSERT_TRUE(again.ok()) << again.error().message;
   EXPECT_EQ(calibration(*again).probability_temperature, c.probability_temperature);
   EXPECT_EQ(calibration(*again).settle_probability, c.settle_probability);
-  auto ten = deserialize(test::as_format_10(serialize(s.model)));
+  auto ten = deserialize(test::as_format_10(test::format_11_bytes(s.model)));
   ASSERT_TRUE(ten.ok()) << ten.error().message;
   EXPECT_EQ(calibration(*ten).probability_temperature, 0.0);
   EXPECT_EQ(calibration(*ten).settle_probability, 0.0);

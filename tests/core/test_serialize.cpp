@@ -11,6 +11,7 @@
 
 #include "format3.h"
 #include "glimpse/learning/model.h"
+#include "glimpse/learning/model_internals.h"
 #include "trained_model.h"
 
 namespace glimpse {
@@ -69,6 +70,29 @@ TEST(Serialize, RoundTripGivesIdenticalScores) {
       ASSERT_TRUE(a.ok() && b.ok());
       EXPECT_EQ(a->scores, b->scores) << method_name(m);
     }
+  }
+}
+
+// Format 12 stores the decision stages' references as binary32, the precision training keeps them at: a
+// model of format 11 (binary64 references) reads and decides alike, and takes more bytes.
+TEST(Serialize, ReferencesAreBinary32AndAFormat11ModelReadsAlike) {
+  const Trained& t = trained();
+  const std::vector<uint8_t> bytes = serialize(t.model), eleven = test::format_11_bytes(t.model);
+  ASSERT_FALSE(eleven.empty());
+  size_t references = 0;
+  for (const auto& stage : t.model.impl->stages)
+    if (stage) {
+      references += static_cast<size_t>(stage->references.size());
+      EXPECT_TRUE((stage->references.array() == stage->references.cast<float>().cast<double>().array()).all());
+    }
+  EXPECT_EQ(eleven.size(), bytes.size() + 4 * references);
+  auto old = deserialize(eleven);
+  ASSERT_TRUE(old.ok()) << old.error().message;
+  EXPECT_EQ(serialize(*old), bytes);  // read as binary64, written again as binary32: the same bytes
+  for (size_t i = 0; i < 4; ++i) {
+    auto a = classify(t.model, t.test[i * 5].cloud), b = classify(*old, t.test[i * 5].cloud);
+    ASSERT_TRUE(a.ok() && b.ok());
+    EXPECT_EQ(a->scores, b->scores);
   }
 }
 

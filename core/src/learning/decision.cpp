@@ -216,6 +216,9 @@ Expected<DecisionStage> fit_decision(const Eigen::MatrixXd& histograms, const st
     scale = category_centres(st, y, labels, per_category, params, seed, threads);
   }
   st.temperature = std::max(median(scale), 1e-9);
+  // References at binary32 precision, as a model stores them (format 12): the model trained and the
+  // model read back decide alike. Half the bytes; a distance moves by about 1e-7 of itself.
+  st.references = st.references.cast<float>().cast<double>();
   return st;
 }
 

@@ -44,7 +44,9 @@ constexpr char kMagic[8] = {'G', 'L', 'M', 'P', 'S', 'M', 'D', 'L'};
 // 11: after the novelty combination, f64 the temperature of the model's probabilities
 // (Calibration::probability_temperature) and f64 its settle probability; format 10 and older read 0:
 // no probabilities, streams settle on the score margin.
-constexpr uint32_t kFormatVersion = 11;
+// 12: every decision stage's references are binary32 (the precision fit_decision keeps them at), half
+// the model's bytes; format 11 and older read binary64.
+constexpr uint32_t kFormatVersion = 12;
 constexpr uint32_t kOldestReadableVersion = 1;
 
 uint32_t crc32(const uint8_t* data, size_t n) {

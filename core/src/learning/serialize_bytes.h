@@ -42,6 +42,14 @@ class Writer {
     for (Eigen::Index r = 0; r < m.rows(); ++r)
       for (Eigen::Index c = 0; c < m.cols(); ++c) f64(m(r, c));
   }
+  // The same layout with binary32 values: for a matrix whose values are binary32 already (a decision
+  // stage's references), so nothing is lost.
+  void mat32(const Eigen::MatrixXd& m) {
+    u32(static_cast<uint32_t>(m.rows()));
+    u32(static_cast<uint32_t>(m.cols()));
+    for (Eigen::Index r = 0; r < m.rows(); ++r)
+      for (Eigen::Index c = 0; c < m.cols(); ++c) uint(std::bit_cast<uint32_t>(static_cast<float>(m(r, c))));
+  }
 };
 
 class Reader {
@@ -72,6 +80,7 @@ class Reader {
   int32_t i32(const char* w) { return static_cast<int32_t>(uint<uint32_t>(w)); }
   uint64_t u64(const char* w) { return uint<uint64_t>(w); }
   double f64(const char* w) { return std::bit_cast<double>(uint<uint64_t>(w)); }
+  double f32(const char* w) { return std::bit_cast<float>(uint<uint32_t>(w)); }
   std::string str(const char* what) {
     const uint32_t n = u32(what);
     if (!need(n, what)) return {};
@@ -86,16 +95,18 @@ class Reader {
     for (uint32_t i = 0; i < n; ++i) v[i] = f64(what);
     return v;
   }
-  Eigen::MatrixXd mat(const char* what) {
-    const uint64_t rows = u32(what), cols = u32(what);
-    if (cols && rows > left() / 8 / cols) {
+  // A matrix of binary64 values (mat) or of binary32 ones (mat32, binary32 = true).
+  Eigen::MatrixXd mat(const char* what, bool binary32 = false) {
+    const uint64_t rows = u32(what), cols = u32(what), bytes = binary32 ? 4 : 8;
+    if (cols && rows > left() / bytes / cols) {
       fail(std::string("truncated while reading ") + what);
       return {};
     }
-    if (!need(rows * cols * 8, what)) return {};
+    if (!need(rows * cols * bytes, what)) return {};
     Eigen::MatrixXd m(static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(cols));
     for (uint64_t r = 0; r < rows; ++r)
-      for (uint64_t c = 0; c < cols; ++c) m(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = f64(what);
+      for (uint64_t c = 0; c < cols; ++c)
+        m(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = binary32 ? f32(what) : f64(what);
     return m;
   }
 

@@ -61,12 +61,12 @@ void write_stage(Writer& w, const DecisionStage& s) {
   w.i32(s.categories);
   w.i32(s.neighbours);
   write_pca(w, s.pca);
-  w.mat(s.references);
+  w.mat32(s.references);  // binary32 values (fit_decision), format 12 on
   w.u32(static_cast<uint32_t>(s.labels.size()));
   for (int l : s.labels) w.i32(l);
   w.f64(s.temperature);
 }
-DecisionStage read_stage(Reader& r, int categories, Eigen::Index histogram_size) {
+DecisionStage read_stage(Reader& r, int categories, Eigen::Index histogram_size, uint32_t version) {
   DecisionStage s;
   const uint8_t kind = r.u8("decision kind");
   if (kind > static_cast<uint8_t>(DecisionRule::kNearestReference)) r.fail("unknown decision kind");
@@ -74,7 +74,7 @@ DecisionStage read_stage(Reader& r, int categories, Eigen::Index histogram_size)
   s.categories = r.i32("decision categories");
   s.neighbours = r.i32("decision neighbours");
   s.pca = read_pca(r);
-  s.references = r.mat("decision references");
+  s.references = r.mat("decision references", version >= 12);
   const uint32_t n = r.u32("decision labels");
   if (n != s.references.rows()) r.fail("decision labels do not match references");
   for (uint32_t i = 0; i < n && !r.failed(); ++i) {
@@ -156,7 +156,7 @@ void read_stages(Reader& r, ModelImpl& impl, uint32_t ncat, uint32_t version) {
     const MethodId method = static_cast<MethodId>(m);
     if (static_cast<uint32_t>(m) < slots && r.u8("stage flag") == 1) {
       if (method == MethodId::kFusion) r.fail("fusion has no decision stage of its own");
-      else impl.stages[m] = read_stage(r, static_cast<int>(ncat), sizes[m]);
+      else impl.stages[m] = read_stage(r, static_cast<int>(ncat), sizes[m], version);
     }
     if (!r.failed() && method != MethodId::kFusion && trains(impl.params, method) != impl.stages[m].has_value())
       r.fail(std::string("decision stage of ") + method_name(method) + " missing or unexpected");

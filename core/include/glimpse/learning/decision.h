@@ -18,7 +18,7 @@ struct DecisionStage {
   int categories = 0;
   int neighbours = 5;
   Pca pca;                     // of the training histograms
-  Eigen::MatrixXd references;  // centres or training vectors, in PCA space (rows)
+  Eigen::MatrixXd references;  // centres or training vectors, in PCA space (rows), binary32 values
   std::vector<int> labels;     // category of each reference
   double temperature = 1;      // L1 distance scale turning distances into scores (see fit_decision)
   bool projected = true;       // false: no PCA (the identity), references are histograms
