@@ -206,7 +206,9 @@ Expected<DecisionStage> fit_decision(const Eigen::MatrixXd& histograms, const st
   st.categories = categories;
   st.neighbours = std::max(1, params.neighbours);
   if (Status s = fit_projection(st, histograms, params, threads); !s.ok()) return s.error();
-  const Eigen::MatrixXd y = project(st.pca, histograms, threads);
+  // Training vectors at binary32 precision, as a model stores its references (format 12): the model
+  // trained and the model read back decide alike, and the temperature is of the references stored.
+  const Eigen::MatrixXd y = project(st.pca, histograms, threads).cast<float>().cast<double>();
   std::vector<double> scale;
   if (params.kind == DecisionRule::kNearestNeighbours || params.kind == DecisionRule::kNearestReference) {
     st.references = y;
@@ -216,9 +218,7 @@ Expected<DecisionStage> fit_decision(const Eigen::MatrixXd& histograms, const st
     scale = category_centres(st, y, labels, per_category, params, seed, threads);
   }
   st.temperature = std::max(median(scale), 1e-9);
-  // References at binary32 precision, as a model stores them (format 12): the model trained and the
-  // model read back decide alike. Half the bytes; a distance moves by about 1e-7 of itself.
-  st.references = st.references.cast<float>().cast<double>();
+  st.references = st.references.cast<float>().cast<double>();  // centres too (training vectors already are)
   return st;
 }
 
