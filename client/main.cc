@@ -163,7 +163,7 @@ void AddTrainingViewOptions(CLI::App& train, TrainOptions& t) {
            "lidar, from that distance and elevation, filtered to the median density of every mesh's ideal views, "
            "measured in a first pass; sent marked augmented: "
            "learnt, but never what 'unknown' measures a cloud against), as glimpse-lab's --train-sensors; 'none': the paper's views alone (default: " + kSensorViews + ", the recipe the README "
-           "measures; training takes about 3 times longer)")
+           "measures; training takes about 4 times longer)")
       ->check(Checked([](const std::string& s) { return glimpse::parse_training_sensors(s); }, "LIST"))
       ->group("Meshes");
 }

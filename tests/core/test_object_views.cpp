@@ -72,11 +72,12 @@ TEST(ObjectViews, TrainingViewsAreTheIdealOnesThenTheSensorsThinnedToTheDensity)
   const std::vector<Cloud> unthinned = sensor_views(chair.mesh, plain.full, key, chair.any_pose, recipe, 0);
   for (double density : {0.0, median_relative_density(plain.views)}) {  // 0: not thinned
     const ObjectViews views = training_views(chair.mesh, key, chair.any_pose, recipe, density);
-    ASSERT_EQ(views.views.size(), 18u);
+    const size_t sensors = recipe.train_sensors.size();
+    ASSERT_EQ(views.views.size(), 6 * (1 + sensors));
     EXPECT_EQ(views.first_augmented, 6u);
     for (size_t v = 0; v < 6; ++v) {
       EXPECT_EQ(views.views[v].points, plain.views[v].points);
-      for (size_t s = 0; s < 2; ++s) {
+      for (size_t s = 0; s < sensors; ++s) {
         ScanFilterParams filters;
         filters.relative_density = density;
         const Cloud expected = filter_scan(condition_view(chair.mesh, chair.any_pose, plain.full, v, 6, seed,
@@ -94,7 +95,7 @@ TEST(TrainingSensors, ParseAndSpecRoundTripAndBadItemsAreNamed) {
   auto d = parse_training_sensors(training_sensors_spec(default_training_sensors()));
   ASSERT_TRUE(d.ok()) << d.error().message;
   EXPECT_EQ(*d, default_training_sensors());
-  EXPECT_EQ(training_sensors_spec(default_training_sensors()), "depth:1.5:15,depth:3:45");
+  EXPECT_EQ(training_sensors_spec(default_training_sensors()), "depth:1.5:15,depth:3:45,depth:2:0");
   auto l = parse_training_sensors("lidar:8:5");
   ASSERT_TRUE(l.ok());
   ASSERT_EQ(l->size(), 1u);

@@ -28,11 +28,12 @@ Cloud sensor_view(const Mesh& mesh, bool any_pose, const Points& full, size_t vi
 }  // namespace
 
 std::vector<ScanCondition> default_training_sensors() {
-  ScanCondition near, far;
-  near.sensor = far.sensor = SensorKind::kDepthCamera;
+  ScanCondition near, far, level;
+  near.sensor = far.sensor = level.sensor = SensorKind::kDepthCamera;
   near.distance_m = 1.5f, near.elevation_deg = 15.f;
   far.distance_m = 3.f, far.elevation_deg = 45.f;
-  return {near, far};
+  level.distance_m = 2.f, level.elevation_deg = 0.f;
+  return {near, far, level};
 }
 
 Points full_cloud(const Mesh& mesh, std::string_view key, const ViewRecipe& recipe) {

@@ -31,7 +31,9 @@ struct ViewRecipe {
 };
 
 // The recipe's training sensors (glimpse-lab --train-sensors, glimpse train --sensor-views): a depth
-// camera at 1.5 m, 15 deg and at 3 m, 45 deg, both off the 2 m, 30 deg the robustness matrix tests.
+// camera at 1.5 m, 15 deg, at 3 m, 45 deg (both off the 2 m, 30 deg the robustness matrix tests) and at
+// 2 m level with the object (a camera on a robot or a wall: a level camera at 3 m reads 4.5 points more
+// with it, docs/sensors.md).
 std::vector<ScanCondition> default_training_sensors();
 
 // The object's full 3D cloud: recipe.points area-weighted samples seeded by (recipe.seed, `key`), or its
