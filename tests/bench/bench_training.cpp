@@ -1,0 +1,90 @@
+// Training's cost against the size of the training set: train() of the zoo's objects with the recipe's
+// views (the paper's six ideal views and the two training cameras' six, every view learnt whole and as
+// five top-down prefixes), the default methods, on every core. BM_Train/N: N objects per category (5
+// categories); the goal is that 4 times the objects take at most 4.4 times as long (issue 55), the ratio
+// printed at the end from the medians. BM_Train/N/0 is the baseline run in the same process: calibration
+// decides every held-out row (TrainParams::calibration_queries 0), quadratic in the rows. The views are
+// made once, outside the timed loop; features, stages, the logistic decision, calibration and the
+// novelty model are timed.
+#include <benchmark/benchmark.h>
+
+#include <cstdio>
+#include <map>
+#include <string>
+
+#include "glimpse/learning/model.h"
+#include "glimpse/learning/train_params.h"
+#include "glimpse/learning/object_views.h"
+#include "glimpse/views/zoo.h"
+
+namespace glimpse {
+namespace {
+
+// The recipe's training clouds of the zoo's objects, per_category of each category, its ideal views
+// given and the cameras' augmented (as glimpse train sends them).
+std::vector<TrainingCloud> zoo_training_set(size_t per_category) {
+  ViewRecipe recipe;
+  recipe.train_sensors = default_training_sensors();
+  std::vector<TrainingCloud> out;
+  for (const LabelledMesh& object : make_zoo(per_category, 42)) {
+    const std::string key = object.category + "/" + object.id;
+    // Thinned to a fixed density: the zoo's ideal views' median (glimpse train measures it in a pass).
+    const ObjectViews views = training_views(object.mesh, key, object.any_pose, recipe, 3363.8);
+    for (size_t v = 0; v < views.views.size(); ++v)
+      if (!views.views[v].points.empty()) out.push_back({object.category, key, views.views[v], v >= views.first_augmented});
+  }
+  return out;
+}
+
+void BM_Train(benchmark::State& state) {
+  const std::vector<TrainingCloud> data = zoo_training_set(static_cast<size_t>(state.range(0)));
+  TrainParams params;
+  if (state.range(1) == 0) params.calibration_queries = 0;
+  size_t rows = 0;
+  for (auto _ : state) {
+    auto model = train(data, params);
+    if (!model.ok()) {
+      state.SkipWithError(model.error().message.c_str());
+      return;
+    }
+    rows = model->stats.clouds;
+    benchmark::DoNotOptimize(model);
+  }
+  state.counters["clouds"] = static_cast<double>(rows);
+}
+BENCHMARK(BM_Train)->ArgsProduct({{5, 20}, {1, 0}})->Iterations(1)->Repetitions(3)->Unit(benchmark::kSecond)->UseRealTime();
+
+// Keeps each BM_Train size's median (or its single run) for the ratio.
+class MedianReporter : public benchmark::ConsoleReporter {
+ public:
+  void ReportRuns(const std::vector<Run>& runs) override {
+    for (const Run& r : runs) {
+      const bool median = r.run_type == Run::RT_Aggregate && r.aggregate_name == "median";
+      const bool single = r.run_type == Run::RT_Iteration && r.repetitions <= 1;
+      if (!r.error_occurred && (median || single) && r.run_name.function_name == "BM_Train")
+        seconds[r.run_name.args] = r.GetAdjustedRealTime();
+    }
+    ConsoleReporter::ReportRuns(runs);
+  }
+  std::map<std::string, double> seconds;
+};
+
+}  // namespace
+}  // namespace glimpse
+
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  glimpse::MedianReporter reporter;
+  benchmark::RunSpecifiedBenchmarks(&reporter);
+  for (const char* capped : {"1", "0"}) {
+    const auto small = reporter.seconds.find(std::string("5/") + capped);
+    const auto large = reporter.seconds.find(std::string("20/") + capped);
+    if (small == reporter.seconds.end() || large == reporter.seconds.end() || small->second <= 0) continue;
+    std::printf("training%s: 20 objects per category %.1f s, 5 per category %.1f s: ratio %.2f for 4x the objects%s\n",
+                capped[0] == '1' ? "" : ", every held-out row decided", large->second, small->second,
+                large->second / small->second, capped[0] == '1' ? " (goal <= 4.4)" : "");
+  }
+  benchmark::Shutdown();
+  return 0;
+}
