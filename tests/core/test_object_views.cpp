@@ -102,11 +102,20 @@ TEST(TrainingSensors, ParseAndSpecRoundTripAndBadItemsAreNamed) {
   EXPECT_EQ((*l)[0].sensor, SensorKind::kLidar);
   EXPECT_FLOAT_EQ((*l)[0].distance_m, 8.f);
   EXPECT_FLOAT_EQ((*l)[0].elevation_deg, 5.f);
+  auto wide = parse_training_sensors("lidar64:20:5,lidar32:10:5,lidar16:5:5");
+  ASSERT_TRUE(wide.ok()) << wide.error().message;
+  ASSERT_EQ(wide->size(), 3u);
+  EXPECT_EQ((*wide)[0].beams, 64);
+  EXPECT_EQ((*wide)[1].beams, 32);
+  EXPECT_EQ((*wide)[2].beams, 16);
+  EXPECT_EQ(training_sensors_spec(*wide), "lidar64:20:5,lidar32:10:5,lidar:5:5");
+  EXPECT_EQ(describe((*wide)[1]), "LiDAR 32 beams 10 m, 5 deg");
   auto none = parse_training_sensors("none");
   ASSERT_TRUE(none.ok());
   EXPECT_TRUE(none->empty());
   EXPECT_EQ(training_sensors_spec({}), "none");
-  for (const char* bad : {"", "depth", "depth:2", "ideal:2:30", "depth:-1:30", "depth:2:95", "depth:2:30,x", "cam:2:30"}) {
+  for (const char* bad : {"", "depth", "depth:2", "ideal:2:30", "depth:-1:30", "depth:2:95", "depth:2:30,x", "cam:2:30", "lidar8:5:5",
+                          "lidar128:5:5"}) {
     auto r = parse_training_sensors(bad);
     EXPECT_FALSE(r.ok()) << bad;
     if (!r.ok() && std::string(bad).size() > 0) {

@@ -248,6 +248,35 @@ TEST(Lidar, BeamsMakeRingsWithTheStatedSpacingAndNoise) {
   EXPECT_NEAR(std_x(central), 0.015, 0.006);
 }
 
+TEST(Lidar, ThirtyTwoAndSixtyFourBeamsSpanTheirClassesFieldsAndOtherCountsAreErrors) {
+  // The same wall: 32 beams over -25..15 deg (1.29 deg apart), 64 over -24.9..2 deg (0.43 deg apart);
+  // every beam below 45 deg meets a wall 10 m away that is 20 m tall.
+  auto scene = RayScene::build(wall(10.f, 10.f));
+  ASSERT_TRUE(scene.ok());
+  for (int beams : {32, 64}) {
+    auto lp = lidar_with_beams(beams);
+    ASSERT_TRUE(lp.ok()) << lp.error().message;
+    const Cloud c = lidar_scan(*scene, {Vec3::Zero(), Vec3(1, 0, 0)}, *lp, 5);
+    std::set<long> rings;
+    double lowest = 90, highest = -90;
+    for (const Vec3& p : c.points) {
+      const double el = std::atan2(p.z(), std::hypot(p.x(), p.y())) / kDeg;
+      rings.insert(std::lround((el - lp->lowest_beam_deg) / ((lp->highest_beam_deg - lp->lowest_beam_deg) / (beams - 1))));
+      lowest = std::min(lowest, el), highest = std::max(highest, el);
+    }
+    EXPECT_EQ(rings.size(), size_t(beams)) << beams;
+    EXPECT_NEAR(lowest, beams == 32 ? -25.0 : -24.9, 0.1) << beams;
+    EXPECT_NEAR(highest, beams == 32 ? 15.0 : 2.0, 0.1) << beams;
+    EXPECT_NEAR(double(c.points.size()), beams * 450.0, beams * 3.0);
+  }
+  EXPECT_TRUE(lidar_with_beams(16).ok());
+  for (int bad : {0, 8, 128}) {
+    auto lp = lidar_with_beams(bad);
+    ASSERT_FALSE(lp.ok()) << bad;
+    EXPECT_NE(lp.error().message.find("16, 32 or 64"), std::string::npos) << lp.error().message;
+  }
+}
+
 TEST(Lidar, FarObjectsGetFewerPoints) {
   auto count = [](float d) {
     auto scene = RayScene::build(sphere_mesh(0.5f, {d, 0.f, 0.f}));

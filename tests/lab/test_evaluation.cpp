@@ -104,7 +104,9 @@ TEST(RunEvaluation, SensorTestViewsAndTheRobustnessMatrix) {
   p.test_condition.distance_m = 2.5f;
   ScanCondition floor = p.test_condition;
   floor.floor = true, floor.outliers = 0.02;
-  p.matrix = {ScanCondition{}, floor};
+  ScanCondition lidar;
+  lidar.sensor = SensorKind::kLidar, lidar.beams = 64, lidar.distance_m = 5.f, lidar.elevation_deg = 5.f;
+  p.matrix = {ScanCondition{}, floor, lidar};
   p.matrix_views_per_object = 1;
   p.train_conditions = default_training_sensors();  // the recipe: the model learns a camera's views too
   auto r = run_evaluation(objects, p, "zoo, depth camera");
@@ -118,11 +120,24 @@ TEST(RunEvaluation, SensorTestViewsAndTheRobustnessMatrix) {
     }
   const double full = accuracy(r->decisions, "full", MethodId::kFusion).percent();
   // The matrix: one row per condition, one view per object; the floor is found and removed.
-  ASSERT_EQ(r->robustness.size(), 2u);
+  ASSERT_EQ(r->robustness.size(), 3u);
   for (const RobustnessRow& row : r->robustness) {
     EXPECT_EQ(row.views, objects.size());
     ASSERT_EQ(row.accuracy.size(), p.stages.size());
+    ASSERT_EQ(row.accepted.size(), p.stages.size());
+    for (size_t s = 0; s < p.stages.size(); ++s) EXPECT_LE(row.accepted[s], row.accuracy[s]) << describe(row.condition);
+    EXPECT_TRUE(std::isnan(row.unknown_accepted));  // every object is of a learnt category
+    ASSERT_EQ(row.full_views.size(), objects.size());
+    size_t right = 0;
+    for (const RobustnessRow::ViewOutcome& v : row.full_views) {
+      right += v.right;
+      EXPECT_TRUE(v.right || !v.accepted);
+    }
+    EXPECT_NEAR(100.0 * double(right) / double(objects.size()), row.accuracy[0], 1e-9);
   }
+  // A 64-beam LiDAR at 5 m leaves fewer points than a depth camera, still enough to decide most views.
+  EXPECT_LT(r->robustness[2].median_points, r->robustness[1].median_points);
+  EXPECT_GT(r->robustness[2].median_points, 50.0);
   const RobustnessRow& ideal = r->robustness[0];
   const RobustnessRow& residue = r->robustness[1];
   EXPECT_EQ(ideal.ground_views, 0u);
@@ -131,6 +146,9 @@ TEST(RunEvaluation, SensorTestViewsAndTheRobustnessMatrix) {
   const std::string md = markdown_report(*r);
   EXPECT_NE(md.find("## Robustness matrix"), std::string::npos);
   EXPECT_NE(md.find("depth camera 2.5 m, 30 deg, floor, 2 % outliers"), std::string::npos);
+  EXPECT_NE(md.find("| LiDAR 64 beams 5 m, 5 deg |"), std::string::npos);
+  EXPECT_NE(md.find("right and accepted full / 10% / 20%"), std::string::npos) << md;
+  EXPECT_NE(md.find("| points kept | depth camera | LiDAR |"), std::string::npos);
   EXPECT_NE(md.find("## Test views from a simulated sensor"), std::string::npos);
   std::cout << "zoo, depth camera test views: fusion full " << full << " %; matrix ideal full " << ideal.accuracy[0]
             << " %, 20 % " << ideal.accuracy[2] << " %; floor + outliers full " << residue.accuracy[0] << " %, 20 % "

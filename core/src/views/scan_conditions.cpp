@@ -33,10 +33,19 @@ std::string_view sensor_name(SensorKind kind) {
   return "?";
 }
 
-Expected<SensorKind> parse_sensor(std::string_view name) {
+Expected<ScanCondition> parse_sensor(std::string_view name) {
+  ScanCondition c;
   for (SensorKind k : {SensorKind::kIdeal, SensorKind::kDepthCamera, SensorKind::kLidar})
-    if (name == sensor_name(k)) return k;
-  return invalid_argument("unknown sensor '" + std::string(name) + "' (valid: ideal, depth, lidar)");
+    if (name == sensor_name(k)) return c.sensor = k, c;
+  for (int beams : {16, 32, 64})
+    if (name.starts_with("lidar") && name.substr(5) == std::to_string(beams))
+      return c.sensor = SensorKind::kLidar, c.beams = beams, c;
+  return invalid_argument("unknown sensor '" + std::string(name) + "' (valid: ideal, depth, lidar, lidar16, lidar32, lidar64)");
+}
+
+std::string sensor_spec_name(const ScanCondition& c) {
+  if (c.sensor == SensorKind::kLidar && c.beams != 16) return std::string("lidar").append(std::to_string(c.beams));
+  return std::string(sensor_name(c.sensor));
 }
 
 std::string describe(const ScanCondition& c) {
@@ -45,12 +54,12 @@ std::string describe(const ScanCondition& c) {
   switch (c.sensor) {
     case SensorKind::kIdeal: s = "ideal"; break;
     case SensorKind::kDepthCamera: s = "depth camera"; break;
-    case SensorKind::kLidar: s = "LiDAR 16 beams"; break;
+    case SensorKind::kLidar: s = std::string("LiDAR ").append(std::to_string(c.beams)).append(" beams"); break;
   }
   if (c.sensor == SensorKind::kIdeal) {
     if (c.density != 1) s += ", density " + number(c.density) + "x";
   } else {
-    s += " " + number(c.distance_m) + " m, " + number(c.elevation_deg) + " deg";
+    s.append(" ").append(number(c.distance_m)).append(" m, ").append(number(c.elevation_deg)).append(" deg");
   }
   if (c.tilt_deg > 0) s += ", up off by <= " + number(c.tilt_deg) + " deg";
   if (c.floor) s += ", floor";
@@ -82,8 +91,11 @@ Cloud condition_view(const Mesh& mesh, bool any_pose, const Points& full, size_t
     if (!scene.ok()) return Cloud{};
     const size_t viewpoint = (std::min(view, views - 1) * 6) / views;  // the ideal view's azimuth
     const SensorPose pose = orbit_pose(b.centre(), 60.f * float(viewpoint), c.elevation_deg, c.distance_m);
-    cloud = c.sensor == SensorKind::kDepthCamera ? depth_camera_scan(*scene, pose, DepthCameraParams{}, view_seed)
-                                                 : lidar_scan(*scene, pose, LidarParams{}, view_seed);
+    if (c.sensor == SensorKind::kDepthCamera) {
+      cloud = depth_camera_scan(*scene, pose, DepthCameraParams{}, view_seed);
+    } else if (auto lidar = lidar_with_beams(c.beams); lidar.ok()) {
+      cloud = lidar_scan(*scene, pose, *lidar, view_seed);
+    }
   }
   if (c.outliers > 0) cloud = add_outliers(cloud, c.outliers, view_seed + 1);
   if (c.tilt_deg > 0) cloud = rotate_about_centroid(cloud, random_tilt(view_seed + 2, c.tilt_deg));
@@ -96,19 +108,20 @@ Expected<std::vector<ScanCondition>> parse_training_sensors(std::string_view tex
   std::string list(text);
   std::stringstream items(list);
   for (std::string item; std::getline(items, item, ',');) {
-    const std::string usage = "training sensors are SENSOR:METRES:DEGREES items (e.g. depth:2:30) or 'none', not '" + item + "'";
+    const std::string usage = "training sensors are SENSOR:METRES:DEGREES items (e.g. depth:2:30, lidar32:10:5) or 'none', not '" + item + "'";
     const size_t a = item.find(':'), b = a == std::string::npos ? a : item.find(':', a + 1);
     if (b == std::string::npos) return invalid_argument(usage);
     auto sensor = parse_sensor(item.substr(0, a));
-    if (!sensor.ok() || *sensor == SensorKind::kIdeal) return invalid_argument(usage + ": the sensor is depth or lidar");
+    if (!sensor.ok() || sensor->sensor == SensorKind::kIdeal)
+      return invalid_argument(usage + ": the sensor is depth, lidar, lidar32 or lidar64");
     char* end = nullptr;
     const std::string ds = item.substr(a + 1, b - a - 1), es = item.substr(b + 1);
     const double d = std::strtod(ds.c_str(), &end);
     if (ds.empty() || *end || !(d > 0 && d <= 100)) return invalid_argument(usage + ": metres in (0, 100]");
     const double e = std::strtod(es.c_str(), &end);
     if (es.empty() || *end || !(e >= -90 && e <= 90)) return invalid_argument(usage + ": degrees in [-90, 90]");
-    ScanCondition c;
-    c.sensor = *sensor, c.distance_m = float(d), c.elevation_deg = float(e);
+    ScanCondition c = *sensor;
+    c.distance_m = float(d), c.elevation_deg = float(e);
     out.push_back(c);
   }
   if (out.empty()) return invalid_argument("no training sensor given (e.g. depth:2:30, or 'none')");
@@ -118,7 +131,7 @@ Expected<std::vector<ScanCondition>> parse_training_sensors(std::string_view tex
 std::string training_sensors_spec(const std::vector<ScanCondition>& sensors) {
   std::string out;
   for (const ScanCondition& c : sensors)
-    out += (out.empty() ? "" : ",") + std::string(sensor_name(c.sensor)) + ":" + number(c.distance_m) + ":" + number(c.elevation_deg);
+    out.append(out.empty() ? "" : ",").append(sensor_spec_name(c)).append(":").append(number(c.distance_m)).append(":").append(number(c.elevation_deg));
   return out.empty() ? "none" : out;
 }
 

@@ -233,6 +233,17 @@ Cloud depth_camera_scan(const RayScene& scene, const SensorPose& pose, const Dep
   return out;
 }
 
+Expected<LidarParams> lidar_with_beams(int beams) {
+  LidarParams p;
+  p.beams = beams;
+  switch (beams) {
+    case 16: return p;
+    case 32: p.lowest_beam_deg = -25.f, p.highest_beam_deg = 15.f; return p;
+    case 64: p.lowest_beam_deg = -24.9f, p.highest_beam_deg = 2.f; return p;
+    default: return invalid_argument("a LiDAR has 16, 32 or 64 beams, not " + std::to_string(beams));
+  }
+}
+
 Cloud lidar_scan(const RayScene& scene, const SensorPose& pose, const LidarParams& p, uint64_t seed) {
   Cloud out;
   out.sensor = pose.position;

@@ -17,10 +17,9 @@ namespace glimpse {
 enum class SensorKind : uint8_t {
   kIdeal,        // HPR on area-weighted samples from the paper's viewpoints (sec. 3.4)
   kDepthCamera,  // DepthCameraParams' Kinect-class camera, rays cast against the mesh
-  kLidar,        // LidarParams' 16-beam spinning LiDAR
+  kLidar,        // a spinning LiDAR of 16, 32 or 64 beams (lidar_with_beams)
 };
 std::string_view sensor_name(SensorKind kind);  // "ideal", "depth", "lidar"
-Expected<SensorKind> parse_sensor(std::string_view name);
 
 struct ScanCondition {
   std::string label;  // the report's row name; empty: described from the fields
@@ -28,6 +27,7 @@ struct ScanCondition {
   double density = 1;        // ideal: samples per object x this
   float distance_m = 2;      // depth / LiDAR: from the sensor to the object's bounding-box centre
   float elevation_deg = 30;  // depth / LiDAR: above the horizon, seen from that centre
+  int beams = 16;            // LiDAR: 16, 32 or 64
   float tilt_deg = 0;        // the cloud's up off by up to this, in a random direction (seeded)
   bool floor = false;        // a floor patch under the object, seen by the sensor
   double outliers = 0;       // stray points, x the view's size
@@ -36,7 +36,13 @@ struct ScanCondition {
 };
 std::string describe(const ScanCondition& condition);  // "depth 2 m, 30 deg, floor, 2 % outliers"
 
-// "depth:1.5:15,depth:3:45" (SENSOR:METRES:DEGREES, sensor depth or lidar) or "none" (no sensor). Errors
+// A sensor by name, as a condition at the default pose: "ideal", "depth", "lidar" (16 beams), "lidar16",
+// "lidar32" or "lidar64". The error lists the valid names.
+Expected<ScanCondition> parse_sensor(std::string_view name);
+// The name back: "ideal", "depth", "lidar" (16 beams), "lidar32", "lidar64".
+std::string sensor_spec_name(const ScanCondition& condition);
+
+// "depth:1.5:15,depth:3:45" (SENSOR:METRES:DEGREES, sensor depth, lidar, lidar32 or lidar64) or "none" (no sensor). Errors
 // name the bad item.
 Expected<std::vector<ScanCondition>> parse_training_sensors(std::string_view text);
 // The same text back: "depth:1.5:15,depth:3:45", "none" for no sensor.

@@ -92,6 +92,10 @@ struct LidarParams {
   float max_incidence_deg = 87.f;              // no return beyond
 };
 
+// The LiDAR classes simulated, by beam count: 16 (VLP-16 class, -15..15 deg), 32 (VLP-32C class,
+// -25..15 deg) and 64 (HDL-64E class, -24.9..2 deg, a vehicle's roof). Any other count is an error.
+Expected<LidarParams> lidar_with_beams(int beams);
+
 // The LiDAR at pose.position, spinning about +z (level; the target is not used). Seeded.
 Cloud lidar_scan(const RayScene& scene, const SensorPose& pose, const LidarParams& params, uint64_t seed);
 

@@ -239,7 +239,7 @@ void add_training_flags(CLI::App* cmd, EvalOptions& o) {
   o.train_sensors = training_sensors_spec(default_training_sensors());
   cmd->add_option("--train-sensors", o.train_sensors,
                   "training-only views of simulated sensors besides the ideal ones: SENSOR:METRES:DEGREES[,...] "
-                  "(depth or lidar, from that distance and elevation, the same azimuths, through the scan filters "
+                  "(depth, lidar, lidar32 or lidar64, from that distance and elevation, the same azimuths, through the scan filters "
                   "down to the model's density, the median of its ideal training views; augmented: the decision learns them, novelty measures against a model of the other views), or 'none' (the recipe's: off the 2 m, 30 deg camera the "
                   "robustness matrix tests)")
       ->capture_default_str();
@@ -294,7 +294,7 @@ void add_test_flags(CLI::App* cmd, EvalOptions& o) {
       ->capture_default_str();
   cmd->add_option("--sensor", o.sensor,
                   "test views from: ideal (HPR on samples, the paper's), depth (Kinect-class camera) or lidar "
-                  "(16 beams), cast against the mesh; training views stay ideal")
+                  "(16 beams; lidar32, lidar64: 32 or 64), cast against the mesh; training views stay ideal")
       ->capture_default_str();
   cmd->add_option("--distance", o.distance, "depth/lidar: metres from the sensor to the object's centre")
       ->capture_default_str();
@@ -303,9 +303,10 @@ void add_test_flags(CLI::App* cmd, EvalOptions& o) {
       ->capture_default_str();
   cmd->add_flag("--floor", o.floor, "depth/lidar: a floor patch under the object, removed by the ground filter");
   cmd->add_option("--outliers", o.outliers, "stray points added to each test view, x its size")->capture_default_str();
-  cmd->add_option("--matrix", o.matrix, "robustness matrix: none, small (default run) or full")->capture_default_str();
+  cmd->add_option("--matrix", o.matrix, "robustness matrix: none, small (default run), full, or sensors (the depth camera from -10 to 60 "
+                  "degrees at 0.8-4 m, LiDAR of 16, 32 and 64 beams at 5-20 m)")->capture_default_str();
   cmd->add_option("--matrix-views", o.matrix_views,
-                  "views per tested object in the robustness matrix (0: 1 for small, 2 for full)")
+                  "views per tested object in the robustness matrix (0: 1 for small, 2 for full and sensors)")
       ->capture_default_str();
   cmd->add_option("--cut-margin", o.cut_margin, "keypoint stage cut below the k-th keypoint, in support radii")
       ->capture_default_str();

@@ -75,7 +75,7 @@ struct EvalOptions {
   std::string default_method;
   bool keypoint_ablation = false;
   int soft_words = 0;
-  size_t matrix_views = 0;  // 0: 1 per object for the small matrix (the default run stays within 5 minutes), 2 for full
+  size_t matrix_views = 0;  // 0: 1 per object for the small matrix (the default run stays within 5 minutes), 2 for full and sensors
 };
 
 // --preset paper: the paper's settings for every flag `given` says is not on the command line

@@ -138,7 +138,7 @@ Status test_condition_from(const EvalOptions& o, EvalParams& p) {
   auto sensor = parse_sensor(o.sensor);
   if (!sensor.ok()) return Error{sensor.error().code, "--sensor: " + sensor.error().message};
   ScanCondition& c = p.test_condition;
-  c.sensor = *sensor;
+  c.sensor = sensor->sensor, c.beams = sensor->beams;
   if (c.sensor != SensorKind::kIdeal) c.distance_m = o.distance, c.elevation_deg = o.elevation;
   if (!(o.distance > 0)) return invalid_argument("--distance must be positive metres");
   if (!(o.elevation >= -90 && o.elevation <= 90)) return invalid_argument("--elevation must be in [-90, 90] degrees");
@@ -146,10 +146,10 @@ Status test_condition_from(const EvalOptions& o, EvalParams& p) {
   if (!(o.outliers >= 0 && o.outliers <= 1)) return invalid_argument("--outliers must be a fraction in [0, 1]");
   if (o.floor && c.sensor == SensorKind::kIdeal) return invalid_argument("--floor needs a sensor (--sensor depth|lidar)");
   c.tilt_deg = o.scan_tilt, c.floor = o.floor, c.outliers = o.outliers;
-  if (o.matrix != "none" && o.matrix != "small" && o.matrix != "full")
-    return invalid_argument("--matrix must be none, small or full, not '" + o.matrix + "'");
+  if (o.matrix != "none" && o.matrix != "small" && o.matrix != "full" && o.matrix != "sensors")
+    return invalid_argument("--matrix must be none, small, full or sensors, not '" + o.matrix + "'");
   p.matrix = robustness_conditions(o.matrix);
-  p.matrix_views_per_object = o.matrix_views ? o.matrix_views : o.matrix == "full" ? 2 : 1;
+  p.matrix_views_per_object = o.matrix_views ? o.matrix_views : o.matrix == "small" ? 1 : 2;
   return {};
 }
 

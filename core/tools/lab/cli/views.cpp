@@ -71,8 +71,9 @@ int run_views(const ViewsOptions& o) {
     std::fprintf(stderr, "glimpse-lab views: --sensor: %s\n", sensor.error().message.c_str());
     return 2;
   }
+  auto lidar = lidar_with_beams(sensor->beams);
   std::optional<RayScene> scene;
-  if (*sensor != SensorKind::kIdeal) {
+  if (sensor->sensor != SensorKind::kIdeal) {
     const Bounds b = bounds(m.vertices);
     auto built = RayScene::build(m, o.floor ? 0.5f * std::max(b.extent().x(), b.extent().y()) + 0.5f : 0.f);
     if (!built.ok()) {
@@ -90,8 +91,8 @@ int run_views(const ViewsOptions& o) {
       view = hidden_point_removal(cloud.points, cameras[i], o.radius_factor);
     } else {
       const SensorPose pose = orbit_pose(scene->object_bounds().centre(), 60.f * float(i), o.elevation_deg, o.distance_m);
-      view = *sensor == SensorKind::kDepthCamera ? depth_camera_scan(*scene, pose, DepthCameraParams{}, o.seed + i)
-                                                 : lidar_scan(*scene, pose, LidarParams{}, o.seed + i);
+      view = sensor->sensor == SensorKind::kDepthCamera ? depth_camera_scan(*scene, pose, DepthCameraParams{}, o.seed + i)
+                                                        : lidar_scan(*scene, pose, *lidar, o.seed + i);
     }
     const std::string path = (std::filesystem::path(o.out) / ("view_" + std::to_string(60 * i) + ".pcd")).string();
     if (Status s = write_cloud(path, view); !s.ok()) {
@@ -122,7 +123,8 @@ void add_views_command(CLI::App& app) {
   cmd->add_option("--seed", o->seed, "surface sampling and sensor noise seed")->capture_default_str();
   cmd->add_option("--sensor", o->sensor,
                   "ideal: HPR views of surface samples (the paper); depth / lidar: frames a simulated Kinect-class "
-                  "camera or 16-beam LiDAR takes from the same azimuths (ray cast, with its noise)")
+                  "camera or a LiDAR of 16 beams (lidar, lidar16), 32 (lidar32) or 64 (lidar64) takes from the same azimuths "
+                  "(ray cast, with its noise)")
       ->capture_default_str();
   cmd->add_option("--distance", o->distance_m, "depth / lidar: metres from the object's centre")->capture_default_str()
       ->check(CLI::PositiveNumber);

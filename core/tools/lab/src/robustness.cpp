@@ -6,7 +6,6 @@
 #include <set>
 #include <sstream>
 
-#include "report_format.h"
 #include "protocol.h"
 #include "glimpse/views/sampling.h"
 #include "glimpse/views/placement.h"
@@ -21,9 +20,9 @@ std::vector<ScanCondition> robustness_conditions(std::string_view matrix) {
   out.push_back({});  // ideal, through the filters
   auto ideal_density = [](double d) { ScanCondition c; c.density = d; return c; };
   auto tilt = [](float t) { ScanCondition c; c.tilt_deg = t; return c; };
-  auto sensor = [](SensorKind k, float d, float e) {
+  auto sensor = [](SensorKind k, float d, float e, int beams = 16) {
     ScanCondition c;
-    c.sensor = k, c.distance_m = d, c.elevation_deg = e;
+    c.sensor = k, c.distance_m = d, c.elevation_deg = e, c.beams = beams;
     return c;
   };
   ScanCondition residue = sensor(SensorKind::kDepthCamera, 2.f, 30.f);
@@ -35,6 +34,13 @@ std::vector<ScanCondition> robustness_conditions(std::string_view matrix) {
     out.push_back(sensor(SensorKind::kDepthCamera, 2.f, 30.f));
     out.push_back(residue);
     out.push_back(sensor(SensorKind::kLidar, 10.f, 5.f));
+    return out;
+  }
+  if (matrix == "sensors") {  // the poses real scanners take: issue 55's grid
+    for (float d : {0.8f, 1.f, 2.f, 3.f, 4.f})
+      for (float e : {-10.f, 0.f, 15.f, 30.f, 45.f, 60.f}) out.push_back(sensor(SensorKind::kDepthCamera, d, e));
+    for (int beams : {16, 32, 64})
+      for (float d : {5.f, 10.f, 20.f}) out.push_back(sensor(SensorKind::kLidar, d, 5.f, beams));
     return out;
   }
   if (matrix != "full") return {};
@@ -82,11 +88,13 @@ ConditionView decide_condition_view(const Protocol& P, const ScanCondition& cond
   const ConditionView seen{raw.points.size(), cloud.points.size(), report.ground > 0};
   const size_t ideal = std::max<size_t>(1, P.views[v].ideal_points ? P.views[v].ideal_points : P.views[v].cloud.points.size());
   const double full_equivalent = double(P.full[o].size()) * double(cloud.points.size()) / double(ideal);
-  const ModelImpl& impl = *P.fold_models[size_t(fold)]->impl;
+  const Model& model = *P.fold_models[size_t(fold)];
+  const ModelImpl& impl = *model.impl;
   for (size_t s = 0; s < stages.size(); ++s) {
     StageDecision& d = decisions[s];
     d.fold = fold, d.object = int(o), d.view = P.views[v].view, d.stage = stage_name(stages[s]), d.method = method;
     d.truth = r.object_truth[o];
+    d.unknown_class = r.object_unknown_class[o];
     size_t count = cloud.points.size();
     if (stages[s].kind == StageKind::kFraction)
       count = std::min(count, size_t(std::llround(stages[s].value * full_equivalent)));
@@ -94,12 +102,18 @@ ConditionView decide_condition_view(const Protocol& P, const ScanCondition& cond
     if (count == 0) continue;
     auto f = cloud_features(reveal_top_down(cloud, count), P.features, P.base, 1);
     if (!f.ok()) continue;
-    const Eigen::VectorXd scores = method_scores(impl, method, *f);
+    const MethodDecision decision = method_decision(impl, method, *f);
+    const Eigen::VectorXd& scores = decision.scores;
     d.keypoints = f->positions.size();
     d.scores.assign(r.categories.size(), 0.0);
     const std::vector<int>& to_ours = P.fold_to_ours[size_t(fold)];
     for (int c = 0; c < int(scores.size()); ++c) d.scores[size_t(to_ours[size_t(c)])] = scores[c];
-    d.winner = to_ours[size_t(argmax(scores))];
+    Classification c;
+    c.method = method;
+    c.winner = argmax(scores);
+    judge_unknown(model, decision, *f, c);  // the model's own operating point, as Classify answers
+    d.winner = to_ours[size_t(c.winner)];
+    d.novelty = c.novelty, d.unknown = c.unknown;
   }
   return seen;
 }
@@ -110,28 +124,41 @@ double median_of(std::vector<size_t> x) {
   return double(x[x.size() / 2]);
 }
 
-// The matrix's row of a condition: accuracy per main stage (none for keypoint stages), views whose first
-// stage failed, views with a ground plane removed, median points before and after the filters.
+// The matrix's row of a condition: closest and right-and-accepted accuracy per main stage (none for
+// keypoint stages), unknown views accepted, views whose first stage failed, views with a ground plane
+// removed, median points before and after the filters.
 RobustnessRow robustness_row(const EvalResult& r, const ScanCondition& condition, size_t n_stages,
                              const std::vector<StageDecision>& decisions, const std::vector<ConditionView>& seen) {
   const MethodId method = r.change_method;
   RobustnessRow row;
   row.condition = condition;
   row.views = seen.size();
+  std::vector<StageDecision> accepted = decisions;  // "unknown" counts as no decision
+  for (StageDecision& d : accepted)
+    if (d.unknown) d.winner = -1;
   for (const Stage& s : r.params.stages) {
     if (s.kind == StageKind::kKeypoints) {
-      row.accuracy.push_back(NAN), row.balanced.push_back(NAN);
+      row.accuracy.push_back(NAN), row.accepted.push_back(NAN), row.balanced.push_back(NAN);
       continue;
     }
     row.accuracy.push_back(accuracy(decisions, stage_name(s), method).percent());
+    row.accepted.push_back(accuracy(accepted, stage_name(s), method).percent());
     row.balanced.push_back(balanced_accuracy(decisions, stage_name(s), method, r.categories.size()));
   }
   std::vector<size_t> raw_points, kept_points;
+  size_t unknown_views = 0, unknown_accepted = 0;
   for (size_t i = 0; i < seen.size(); ++i) {
-    row.failed += decisions[i * n_stages].winner < 0;
+    const StageDecision& full = decisions[i * n_stages];
+    row.failed += full.winner < 0;
     row.ground_views += seen[i].ground;
     raw_points.push_back(seen[i].raw_points), kept_points.push_back(seen[i].kept_points);
+    if (full.truth < 0) {
+      ++unknown_views, unknown_accepted += accepted[i * n_stages].winner >= 0;
+      continue;
+    }
+    row.full_views.push_back({seen[i].kept_points, full.winner == full.truth, accepted[i * n_stages].winner == full.truth});
   }
+  if (unknown_views) row.unknown_accepted = 100.0 * double(unknown_accepted) / double(unknown_views);
   row.median_points_raw = median_of(raw_points);
   row.median_points = median_of(kept_points);
   return row;
@@ -171,59 +198,3 @@ void robustness_matrix(Protocol& P) {
 
 }  // namespace eval_internal
 }  // namespace glimpse
-
-namespace glimpse::eval_internal {
-
-std::string robustness_section(const EvalResult& r) {
-  std::string o;
-  const ScanCondition& test = r.params.test_condition;
-  if (!test.is_ideal())
-    o += "## Test views from a simulated sensor\n\nEvery tested view above was taken as **" + describe(test) +
-         "** (rays cast against the mesh, Embree), then filtered (ground plane, isolated points, voxel grid to the "
-         "training views' density); training views are the ideal ones. Stage fractions are the same share of the "
-         "sensor view's points as of the ideal view's.\n\n";
-  if (r.robustness.empty()) return o;
-  std::vector<std::string> stages;
-  for (const Stage& s : r.params.stages)
-    if (s.kind != StageKind::kKeypoints) stages.push_back(stage_name(s));
-  o += "## Robustness matrix: real sensors and scene residue\n\n";
-  o += "The models above (" + std::string(method_name(r.change_method)) +
-       ", trained on ideal views) classify " + std::to_string(r.robustness.front().views) +
-       " tested views (" + std::to_string(r.params.matrix_views_per_object) +
-       " per object) taken under each condition, after the filters every scan goes through: RANSAC ground plane, "
-       "isolated points, voxel grid down to the training views' density (median relative density ";
-  for (size_t i = 0; i < r.trained_density.size(); ++i) o += (i ? ", " : "") + pct(r.trained_density[i], 1);
-  o += " points per extent^2). Depth camera: 640x480, 57x43 deg, 0.5-4.5 m, sigma(z) = 1.2 mm + 1.9 mm (z - 0.4)^2, "
-       "1/8 px disparity steps, returns thinning beyond 70 deg incidence; it aims at the object's centre, so a large "
-       "object near it is cut by the field of view. LiDAR: 16 beams over +-15 deg, 0.2 deg steps, 1.5 cm range noise. "
-       "Delta: points against the first (ideal) row.\n\n| condition | points raw | points kept | ground removed |";
-  for (const std::string& s : stages) o += " " + s + " |";
-  for (const std::string& s : stages) o += " delta " + s + " |";
-  o += " balanced " + stages.front() + " | no decision | seconds |\n|---|---:|---:|---:|";
-  for (size_t i = 0; i < 2 * stages.size() + 3; ++i) o += "---:|";
-  o += "\n";
-  const RobustnessRow& base = r.robustness.front();
-  auto main_values = [&](const std::vector<double>& v) {
-    std::vector<double> out;
-    for (size_t s = 0; s < r.params.stages.size() && s < v.size(); ++s)
-      if (r.params.stages[s].kind != StageKind::kKeypoints) out.push_back(v[s]);
-    return out;
-  };
-  const std::vector<double> base_acc = main_values(base.accuracy);
-  for (const RobustnessRow& row : r.robustness) {
-    const std::vector<double> acc = main_values(row.accuracy), bal = main_values(row.balanced);
-    o += "| " + describe(row.condition) + " | " + std::to_string(std::llround(row.median_points_raw)) + " | " +
-         std::to_string(std::llround(row.median_points)) + " | " + std::to_string(row.ground_views) + " |";
-    for (double a : acc) o += " " + pct(a, 1) + " |";
-    for (size_t s = 0; s < acc.size(); ++s) {
-      const double d = acc[s] - base_acc[s];
-      o += " " + (&row == &base ? std::string("–") : (d >= 0 ? "+" : "") + pct(d, 1)) + " |";
-    }
-    o += " " + pct(bal.empty() ? NAN : bal.front(), 1) + " | " + std::to_string(row.failed) + " | " + pct(row.seconds, 1) + " |\n";
-  }
-  o += "\nPoints are medians per view (full view). \"no decision\": full views left with too few points to decide "
-       "(counted as wrong).\n\n";
-  return o;
-}
-
-}  // namespace glimpse::eval_internal

@@ -7,6 +7,7 @@
 // plain data so tests can call them with hand-made inputs; run_evaluation strings them together.
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -72,7 +73,9 @@ std::vector<std::string> paper_category_order(const std::vector<EvalObject>& obj
 // at 2 m with and without floor and outliers, LiDAR at 10 m) and `full` (depth camera at 1-3 m x 0-45
 // deg, LiDAR at 5-15 m, density 0.25x-4x, tilt 2-10 deg, floor, outliers). Each starts with the ideal
 // views through the same filters, the row every other one is compared with.
-std::vector<ScanCondition> robustness_conditions(std::string_view matrix);  // "none", "small", "full"
+// "none", "small", "full" or "sensors" (the depth camera from -10 to 60 degrees at 0.8-4 m, LiDAR of
+// 16, 32 and 64 beams at 5-20 m).
+std::vector<ScanCondition> robustness_conditions(std::string_view matrix);
 
 // ---- Cross-validation -------------------------------------------------------------------------------
 
@@ -149,8 +152,16 @@ struct StageStats {
 // One condition of the robustness matrix: the default method's accuracy at the main stages.
 struct RobustnessRow {
   ScanCondition condition;
-  std::vector<double> accuracy;  // per main stage, %
+  std::vector<double> accuracy;  // per main stage, %: the closest category right
+  std::vector<double> accepted;  // per main stage, %: right and not called unknown
   std::vector<double> balanced;  // per main stage, %
+  double unknown_accepted = NAN;  // % of the views of objects of no learnt category accepted (full view); NaN: none tested
+  // Each known view's full-view outcome beside its points after the filters (accuracy against points).
+  struct ViewOutcome {
+    size_t points = 0;
+    bool right = false, accepted = false;
+  };
+  std::vector<ViewOutcome> full_views;
   size_t views = 0, failed = 0;  // failed: no decision on the full view (too few points, ...)
   double median_points_raw = 0;  // as the sensor returned them
   double median_points = 0;      // after the filters
