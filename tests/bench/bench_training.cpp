@@ -14,30 +14,13 @@
 
 #include "glimpse/learning/model.h"
 #include "glimpse/learning/train_params.h"
-#include "glimpse/learning/object_views.h"
-#include "glimpse/views/zoo.h"
+#include "zoo_recipe.h"
 
 namespace glimpse {
 namespace {
 
-// The recipe's training clouds of the zoo's objects, per_category of each category, its ideal views
-// given and the cameras' augmented (as glimpse train sends them).
-std::vector<TrainingCloud> zoo_training_set(size_t per_category) {
-  ViewRecipe recipe;
-  recipe.train_sensors = default_training_sensors();
-  std::vector<TrainingCloud> out;
-  for (const LabelledMesh& object : make_zoo(per_category, 42)) {
-    const std::string key = object.category + "/" + object.id;
-    // Thinned to a fixed density: the zoo's ideal views' median (glimpse train measures it in a pass).
-    const ObjectViews views = training_views(object.mesh, key, object.any_pose, recipe, 3363.8);
-    for (size_t v = 0; v < views.views.size(); ++v)
-      if (!views.views[v].points.empty()) out.push_back({object.category, key, views.views[v], v >= views.first_augmented});
-  }
-  return out;
-}
-
 void BM_Train(benchmark::State& state) {
-  const std::vector<TrainingCloud> data = zoo_training_set(static_cast<size_t>(state.range(0)));
+  const std::vector<TrainingCloud> data = bench::zoo_training_set(static_cast<size_t>(state.range(0)));
   TrainParams params;
   if (state.range(1) == 0) params.calibration_queries = 0;
   size_t rows = 0;

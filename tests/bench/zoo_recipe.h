@@ -1,0 +1,29 @@
+// The benchmarks' training set: the zoo's objects seen as the recipe sees them (the paper's six ideal
+// views given, the training cameras' views augmented), as glimpse train sends them.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "glimpse/learning/model.h"
+#include "glimpse/learning/object_views.h"
+#include "glimpse/views/zoo.h"
+
+namespace glimpse::bench {
+
+// per_category of each of the zoo's categories (seed 42), thinned to a fixed density: the zoo's ideal
+// views' median (glimpse train measures it in a pass).
+inline std::vector<TrainingCloud> zoo_training_set(size_t per_category) {
+  ViewRecipe recipe;
+  recipe.train_sensors = default_training_sensors();
+  std::vector<TrainingCloud> out;
+  for (const LabelledMesh& object : make_zoo(per_category, 42)) {
+    const std::string key = object.category + "/" + object.id;
+    const ObjectViews views = training_views(object.mesh, key, object.any_pose, recipe, 3363.8);
+    for (size_t v = 0; v < views.views.size(); ++v)
+      if (!views.views[v].points.empty()) out.push_back({object.category, key, views.views[v], v >= views.first_augmented});
+  }
+  return out;
+}
+
+}  // namespace glimpse::bench
