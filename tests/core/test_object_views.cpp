@@ -2,6 +2,7 @@
 // the scan conditions of real sensors (views/scan_conditions.h).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -91,6 +92,39 @@ TEST(ObjectViews, TrainingViewsAreTheIdealOnesThenTheSensorsThinnedToTheDensity)
   EXPECT_GE(thinned, 6u);  // the near camera's views at least
 }
 
+// A range of poses: each view draws its own distance and elevation in the range, the same on every run;
+// another draw of the same range gives other poses; a negative elevation never puts the sensor under the
+// ground.
+TEST(TrainingSensors, RangesDrawEachViewsPoseWithinThemAndNeverBelowTheGround) {
+  const LabelledMesh table = make_zoo(1, 5).at(2);
+  ASSERT_EQ(table.category, "table");
+  auto drawn = parse_training_sensors("depth:0.8-4:-10-60,depth:0.8-4:-10-60");
+  ASSERT_TRUE(drawn.ok());
+  const Vec3 centre = bounds(table.mesh.vertices).centre();
+  std::vector<float> distances, elevations;
+  for (const ScanCondition& c : *drawn)
+    for (size_t v = 0; v < 6; ++v) {
+      const Cloud view = condition_view(table.mesh, false, {}, v, 6, 99, c, 3000, 100);
+      ASSERT_TRUE(view.sensor.has_value());
+      EXPECT_EQ(*view.sensor, *condition_view(table.mesh, false, {}, v, 6, 99, c, 3000, 100).sensor);
+      const Vec3 d = *view.sensor - centre;
+      distances.push_back(d.norm());
+      elevations.push_back(std::asin(d.z() / d.norm()) * 180.f / float(M_PI));
+      EXPECT_GE(view.sensor->z(), -1e-4f);
+      EXPECT_FALSE(view.points.empty());
+    }
+  for (size_t i = 0; i < distances.size(); ++i) {
+    EXPECT_GE(distances[i], 0.8f - 1e-4f);
+    EXPECT_LE(distances[i], 4.f + 1e-4f);
+    EXPECT_GE(elevations[i], -10.f - 1e-3f);
+    EXPECT_LE(elevations[i], 60.f + 1e-3f);
+  }
+  // Twelve draws spread over the ranges (not one pose repeated).
+  EXPECT_GT(*std::max_element(distances.begin(), distances.end()) - *std::min_element(distances.begin(), distances.end()), 1.5f);
+  EXPECT_GT(*std::max_element(elevations.begin(), elevations.end()) - *std::min_element(elevations.begin(), elevations.end()), 30.f);
+  EXPECT_NE(distances[0], distances[6]);  // the second draw of view 0
+}
+
 TEST(TrainingSensors, ParseAndSpecRoundTripAndBadItemsAreNamed) {
   auto d = parse_training_sensors(training_sensors_spec(default_training_sensors()));
   ASSERT_TRUE(d.ok()) << d.error().message;
@@ -110,12 +144,24 @@ TEST(TrainingSensors, ParseAndSpecRoundTripAndBadItemsAreNamed) {
   EXPECT_EQ((*wide)[2].beams, 16);
   EXPECT_EQ(training_sensors_spec(*wide), "lidar64:20:5,lidar32:10:5,lidar:5:5");
   EXPECT_EQ(describe((*wide)[1]), "LiDAR 32 beams 10 m, 5 deg");
+  auto ranges = parse_training_sensors("depth:0.8-4:-10-60,depth:0.8-4:-10-60,lidar:5-20:5");
+  ASSERT_TRUE(ranges.ok()) << ranges.error().message;
+  ASSERT_EQ(ranges->size(), 3u);
+  EXPECT_FLOAT_EQ((*ranges)[0].distance_m, 0.8f);
+  EXPECT_FLOAT_EQ((*ranges)[0].distance_to_m, 4.f);
+  EXPECT_FLOAT_EQ((*ranges)[0].elevation_deg, -10.f);
+  EXPECT_FLOAT_EQ((*ranges)[0].elevation_to_deg, 60.f);
+  EXPECT_EQ((*ranges)[0].draw, 0);
+  EXPECT_EQ((*ranges)[1].draw, 1);  // listed again: another draw
+  EXPECT_EQ((*ranges)[2].draw, 0);
+  EXPECT_EQ(training_sensors_spec(*ranges), "depth:0.8-4:-10-60,depth:0.8-4:-10-60,lidar:5-20:5");
+  EXPECT_EQ(describe((*ranges)[0]), "depth camera 0.8-4 m, -10-60 deg");
   auto none = parse_training_sensors("none");
   ASSERT_TRUE(none.ok());
   EXPECT_TRUE(none->empty());
   EXPECT_EQ(training_sensors_spec({}), "none");
   for (const char* bad : {"", "depth", "depth:2", "ideal:2:30", "depth:-1:30", "depth:2:95", "depth:2:30,x", "cam:2:30", "lidar8:5:5",
-                          "lidar128:5:5"}) {
+                          "lidar128:5:5", "depth:4-0.8:0", "depth:0.8-:0", "depth:-1-4:0", "depth:2:-10-95", "depth:2:60-10"}) {
     auto r = parse_training_sensors(bad);
     EXPECT_FALSE(r.ok()) << bad;
     if (!r.ok() && std::string(bad).size() > 0) {

@@ -28,6 +28,11 @@ struct ScanCondition {
   float distance_m = 2;      // depth / LiDAR: from the sensor to the object's bounding-box centre
   float elevation_deg = 30;  // depth / LiDAR: above the horizon, seen from that centre
   int beams = 16;            // LiDAR: 16, 32 or 64
+  // A range of poses (training): each view draws its distance in [distance_m, distance_to_m] and its
+  // elevation in [elevation_deg, elevation_to_deg] where these lie above them (seeded by the object, the
+  // view and `draw`); otherwise the pose is fixed.
+  float distance_to_m = 0, elevation_to_deg = -90;
+  int draw = 0;  // the same range listed again: another draw of poses
   float tilt_deg = 0;        // the cloud's up off by up to this, in a random direction (seeded)
   bool floor = false;        // a floor patch under the object, seen by the sensor
   double outliers = 0;       // stray points, x the view's size
@@ -42,8 +47,9 @@ Expected<ScanCondition> parse_sensor(std::string_view name);
 // The name back: "ideal", "depth", "lidar" (16 beams), "lidar32", "lidar64".
 std::string sensor_spec_name(const ScanCondition& condition);
 
-// "depth:1.5:15,depth:3:45" (SENSOR:METRES:DEGREES, sensor depth, lidar, lidar32 or lidar64) or "none" (no sensor). Errors
-// name the bad item.
+// "depth:1.5:15,depth:3:45" (SENSOR:METRES:DEGREES, sensor depth, lidar, lidar32 or lidar64) or "none" (no
+// sensor). METRES and DEGREES may be ranges, "0.8-4" and "-10-60": each view draws its pose in them; an
+// item listed twice is a second draw. Errors name the bad item.
 Expected<std::vector<ScanCondition>> parse_training_sensors(std::string_view text);
 // The same text back: "depth:1.5:15,depth:3:45", "none" for no sensor.
 std::string training_sensors_spec(const std::vector<ScanCondition>& sensors);
@@ -51,8 +57,9 @@ std::string training_sensors_spec(const std::vector<ScanCondition>& sensors);
 // One view of an object under a condition, as the sensor returns it (before any filter). Ideal views are
 // object_view's; the others are cast against the object's mesh (upright, real-life size, on the ground)
 // in the same pose (an object without a natural up, `any_pose`, gets the view's random pose), from the
-// same azimuth as the ideal view, at the condition's distance and elevation. `full` is the object's full
-// 3D cloud at the protocol's density (ideal views only), `object_seed` its seed (object_seed()).
+// same azimuth as the ideal view, at the condition's distance and elevation (drawn in its ranges), never
+// below the ground (a negative elevation rises until the sensor stands at z = 0). `full` is the object's
+// full 3D cloud at the protocol's density (ideal views only), `object_seed` its seed (object_seed()).
 Cloud condition_view(const Mesh& mesh, bool any_pose, const Points& full, size_t view, size_t views,
                      uint64_t object_seed, const ScanCondition& condition, size_t points_per_object,
                      double hpr_radius_factor);
