@@ -159,8 +159,9 @@ void AddTrainingViewOptions(CLI::App& train, TrainOptions& t) {
   train.add_option_function<std::string>(
            "--sensor-views",
            [&t](const std::string& text) { t.protocol.train_sensors = *glimpse::parse_training_sensors(text); },
-           "more training views of each mesh taken by simulated sensors, SENSOR:METRES:DEGREES[,...] (depth or "
-           "lidar, from that distance and elevation, filtered to the median density of every mesh's ideal views, "
+           "more training views of each mesh taken by simulated sensors, SENSOR:METRES:DEGREES[,...] (depth, "
+           "lidar, lidar32 or lidar64, from that distance and elevation, or ranges such as depth:0.8-4:-10-60 from "
+           "which each view draws its pose; an item listed again draws again; filtered to the median density of every mesh's ideal views, "
            "measured in a first pass; sent marked augmented: "
            "learnt, but never what 'unknown' measures a cloud against), as glimpse-lab's --train-sensors; 'none': the paper's views alone (default: " + kSensorViews + ", the recipe the README "
            "measures; training takes about 4 times longer)")

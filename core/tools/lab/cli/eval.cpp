@@ -239,7 +239,8 @@ void add_training_flags(CLI::App* cmd, EvalOptions& o) {
   o.train_sensors = training_sensors_spec(default_training_sensors());
   cmd->add_option("--train-sensors", o.train_sensors,
                   "training-only views of simulated sensors besides the ideal ones: SENSOR:METRES:DEGREES[,...] "
-                  "(depth, lidar, lidar32 or lidar64, from that distance and elevation, the same azimuths, through the scan filters "
+                  "(depth, lidar, lidar32 or lidar64, from that distance and elevation, or ranges such as "
+                  "depth:0.8-4:-10-60 from which each view draws its pose, an item listed again drawing again; the same azimuths, through the scan filters "
                   "down to the model's density, the median of its ideal training views; augmented: the decision learns them, novelty measures against a model of the other views), or 'none' (the recipe's: off the 2 m, 30 deg camera the "
                   "robustness matrix tests)")
       ->capture_default_str();
