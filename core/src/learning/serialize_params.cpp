@@ -59,6 +59,7 @@ void visit_params(TrainParams& p, F&& f) {
   f("kmeans_restarts", p.kmeans_restarts);
   f("calibration_folds", p.calibration_folds);
   f("calibration_queries", p.calibration_queries);
+  f("augmented_prefixes", p.augmented_prefixes);
   f("settle_precision", p.settle_precision);
   f("known_acceptance", p.known_acceptance);
   f("novelty_objects", p.novelty_objects);

@@ -46,6 +46,7 @@ std::vector<Job> learning_jobs(const std::vector<TrainingCloud>& data, const Tra
     learnt[i] = training_view(data[i].cloud, params, salt);
     jobs.push_back({i, 0});
     const size_t n = data[i].cloud.points.size();
+    if (data[i].augmented && !params.augmented_prefixes) continue;
     for (double f : params.partial_prefixes) {
       const auto count = static_cast<size_t>(std::lround(f * static_cast<double>(n)));
       if (count >= params.features.min_points && count < n) jobs.push_back({i, count});

@@ -81,6 +81,9 @@ struct TrainParams {
   // fractions of its points (sec. 4's exploration order), as samples of the same object. A scan is
   // classified while it grows, so the model must know partial views. Empty: whole clouds only.
   std::vector<double> partial_prefixes = {0.15, 0.25, 0.35, 0.5, 0.7};
+  // The prefixes of augmented clouds too (TrainingCloud::augmented: the cameras' views, the zoo beside a
+  // folder); false: augmented clouds are learnt whole only.
+  bool augmented_prefixes = true;
   // Each training cloud is learnt turned about its centroid by a random tilt of up to this many degrees
   // (seeded): a scanner knows up to a few degrees, and on a flat top a tilt of 2 degrees makes the first
   // points seen a strip along one edge instead of the whole top. 0: as given.

@@ -257,6 +257,10 @@ void add_training_flags(CLI::App* cmd, EvalOptions& o) {
   cmd->add_option("--fusion-head-c", o.fusion_head_c,
                   "C of the fusion's logistic decision (its share is calibrated per model; measured with 10); 0: none, the "
                   "nearest references alone (default: the recogniser's, 10)");
+  cmd->add_option("--augmented-prefixes", o.augmented_prefixes,
+                  "on: augmented training views (the cameras', the zoo's beside real objects) are learnt with their "
+                  "top-down prefixes like the others; off: whole only (default: the recogniser's)")
+      ->check(CLI::IsMember({"on", "off"}));
   cmd->add_option("--neighbours", o.neighbours, "k of the k-NN decision (0: the recogniser's default)");
   cmd->add_option("--pca-variance", o.pca_variance,
                   "explained variance the decision stage's PCA keeps (0: default; negative: no PCA, L1 on the histograms)");

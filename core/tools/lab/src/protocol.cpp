@@ -70,9 +70,6 @@ Status export_histograms(const Protocol& P, int fold, const ModelImpl& impl, con
 // (TrainingCloud::augmented: learnt, but not what novelty measures against): a simulated sensor's
 // training views, and the procedural zoo's objects when added to real ones (--also-train zoo:N).
 std::vector<TrainingSample> fold_samples(const Protocol& P, int fold, std::vector<size_t>& test_views) {
-  const bool zoo_added = std::any_of(P.objects.begin(), P.objects.end(), [](const EvalObject& o) {
-    return (o.role == EvalRole::kCrossValidate || o.role == EvalRole::kTrainOnly) && o.source != "zoo";
-  });
   std::vector<TrainingSample> samples;
   for (size_t v = 0; v < P.views.size(); ++v) {
     const int o = P.views[v].object;
@@ -86,8 +83,7 @@ std::vector<TrainingSample> fold_samples(const Protocol& P, int fold, std::vecto
     for (size_t k = 0; k < P.train_slots[v].size(); ++k) {  // the whole (learnt) view, then its prefixes
       const FeatureSlot& slot = P.slots[static_cast<size_t>(P.train_slots[v][k])];
       if (!slot.ok) continue;
-      const bool augmented = P.params.novelty_models &&
-                             (P.views[v].train_condition >= 0 || (zoo_added && object.source == "zoo"));
+      const bool augmented = P.params.novelty_models && P.augmented(v);
       samples.push_back({object.category, id, slot.features, k == 0, std::nullopt, augmented});
       const FeatureSlot& seen = P.slots[static_cast<size_t>(P.seen_slots[v][k])];
       if (&seen != &slot && seen.ok) samples.back().as_seen = seen.features;
@@ -331,6 +327,9 @@ Expected<EvalResult> run_evaluation(const std::vector<EvalObject>& objects, cons
   P.r.source = std::move(source);
   P.threads = resolve_threads(params.threads);
   P.r.threads = P.threads;
+  P.zoo_added = std::any_of(objects.begin(), objects.end(), [](const EvalObject& o) {
+    return (o.role == EvalRole::kCrossValidate || o.role == EvalRole::kTrainOnly) && o.source != "zoo";
+  });
   P.tp = params.train;
   P.tp.methods = params.methods;
   P.tp.seed = params.seed;

@@ -120,6 +120,13 @@ struct Protocol {
   bool learnt_object(size_t o) const {
     return objects[o].role == EvalRole::kCrossValidate || objects[o].role == EvalRole::kTrainOnly;
   }
+  // A view learnt as augmented (TrainingCloud::augmented) when the models have novelty models: a simulated
+  // sensor's training view, or a zoo object's view when the zoo is added to real objects.
+  bool augmented(size_t v) const {
+    const EvalObject& object = objects[static_cast<size_t>(views[v].object)];
+    return views[v].train_condition >= 0 || (zoo_added && object.source == "zoo");
+  }
+  bool zoo_added = false;  // the zoo's objects learnt beside real ones (--also-train zoo:N)
 };
 
 void compute_slot(Protocol& P, FeatureSlot& slot, const Cloud& cloud);

@@ -103,7 +103,7 @@ void eval_internal::prefix_features(Protocol& P) {
         P.seen_slots[v].push_back(P.tilted(v) && P.tp.calibration_folds >= 2 ? slot_for(v, count, false) : id);
       };
       learn(n);
-      for (double f : P.tp.partial_prefixes) {
+      for (double f : P.tp.augmented_prefixes || !P.augmented(v) ? P.tp.partial_prefixes : std::vector<double>{}) {
         const size_t count = static_cast<size_t>(std::round(f * double(n)));
         if (count < n) learn(count);
       }

@@ -99,7 +99,7 @@ void training_clouds_row(std::ostringstream& o, const EvalResult& r) {
   if (!prefixes.empty()) {
     trained_on = "full views + top-down prefixes holding ";
     for (size_t i = 0; i < prefixes.size(); ++i) trained_on += (i ? ", " : "") + pct(100 * prefixes[i]) + " %";
-    trained_on += " of each training view";
+    trained_on += p.train.augmented_prefixes ? " of each training view" : " of each training view not augmented (augmented views whole only)";
   }
   if (p.train.tilt_deg > 0)
     trained_on += "; each training view (and its prefixes) turned by a random tilt of up to " + pct(p.train.tilt_deg) +
