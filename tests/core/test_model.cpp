@@ -7,6 +7,7 @@
 #include <map>
 
 #include "glimpse/learning/model.h"
+#include "glimpse/learning/model_internals.h"
 #include "glimpse/learning/train_params.h"
 #include "synthetic.h"
 #include "trained_model.h"
@@ -123,6 +124,31 @@ TEST(Train, TiltsFollowTheObjectNotItsPlaceInTheList) {
     ASSERT_EQ(ca->scores.size(), cb->scores.size());
     for (size_t i = 0; i < ca->scores.size(); ++i) EXPECT_NEAR(ca->scores[i], cb->scores[i], 1e-9) << query.object_id;
   }
+}
+
+// augmented_prefixes false: an augmented cloud is learnt whole only; the others keep their top-down
+// prefixes. The nearest-reference stage holds one reference per learnt row.
+TEST(Train, AugmentedCloudsAreLearntWholeOnlyWithoutAugmentedPrefixes) {
+  TrainParams p = small_params();
+  p.methods = {MethodId::kUSH};
+  p.default_method = MethodId::kUSH;
+  p.calibration_folds = 0;
+  p.decision.kind = DecisionRule::kNearestReference;
+  std::vector<TrainingCloud> data = test::synthetic_views(2, 2, 13);
+  size_t marked = 0;
+  for (size_t i = 0; i < data.size(); i += 2) data[i].augmented = true, ++marked;
+  TrainParams whole_only = p;
+  whole_only.augmented_prefixes = false;
+  auto with = train(data, p), without = train(data, whole_only);
+  ASSERT_TRUE(with.ok() && without.ok());
+  const Eigen::Index rows_with = with->impl->stages[static_cast<int>(MethodId::kUSH)]->references.rows();
+  const Eigen::Index rows_without = without->impl->stages[static_cast<int>(MethodId::kUSH)]->references.rows();
+  // Every synthetic view is large enough for all five prefixes.
+  EXPECT_EQ(rows_with, Eigen::Index(data.size() * (1 + p.partial_prefixes.size())));
+  EXPECT_EQ(rows_without, rows_with - Eigen::Index(marked * p.partial_prefixes.size()));
+  auto back = deserialize(serialize(*without));
+  ASSERT_TRUE(back.ok()) << back.error().message;
+  EXPECT_FALSE(back->impl->params.augmented_prefixes);
 }
 
 TEST(Train, Errors) {
