@@ -8,6 +8,7 @@
 #include <thread>
 
 #include "glimpse/views/sensors.h"
+#include "glimpse/views/zoo.h"
 
 namespace glimpse {
 namespace {
@@ -215,6 +216,31 @@ TEST(DepthCamera, RangeLimitsAndSameSeedSameCloud) {
   EXPECT_EQ(a.points, b.points);
   const Cloud c = depth_camera_scan(*near, orbit_pose({2, 0, 0}, 180.f, 10.f, 2.f), {}, 12);
   EXPECT_NE(a.points, c.points);
+}
+
+// The camera casts only the pixels whose rays can reach the scene's bounds: the same points, bit for bit,
+// as casting every pixel, from near, far, level and high, with and without a floor.
+TEST(DepthCamera, CastingOnlyTheWindowOntoTheSceneGivesTheWholeFramesPoints) {
+  const Mesh chair = *make_zoo_shape("chair", 3);
+  const Vec3 centre = bounds(chair.vertices).centre();
+  DepthCameraParams every_pixel;
+  every_pixel.whole_frame = true;
+  for (auto [distance, elevation] : {std::pair{1.2f, 15.f}, {3.f, 45.f}, {2.f, 0.f}, {4.f, 70.f}})
+    for (float floor : {0.f, 1.5f}) {
+      const SensorPose pose = orbit_pose(centre, 40.f, elevation, distance);
+      auto scene = RayScene::build(chair, floor);
+      ASSERT_TRUE(scene.ok());
+      const Cloud a = depth_camera_scan(*scene, pose, {}, 5), b = depth_camera_scan(*scene, pose, every_pixel, 5);
+      EXPECT_GT(a.points.size(), 1000u) << distance << " m, " << elevation << " deg, floor " << floor;
+      EXPECT_EQ(a.points, b.points) << distance << " m, " << elevation << " deg, floor " << floor;
+    }
+  // A plate square to the camera fills its bounds' window to the edge: any pixel short is a point short.
+  auto plate = RayScene::build(wall(2.f, 0.3f, 20.f));
+  ASSERT_TRUE(plate.ok());
+  const SensorPose facing{Vec3::Zero(), Vec3(2, 0, 0)};
+  const Cloud a = depth_camera_scan(*plate, facing, {}, 6), b = depth_camera_scan(*plate, facing, every_pixel, 6);
+  EXPECT_GT(a.points.size(), 10000u);
+  EXPECT_EQ(a.points, b.points);
 }
 
 TEST(OrbitPose, PlacesTheSensorAtDistanceAndElevation) {

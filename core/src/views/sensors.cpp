@@ -77,13 +77,15 @@ Expected<RayScene> RayScene::build(const Mesh& mesh, float floor_half_size_m) {
   if (add_triangles(mesh.vertices, mesh.faces) == RTC_INVALID_GEOMETRY_ID)
     return resource_exhausted("ray scene: Embree could not allocate the mesh's buffers");
   RayScene out;
-  out.bounds_ = bounds(mesh.vertices);
+  out.bounds_ = out.scene_bounds_ = bounds(mesh.vertices);
   if (floor_half_size_m > 0) {
     const Vec3 c = out.bounds_.centre();
     const float h = floor_half_size_m;
     const Points corners = {{c.x() - h, c.y() - h, 0.f}, {c.x() + h, c.y() - h, 0.f},
                             {c.x() + h, c.y() + h, 0.f}, {c.x() - h, c.y() + h, 0.f}};
     impl->floor_id = add_triangles(corners, {{0, 1, 2}, {0, 2, 3}});
+    for (const Vec3& corner : corners)
+      out.scene_bounds_.min = out.scene_bounds_.min.cwiseMin(corner), out.scene_bounds_.max = out.scene_bounds_.max.cwiseMax(corner);
     if (impl->floor_id == RTC_INVALID_GEOMETRY_ID)
       return resource_exhausted("ray scene: Embree could not allocate the floor's buffers");
   }
@@ -183,6 +185,35 @@ bool returns_at_incidence(float cos_incidence, float start_deg, float max_deg, s
   return uniform01(rng) >= double((angle - start_deg) / (max_deg - start_deg));
 }
 
+// The pixels whose rays can reach `b`: the rectangle round the projections of its corners, a pixel
+// wider on each side, its columns widened to whole packets of 8 (RayScene::cast_many casts a row in
+// packets from column 0, so each packet holds the same rays as in a whole row). The whole frame when a
+// corner lies behind the camera.
+struct PixelWindow {
+  int u0, u1, v0, v1;  // [u0, u1) x [v0, v1)
+};
+PixelWindow window_onto(const Bounds& b, const Vec3& position, const Vec3& forward, const Vec3& right, const Vec3& up,
+                        float fx, float fy, int width, int height) {
+  const PixelWindow whole{0, width, 0, height};
+  float u_lo = INFINITY, u_hi = -INFINITY, v_lo = INFINITY, v_hi = -INFINITY;
+  for (int i = 0; i < 8; ++i) {
+    const Vec3 corner(i & 1 ? b.max.x() : b.min.x(), i & 2 ? b.max.y() : b.min.y(), i & 4 ? b.max.z() : b.min.z());
+    const Vec3 d = corner - position;
+    const float depth = d.dot(forward);
+    if (!(depth > 1e-4f)) return whole;
+    const float u = fx * d.dot(right) / depth + 0.5f * float(width) - 0.5f;
+    const float v = 0.5f * float(height) - 0.5f - fy * d.dot(up) / depth;
+    u_lo = std::min(u_lo, u), u_hi = std::max(u_hi, u), v_lo = std::min(v_lo, v), v_hi = std::max(v_hi, v);
+  }
+  if (!std::isfinite(u_lo + u_hi + v_lo + v_hi)) return whole;
+  auto clamp_to = [](float x, int n) { return int(std::clamp(x, 0.f, float(n))); };
+  PixelWindow w{clamp_to(std::floor(u_lo) - 1, width), clamp_to(std::ceil(u_hi) + 2, width),
+                clamp_to(std::floor(v_lo) - 1, height), clamp_to(std::ceil(v_hi) + 2, height)};
+  w.u0 -= w.u0 % 8;
+  w.u1 = std::min(width, (w.u1 + 7) / 8 * 8);
+  return w;
+}
+
 }  // namespace
 
 Cloud depth_camera_scan(const RayScene& scene, const SensorPose& pose, const DepthCameraParams& p, uint64_t seed) {
@@ -199,21 +230,24 @@ Cloud depth_camera_scan(const RayScene& scene, const SensorPose& pose, const Dep
   const float fy = 0.5f * float(p.height) / std::tan(0.5f * p.fov_v_deg * kDeg);
   const double focal_baseline = double(fx) * p.baseline_m;  // disparity (px) x depth (m)
   std::mt19937_64 rng(seed);
-  std::vector<Vec3> rays(static_cast<size_t>(p.width));
-  std::vector<float> reach(rays.size());
-  std::vector<RayScene::Hit> hits(rays.size());
-  for (int v = 0; v < p.height; ++v) {
+  const PixelWindow w = p.whole_frame ? PixelWindow{0, p.width, 0, p.height}
+                                      : window_onto(scene.scene_bounds(), pose.position, forward, right, up, fx, fy, p.width, p.height);
+  const size_t n = size_t(std::max(0, w.u1 - w.u0));
+  std::vector<Vec3> rays(n);
+  std::vector<float> reach(n);
+  std::vector<RayScene::Hit> hits(n);
+  for (int v = w.v0; v < w.v1; ++v) {
     // A row's rays through the pixel centres, with unit depth along the optical axis, cast together.
-    for (int u = 0; u < p.width; ++u) {
-      rays[size_t(u)] = forward + ((float(u) + 0.5f - 0.5f * float(p.width)) / fx) * right +
-                        ((0.5f * float(p.height) - float(v) - 0.5f) / fy) * up;
-      reach[size_t(u)] = p.max_range_m * rays[size_t(u)].norm();
+    for (int u = w.u0; u < w.u1; ++u) {
+      rays[size_t(u - w.u0)] = forward + ((float(u) + 0.5f - 0.5f * float(p.width)) / fx) * right +
+                               ((0.5f * float(p.height) - float(v) - 0.5f) / fy) * up;
+      reach[size_t(u - w.u0)] = p.max_range_m * rays[size_t(u - w.u0)].norm();
     }
     scene.cast_many(pose.position, rays, reach, hits);
-    for (int u = 0; u < p.width; ++u) {
-      const Vec3& ray = rays[size_t(u)];
+    for (size_t k = 0; k < n; ++k) {
+      const Vec3& ray = rays[k];
       const float per_depth = ray.norm();  // distance along the ray per metre of depth
-      const RayScene::Hit& hit = hits[size_t(u)];
+      const RayScene::Hit& hit = hits[k];
       if (!hit.hit) continue;
       const Vec3 dir = ray / per_depth;
       const double depth = double(hit.distance) / per_depth;

@@ -42,11 +42,13 @@ class RayScene {
                  std::span<Hit> out) const;
 
   const Bounds& object_bounds() const { return bounds_; }
+  // Everything a ray can hit: the object and the floor patch.
+  const Bounds& scene_bounds() const { return scene_bounds_; }
 
  private:
   struct Impl;
   std::shared_ptr<const Impl> impl_;
-  Bounds bounds_;
+  Bounds bounds_, scene_bounds_;
 };
 
 // ---- where the sensor is ----
@@ -74,10 +76,14 @@ struct DepthCameraParams {
   // Missing returns at grazing incidence: the angle between the ray and the surface normal; beyond
   // dropout_start_deg the return probability falls linearly to 0 at max_incidence_deg.
   float dropout_start_deg = 70.f, max_incidence_deg = 85.f;
+  // Cast every pixel, not only the window onto the scene's bounds (the same points; bench_sensors' baseline).
+  bool whole_frame = false;
 };
 
 // The camera at pose.position looking at pose.target, its image's up as close to +z as the axis
-// allows; one ray per pixel centre. Points in world coordinates, sensor = the camera. Seeded.
+// allows; one ray per pixel centre. Points in world coordinates, sensor = the camera. Seeded. Only the
+// pixels whose rays can reach the scene's bounds are cast (whole packets of 8): the same points as
+// casting every pixel.
 Cloud depth_camera_scan(const RayScene& scene, const SensorPose& pose, const DepthCameraParams& params,
                         uint64_t seed);
 
