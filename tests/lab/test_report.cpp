@@ -2,6 +2,8 @@
 // open set, the markdown, CSV and SVG writers and the report folder.
 #include <gtest/gtest.h>
 
+#include <set>
+
 #include <cmath>
 #include <filesystem>
 #include <sstream>
@@ -124,6 +126,51 @@ TEST(Writers, MarkdownContainsTheNumbersAndThePapers) {
     if (header_cells == 0) header_cells = cells;
     EXPECT_EQ(cells, header_cells) << line;
   }
+}
+
+// The sensors matrix covers issue 55's poses: the depth camera at 0.8-4 m from -10 to 60 degrees, LiDAR
+// of 16, 32 and 64 beams at 5-20 m, after the ideal row.
+TEST(Robustness, TheSensorsMatrixSpansTheRealScannersPoses) {
+  const std::vector<ScanCondition> grid = robustness_conditions("sensors");
+  ASSERT_EQ(grid.size(), 1u + 30u + 9u);
+  EXPECT_TRUE(grid.front().is_ideal());
+  std::set<float> distances, elevations;
+  std::set<std::pair<int, float>> lidars;
+  for (const ScanCondition& c : grid) {
+    if (c.sensor == SensorKind::kDepthCamera) distances.insert(c.distance_m), elevations.insert(c.elevation_deg);
+    if (c.sensor == SensorKind::kLidar) lidars.insert({c.beams, c.distance_m});
+  }
+  EXPECT_EQ(distances, (std::set<float>{0.8f, 1.f, 2.f, 3.f, 4.f}));
+  EXPECT_EQ(elevations, (std::set<float>{-10.f, 0.f, 15.f, 30.f, 45.f, 60.f}));
+  EXPECT_EQ(lidars.size(), 9u);
+  EXPECT_TRUE(lidars.count({64, 20.f}) && lidars.count({16, 5.f}) && lidars.count({32, 10.f}));
+  EXPECT_TRUE(robustness_conditions("nonsense").empty());
+}
+
+// The matrix's rows give closest beside right and accepted, and the points table bins every sensor row's
+// full views by the points kept (the ideal rows apart).
+TEST(Robustness, MatrixRowsAndAccuracyAgainstPointsKept) {
+  EvalResult r = small_result();
+  RobustnessRow ideal, lidar;
+  lidar.condition.sensor = SensorKind::kLidar, lidar.condition.beams = 32, lidar.condition.distance_m = 10.f;
+  lidar.condition.elevation_deg = 5.f;
+  for (RobustnessRow* row : {&ideal, &lidar}) {
+    row->views = 4;
+    row->accuracy = {75, NAN, 50}, row->accepted = {50, NAN, 25}, row->balanced = {75, NAN, 50};
+  }
+  ideal.full_views = {{2000, true, true}, {1500, true, false}};  // not binned: the ideal row
+  lidar.full_views = {{40, false, false}, {60, true, false}, {80, true, true}, {250, true, true}};
+  lidar.unknown_accepted = 12.5;
+  r.robustness = {ideal, lidar};
+  const std::string md = markdown_report(r);
+  EXPECT_NE(md.find("| closest full / 10% | delta | right and accepted full / 10% | delta | unknown accepted |"),
+            std::string::npos) << md;
+  EXPECT_NE(md.find("| LiDAR 32 beams 10 m, 5 deg | 0 | 0 | 0 | 75.0 / 50.0 | +0.0 / +0.0 | 50.0 / 25.0 | +0.0 / +0.0 | 12.5 |"),
+            std::string::npos) << md;
+  EXPECT_NE(md.find("| 0-49 | – | 0.0 / 0.0 (1) |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| 50-99 | – | 100.0 / 50.0 (2) |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| 200-299 | – | 100.0 / 100.0 (1) |"), std::string::npos) << md;
+  EXPECT_EQ(md.find("| 1000-1999 |"), std::string::npos) << md;  // the ideal row's views are not binned
 }
 
 TEST(Writers, CsvHasOneRowPerDecision) {
