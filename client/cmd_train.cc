@@ -78,7 +78,8 @@ Status EmitZoo(const TrainOptions& o, const ViewRecipe& recipe, double sensor_de
         return training_views(zoo[i].mesh, key(i), zoo[i].any_pose, recipe, sensor_density);
       },
       [&](size_t i, Expected<ObjectViews>&& views) {
-        return EmitViews(zoo[i].category, key(i), *views, emit, !categories.empty());
+        // "zoo/category/id": never the name of a folder's object (a folder's "human/1" is another object).
+        return EmitViews(zoo[i].category, "zoo/" + key(i), *views, emit, !categories.empty());
       });
   return {};
 }
@@ -172,8 +173,7 @@ Expected<double> MeasureSensorDensity(const TrainOptions& o, const Folder& folde
   auto density = SensorDensity(o, folder, zoo_extra);
   if (!density) return density.error();
   if (!o.quiet) {
-    std::string sensors;
-    for (const ScanCondition& c : protocol.train_sensors) sensors += (sensors.empty() ? "" : "; ") + describe(c);
+    const std::string sensors = describe(protocol.train_sensors);
     std::fprintf(stderr,
                  "train: and the same azimuths seen by a simulated %s, filtered to the ideal views' density (%.1f "
                  "points per extent^2, the median over %zu views; --sensor-views none: not)\n",

@@ -94,7 +94,7 @@ BENCHMARK(BM_CastRows)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 // A training camera's view as the recipe makes it, in two parts: the raw view (condition_view: the scene
 // built and the frame cast) and the scan filters down to the model's density (filter_scan). Arg: the
-// recipe's camera (0: 1.5 m, 15 deg; 1: 3 m, 45 deg; 2: 2 m, level).
+// recipe's draw of the depth camera's pose (0-2; view 1 of each draw).
 void BM_TrainingCameraView(benchmark::State& state) {
   static const Mesh mesh = *make_zoo_shape("chair", 1);
   const ScanCondition camera = default_training_sensors()[size_t(state.range(0))];

@@ -28,12 +28,18 @@ Cloud sensor_view(const Mesh& mesh, bool any_pose, const Points& full, size_t vi
 }  // namespace
 
 std::vector<ScanCondition> default_training_sensors() {
-  ScanCondition near, far, level;
-  near.sensor = far.sensor = level.sensor = SensorKind::kDepthCamera;
-  near.distance_m = 1.5f, near.elevation_deg = 15.f;
-  far.distance_m = 3.f, far.elevation_deg = 45.f;
-  level.distance_m = 2.f, level.elevation_deg = 0.f;
-  return {near, far, level};
+  std::vector<ScanCondition> out;
+  ScanCondition camera;  // three draws of a pose in the depth camera's range
+  camera.sensor = SensorKind::kDepthCamera;
+  camera.distance_m = 0.8f, camera.distance_to_m = 4.f, camera.elevation_deg = -10.f, camera.elevation_to_deg = 60.f;
+  for (int draw = 0; draw < 3; ++draw) out.push_back(camera), out.back().draw = draw;
+  for (int beams : {16, 32, 64}) {  // one draw of each LiDAR class
+    ScanCondition lidar;
+    lidar.sensor = SensorKind::kLidar, lidar.beams = beams;
+    lidar.distance_m = 5.f, lidar.distance_to_m = 20.f, lidar.elevation_deg = 5.f;
+    out.push_back(lidar);
+  }
+  return out;
 }
 
 Points full_cloud(const Mesh& mesh, std::string_view key, const ViewRecipe& recipe) {

@@ -92,6 +92,22 @@ std::string describe(const ScanCondition& c) {
   return s;
 }
 
+std::string describe(const std::vector<ScanCondition>& conditions) {
+  std::string out;
+  for (size_t i = 0; i < conditions.size(); ++i) {
+    if (conditions[i].draw > 0) continue;  // counted with its first draw
+    size_t draws = 1;
+    for (size_t j = i + 1; j < conditions.size(); ++j) {
+      ScanCondition again = conditions[j];
+      again.draw = 0;
+      draws += again == conditions[i];
+    }
+    out.append(out.empty() ? "" : "; ").append(describe(conditions[i]));
+    if (draws > 1) out.append(" (").append(std::to_string(draws)).append(" draws)");
+  }
+  return out;
+}
+
 Cloud condition_view(const Mesh& mesh, bool any_pose, const Points& full, size_t view, size_t views, uint64_t seed,
                      const ScanCondition& c, size_t points_per_object, double hpr_radius_factor) {
   views = std::clamp<size_t>(views, 1, 6);

@@ -30,10 +30,10 @@ struct ViewRecipe {
   ScanFilterParams filters;
 };
 
-// The recipe's training sensors (glimpse-lab --train-sensors, glimpse train --sensor-views): a depth
-// camera at 1.5 m, 15 deg, at 3 m, 45 deg (both off the 2 m, 30 deg the robustness matrix tests) and at
-// 2 m level with the object (a camera on a robot or a wall: a level camera at 3 m reads 4.5 points more
-// with it, docs/sensors.md).
+// The recipe's training sensors (glimpse-lab --train-sensors, glimpse train --sensor-views), the poses
+// real scanners take: "depth:0.8-4:-10-60" three times (each view of each draw a depth camera 0.8-4 m
+// away, -10 to 60 deg up; close views cut by the frame) and "lidar:5-20:5,lidar32:5-20:5,lidar64:5-20:5"
+// (LiDAR of 16, 32 and 64 beams 5-20 m away). docs/sensors.md measures it.
 std::vector<ScanCondition> default_training_sensors();
 
 // The object's full 3D cloud: recipe.points area-weighted samples seeded by (recipe.seed, `key`), or its

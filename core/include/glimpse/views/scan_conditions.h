@@ -41,6 +41,10 @@ struct ScanCondition {
 };
 std::string describe(const ScanCondition& condition);  // "depth 2 m, 30 deg, floor, 2 % outliers"
 
+// Several conditions, "; " between them, a range drawn again counted once: "depth camera 0.8-4 m,
+// -10-60 deg (3 draws); LiDAR 16 beams 5-20 m, 5 deg".
+std::string describe(const std::vector<ScanCondition>& conditions);
+
 // A sensor by name, as a condition at the default pose: "ideal", "depth", "lidar" (16 beams), "lidar16",
 // "lidar32" or "lidar64". The error lists the valid names.
 Expected<ScanCondition> parse_sensor(std::string_view name);

@@ -79,7 +79,7 @@ std::vector<TrainingSample> fold_samples(const Protocol& P, int fold, std::vecto
     }
     if (!P.learnt(v)) continue;
     const EvalObject& object = P.objects[static_cast<size_t>(o)];
-    const std::string id = object.source + "/" + object.id;
+    const std::string id = object.source + "/" + object.category + "/" + object.id;  // the zoo's ids repeat per category
     for (size_t k = 0; k < P.train_slots[v].size(); ++k) {  // the whole (learnt) view, then its prefixes
       const FeatureSlot& slot = P.slots[static_cast<size_t>(P.train_slots[v][k])];
       if (!slot.ok) continue;

@@ -214,8 +214,7 @@ void eval_internal::sensor_training_views(Protocol& P) {
   });
   size_t taken = 0;
   for (const View& view : P.views) taken += view.train_condition >= 0;
-  std::string detail;
-  for (const ScanCondition& c : P.params.train_conditions) detail += (detail.empty() ? "" : "; ") + describe(c);
+  const std::string detail = describe(P.params.train_conditions);
   P.r.timings.push_back({"sensor training views", seconds_since(t0), std::to_string(taken) + " views: " + detail + ", filtered to the trained density"});
 }
 
