@@ -38,17 +38,19 @@ TEST(RunEvaluation, ReducedProtocolOnShrec) {
   // as recognition improves. The cameras' training views are thinned to the model's one density (each to
   // its object's own ideal views' instead: fusion 95.3 on full views; BoK, which learns the cameras' views
   // too in this recipe, not in the paper's, 59.3: its keypoints follow the density).
-  EXPECT_GE(accuracy(r->decisions, "full", MethodId::kFusion).percent(), 96.0);  // measured 96.7
-  EXPECT_GE(accuracy(r->decisions, "20%", MethodId::kFusion).percent(), 97.0);   // measured 98.0
-  EXPECT_GE(accuracy(r->decisions, "full", MethodId::kBoK).percent(), 44.0);     // measured 44.7
+  EXPECT_GE(accuracy(r->decisions, "full", MethodId::kFusion).percent(), 97.5);  // measured 98.0
+  EXPECT_GE(accuracy(r->decisions, "20%", MethodId::kFusion).percent(), 97.5);   // measured 98.0
+  EXPECT_GE(accuracy(r->decisions, "full", MethodId::kBoK).percent(), 40.5);     // measured 41.3
   const SettleRow settled = settle_summary(r->streams, -1);
   // Settling needs the winner to hold a whole window, the newest chunk included: later, righter.
   // "Unknown" settles like a category and counts wrong here (every view is known). Novelty comes from the
   // novelty model (the cameras' views augmented: the threshold is the ideal views', not widened by the
-  // cameras'), and settling is cautious both ways: 93.3 % settled, 97.9 % right, at 12.6 % visible.
-  EXPECT_GE(settled.settled_percent(), 92.5);    // measured 93.3 (140 of 150 views)
-  EXPECT_GE(settled.precision_percent(), 97.5);  // measured 97.9 (137 of 140)
-  EXPECT_LE(settled.mean_visible_percent, 13.0); // measured 12.6
+  // cameras'), and settling is cautious both ways. With 10 objects per category the LiDARs' sparse
+  // training views, decided held out, raise the probability a stream settles at: 76.0 % settled, 99.1 %
+  // right, at 12.9 % visible (the full SHREC CV: 95.8 % settled, 99.1 % right; docs/results.md).
+  EXPECT_GE(settled.settled_percent(), 75.0);    // measured 76.0 (114 of 150 views)
+  EXPECT_GE(settled.precision_percent(), 98.5);  // measured 99.1 (113 of 114)
+  EXPECT_LE(settled.mean_visible_percent, 13.5); // measured 12.9
   std::cout << "shrec reduced: full fusion " << accuracy(r->decisions, "full", MethodId::kFusion).percent()
             << " %, 20 % fusion " << accuracy(r->decisions, "20%", MethodId::kFusion).percent() << " %, full BoK "
             << accuracy(r->decisions, "full", MethodId::kBoK).percent() << " %; streams settled "
@@ -92,19 +94,19 @@ TEST(RunEvaluation, ReducedCrossSourceShrecToPsb) {
             << settled.mean_visible_percent << " % visible, precision " << settled.precision_percent() << " %\n";
   // 10 SHREC objects per category -> 8 PSB objects per category (6 parts), 3 views, 3000 points, seed 42:
   // 114 test views, one is 0.9 points. Measured with the recipe's training sensors and the fusion's logistic
-  // decision, the cameras' training views thinned to the model's one density: fusion 100 / 95.6 / 99.1
-  // (full / 10 % / 20 %), size only 71.1 on full views (it learns the cameras' extents too); streams
-  // settle on 92.1 % of views, 99.0 % of them right.
-  EXPECT_GE(full, 99.0);  // measured 100
-  EXPECT_GE(p10, 95.0);   // measured 95.6
-  EXPECT_GE(p20, 98.0);   // measured 99.1
+  // decision, the cameras' training views thinned to the model's one density: fusion 98.2 / 96.5 / 98.2
+  // (full / 10 % / 20 %), size only 71.1 on full views (it learns the sensors' extents too); streams
+  // settle on 91.2 % of views, 98.1 % of them right.
+  EXPECT_GE(full, 97.5);  // measured 98.2
+  EXPECT_GE(p10, 95.5);   // measured 96.5
+  EXPECT_GE(p20, 97.5);   // measured 98.2
   EXPECT_GT(full, size + 15);  // shape adds to what a ruler gets right
-  EXPECT_GE(settled.settled_percent(), 91.5);    // measured 92.1
+  EXPECT_GE(settled.settled_percent(), 90.5);    // measured 91.2
   // Settled as "unknown" counts wrong. Novelty comes from the novelty model (the cameras' views
   // augmented: PSB views look more novel to a model of SHREC's ideal views alone), and settling is
   // cautious both ways (fewer known views settle "unknown", and a category settles only on a novelty well
   // inside the threshold).
-  EXPECT_GE(settled.precision_percent(), 98.5);  // measured 99.0
+  EXPECT_GE(settled.precision_percent(), 97.5);  // measured 98.1
 }
 
 std::string psb_other_dir() {
