@@ -128,7 +128,7 @@ TEST(Writers, MarkdownContainsTheNumbersAndThePapers) {
   }
 }
 
-// The sensors matrix covers issue 55's poses: the depth camera at 0.8-4 m from -10 to 60 degrees, LiDAR
+// The sensors matrix covers the poses real scanners take: the depth camera at 0.8-4 m from -10 to 60 degrees, LiDAR
 // of 16, 32 and 64 beams at 5-20 m, after the ideal row.
 TEST(Robustness, TheSensorsMatrixSpansTheRealScannersPoses) {
   const std::vector<ScanCondition> grid = robustness_conditions("sensors");

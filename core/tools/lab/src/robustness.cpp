@@ -36,7 +36,7 @@ std::vector<ScanCondition> robustness_conditions(std::string_view matrix) {
     out.push_back(sensor(SensorKind::kLidar, 10.f, 5.f));
     return out;
   }
-  if (matrix == "sensors") {  // the poses real scanners take: issue 55's grid
+  if (matrix == "sensors") {  // the poses real scanners take
     for (float d : {0.8f, 1.f, 2.f, 3.f, 4.f})
       for (float e : {-10.f, 0.f, 15.f, 30.f, 45.f, 60.f}) out.push_back(sensor(SensorKind::kDepthCamera, d, e));
     for (int beams : {16, 32, 64})
