@@ -45,8 +45,8 @@ TEST(RunEvaluation, ReducedProtocolOnShrec) {
   // Settling needs the winner to hold a whole window, the newest chunk included: later, righter.
   // "Unknown" settles like a category and counts wrong here (every view is known). Novelty comes from the
   // novelty model (the cameras' views augmented: the threshold is the ideal views', not widened by the
-  // cameras'), and settling is cautious both ways. With 10 objects per category the LiDARs' sparse
-  // training views, decided held out, raise the probability a stream settles at: 76.0 % settled, 99.1 %
+  // cameras'), and settling is cautious both ways. The held-out decisions the settle probability is
+  // calibrated on include the sensors' sparse and cut views, which raise it: 76.0 % settled, 99.1 %
   // right, at 12.9 % visible (the full SHREC CV: 95.8 % settled, 99.1 % right; docs/results.md).
   EXPECT_GE(settled.settled_percent(), 75.0);    // measured 76.0 (114 of 150 views)
   EXPECT_GE(settled.precision_percent(), 98.5);  // measured 99.1 (113 of 114)
