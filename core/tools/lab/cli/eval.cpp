@@ -241,8 +241,8 @@ void add_training_flags(CLI::App* cmd, EvalOptions& o) {
                   "training-only views of simulated sensors besides the ideal ones: SENSOR:METRES:DEGREES[,...] "
                   "(depth, lidar, lidar32 or lidar64, from that distance and elevation, or ranges such as "
                   "depth:0.8-4:-10-60 from which each view draws its pose, an item listed again drawing again; the same azimuths, through the scan filters "
-                  "down to the model's density, the median of its ideal training views; augmented: the decision learns them, novelty measures against a model of the other views), or 'none' (the recipe's: off the 2 m, 30 deg camera the "
-                  "robustness matrix tests)")
+                  "down to the model's density, the median of its ideal training views; augmented: the decision learns them, novelty measures against a model of the other views), or 'none' (default: the recipe's, "
+                  "the poses real scanners take)")
       ->capture_default_str();
   cmd->add_option("--folds", o.folds, "cross-validation folds (by object, stratified)")->capture_default_str();
   cmd->add_option("--methods", o.methods, "comma-separated: bok,bog,kgh,vfh,esf,ush,size,fusion")->capture_default_str();
