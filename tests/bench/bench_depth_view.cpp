@@ -43,7 +43,7 @@ const LabelledMesh& chair() {
 // Every k-th point of `cloud` so that exactly `target` remain (all of them when it has fewer).
 Cloud thinned_to(const Cloud& cloud, size_t target) {
   if (cloud.points.size() <= target) return cloud;
-  Cloud out{{}, cloud.sensor};
+  Cloud out{{}, cloud.sensor, cloud.frame};
   const double step = double(cloud.points.size()) / double(target);
   for (size_t i = 0; i < target; ++i) out.points.push_back(cloud.points[size_t(double(i) * step)]);
   return out;

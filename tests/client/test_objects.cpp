@@ -57,7 +57,7 @@ TEST(Objects, ParseUnit) {
 TEST_F(ObjectsTest, WithoutAManifestMeshesAreZUpInMetresAndCloudsGoAsTheyAre) {
   WriteBox(dir_ / "tall" / "a.off", 0.2f, 0.3f, 1.5f);
   WriteBox(dir_ / "flat" / "b.off", 1.0f, 0.8f, 0.1f);
-  Cloud c{{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)}, std::nullopt};
+  Cloud c{{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)}, std::nullopt, {}};
   ASSERT_TRUE(write_cloud((dir_ / "flat" / "scan.xyz").string(), c).ok());
   auto f = ScanFolder(dir_.string(), {});
   ASSERT_TRUE(f.ok()) << f.error().message;
@@ -77,7 +77,7 @@ TEST_F(ObjectsTest, WithoutAManifestMeshesAreZUpInMetresAndCloudsGoAsTheyAre) {
 
 TEST_F(ObjectsTest, CloudFilesTakeTheUsersUnitAndUpButNoHeight) {
   // A scan in millimetres with +y up: --unit mm --up y gives metres, +z up, its sensor moved with it.
-  Cloud c{{Vec3(0, 0, 0), Vec3(100, 1700, 50)}, Vec3(0, 1000, 3000)};
+  Cloud c{{Vec3(0, 0, 0), Vec3(100, 1700, 50)}, Vec3(0, 1000, 3000), {}};
   Placement p;
   p.up = Vec3::UnitY();
   p.sizing = *ParseUnit("mm");
@@ -98,7 +98,7 @@ TEST_F(ObjectsTest, CloudFilesTakeTheUsersUnitAndUpButNoHeight) {
 
   // In a folder: the placement is kept for the cloud files and said; --height with cloud files is refused.
   WriteBox(dir_ / "tall" / "a.off", 200, 1500, 300);
-  ASSERT_TRUE(write_cloud((dir_ / "tall" / "scan.xyz").string(), Cloud{{Vec3(0, 0, 0), Vec3(0, 1500, 0)}, std::nullopt}).ok());
+  ASSERT_TRUE(write_cloud((dir_ / "tall" / "scan.xyz").string(), Cloud{{Vec3(0, 0, 0), Vec3(0, 1500, 0)}, std::nullopt, {}}).ok());
   auto f = ScanFolder(dir_.string(), p);
   ASSERT_TRUE(f.ok()) << f.error().message;
   EXPECT_TRUE(Has(f->applied, "1 cloud files: up +y turned to +z (--up), units x 0.001 m (--unit)"));

@@ -126,7 +126,7 @@ TEST(LocalSurfaces, AgreeWithATextbookFit) {
   for (const Vec3& q : test::sphere(0.08f, 3000, Vec3(0.15f, 0.15f, 0.45f))) pts.push_back(q);
   for (const Vec3& q : test::cylinder(0.02f, 0.4f, 0.006f)) pts.push_back(q + Vec3(0.45f, 0.1f, 0.f));
   const Vec3 viewpoint(1.2f, 0.9f, 1.1f);
-  const Cloud cloud = clean({pts, viewpoint}, 0, nullptr);
+  const Cloud cloud = clean({pts, viewpoint, {}}, 0, nullptr);
   const KdTree tree(cloud.points);
   const float r = 0.03f;
   const auto fast = local_surfaces(tree, r, viewpoint, {});
@@ -184,7 +184,7 @@ TEST(SupportRadius, MedianKthNeighbourDistanceIsExact) {
 }
 
 TEST(Keypoints, PlaneHasNone) {
-  Cloud c{test::jitter(test::plane(0.3f, 0.01f), 0.0003f, 7), Vec3(0, 0, 1)};
+  Cloud c{test::jitter(test::plane(0.3f, 0.01f), 0.0003f, 7), Vec3(0, 0, 1), {}};
   auto f = extract(c);
   ASSERT_TRUE(f.ok()) << f.error().message;
   EXPECT_TRUE(f->keypoints.empty());
@@ -193,7 +193,7 @@ TEST(Keypoints, PlaneHasNone) {
 
 TEST(Keypoints, CubeKeypointsSitAtTheCornersOnly) {
   const float side = 0.3f;
-  Cloud c{test::cube(side, 0.006f), std::nullopt};
+  Cloud c{test::cube(side, 0.006f), std::nullopt, {}};
   auto f = extract(c);
   ASSERT_TRUE(f.ok()) << f.error().message;
   const float r = f->diagnostics.support_radius_m;
@@ -214,7 +214,7 @@ TEST(Keypoints, CubeKeypointsSitAtTheCornersOnly) {
 }
 
 TEST(Keypoints, RadiiGrowMonotonically) {
-  Cloud c{test::jitter(test::sphere(0.05f, 2000), 0.0002f, 1), std::nullopt};
+  Cloud c{test::jitter(test::sphere(0.05f, 2000), 0.0002f, 1), std::nullopt, {}};
   for (const Vec3& p : test::sphere(0.12f, 4000, Vec3(0.3f, 0, 0))) c.points.push_back(p);
   for (const Vec3& p : test::cube(0.2f, 0.008f)) c.points.push_back(p + Vec3(-0.4f, 0, 0));
   auto f = extract(c);
@@ -274,7 +274,7 @@ TEST(Keypoints, BoundaryOfAViewGivesNone) {
   // candidates the boundary test must turn away.)
   for (const Vec3& p : test::sphere(0.05f, 1500))
     if (p.z() > 0.01f) cap.push_back(p);
-  auto with = extract({cap, Vec3(0, 0, 1)});
+  auto with = extract({cap, Vec3(0, 0, 1), {}});
   ASSERT_TRUE(with.ok());
   ASSERT_FALSE(with->keypoints.empty());
   const float r = with->diagnostics.support_radius_m;
@@ -286,7 +286,7 @@ TEST(Keypoints, BoundaryOfAViewGivesNone) {
   EXPECT_GT(with->diagnostics.keypoints.boundary_rejected, 0u);
   FeatureParams no_boundary;
   no_boundary.keypoints.exclude_boundary = false;
-  auto without = extract({cap, Vec3(0, 0, 1)}, no_boundary);
+  auto without = extract({cap, Vec3(0, 0, 1), {}}, no_boundary);
   ASSERT_TRUE(without.ok());
   EXPECT_EQ(without->diagnostics.keypoints.boundary_rejected, 0u);
 }
@@ -350,7 +350,7 @@ Cloud transformed(const Cloud& c, const Eigen::Isometry3f& T) {
 }
 
 TEST(Descriptor, InvariantToRotationAndTranslation) {
-  Cloud c{test::jitter(test::cube(0.25f, 0.006f), 0.0002f, 5), std::nullopt};
+  Cloud c{test::jitter(test::cube(0.25f, 0.006f), 0.0002f, 5), std::nullopt, {}};
   for (const Vec3& p : test::sphere(0.08f, 3000, Vec3(0.5f, 0.1f, 0.1f))) c.points.push_back(p);
   Eigen::Isometry3f T = Eigen::Isometry3f::Identity();
   T.rotate(Eigen::AngleAxisf(0.7f, Vec3(1, 2, 3).normalized()));
@@ -377,7 +377,7 @@ TEST(Descriptor, InvariantToRotationAndTranslation) {
 }
 
 TEST(Extract, DeterministicWhateverTheThreadCount) {
-  Cloud c{test::jitter(test::cube(0.3f, 0.005f), 0.0003f, 11), Vec3(1, 1, 1)};
+  Cloud c{test::jitter(test::cube(0.3f, 0.005f), 0.0003f, 11), Vec3(1, 1, 1), {}};
   FeatureParams one, two;
   one.surface.threads = 1;
   two.surface.threads = 2;
@@ -394,7 +394,7 @@ TEST(Extract, DeterministicWhateverTheThreadCount) {
 // A stray point far away makes cells of r too many to hold: extract answers from the kd-tree instead.
 // Every other point's neighbourhood is the same, so its surface, keypoints and descriptors must be.
 TEST(Extract, AStrayFarPointChangesNoOtherPointsFeatures) {
-  Cloud c{test::jitter(test::cube(0.3f, 0.005f), 0.0003f, 11), Vec3(1, 1, 1)};
+  Cloud c{test::jitter(test::cube(0.3f, 0.005f), 0.0003f, 11), Vec3(1, 1, 1), {}};
   Cloud stray = c;
   stray.points.push_back(Vec3::Constant(5e3f));
   auto a = extract(c), b = extract(stray);
@@ -424,7 +424,7 @@ TEST(Extract, BadInput) {
   ASSERT_FALSE(empty.ok());
   EXPECT_EQ(empty.error().code, ErrorCode::kInvalidArgument);
 
-  auto few = extract({{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)}, std::nullopt});
+  auto few = extract({{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)}, std::nullopt, {}});
   ASSERT_FALSE(few.ok());
   EXPECT_NE(few.error().message.find("at least"), std::string::npos);
 
@@ -455,7 +455,7 @@ TEST(Extract, BadInput) {
   ASSERT_TRUE(thin.ok());
   EXPECT_GT(thin->diagnostics.valid_surfaces, 1000u);
 
-  Cloud mixed{test::cube(0.2f, 0.01f), std::nullopt};
+  Cloud mixed{test::cube(0.2f, 0.01f), std::nullopt, {}};
   const size_t finite = mixed.points.size();
   mixed.points.emplace_back(INFINITY, 0.f, 0.f);
   mixed.points.push_back(mixed.points.front());
@@ -467,7 +467,7 @@ TEST(Extract, BadInput) {
 }
 
 TEST(Extract, RefusesCoordinatesBeyondAScan) {
-  Cloud far{test::cube(0.2f, 0.01f), std::nullopt};
+  Cloud far{test::cube(0.2f, 0.01f), std::nullopt, {}};
   far.points[5].x() = 3e7f;  // 30,000 km: grid keys of the cleaning stage would overflow
   auto r = extract(far);
   ASSERT_FALSE(r.ok());
@@ -476,7 +476,7 @@ TEST(Extract, RefusesCoordinatesBeyondAScan) {
 }
 
 TEST(Extract, StopsWhenCancelled) {
-  const Cloud cube{test::cube(0.2f, 0.005f), std::nullopt};
+  const Cloud cube{test::cube(0.2f, 0.005f), std::nullopt, {}};
   int polls = 0;
   auto r = extract(cube, {}, [&] { return ++polls > 3; });
   ASSERT_FALSE(r.ok());
@@ -594,7 +594,7 @@ TEST(Clean, AChunkedScanKeepsWhatItsWholeCloudKeeps) {
   for (float tolerance : {0.f, 0.001f, 0.005f}) {
     SCOPED_TRACE(tolerance);
     CleanReport report;
-    const Cloud whole = clean({all, std::nullopt}, tolerance, &report);
+    const Cloud whole = clean({all, std::nullopt, {}}, tolerance, &report);
     EXPECT_EQ(report.kept + report.duplicates, all.size());
     EXPECT_GT(report.duplicates, 0u);
     DuplicateFilter filter(tolerance);  // fed in chunks of 7, growing its table as it goes
@@ -611,7 +611,7 @@ TEST(Clean, WithoutToleranceEveryCopyOfAKeptPointGoes) {
   const float a = 0.5f, b = std::nextafter(0.5f, 1.f);
   CleanReport report;
   const Cloud kept = clean({{Vec3(a, 0, 0), Vec3(b, 0, 0), Vec3(b, 0, 0), Vec3(b, 0, 0), Vec3(0, -0.f, 0), Vec3(0, 0, 0)},
-                            std::nullopt},
+                            std::nullopt, {}},
                            0.f, &report);
   EXPECT_EQ(kept.points, (Points{Vec3(a, 0, 0), Vec3(b, 0, 0), Vec3(0, -0.f, 0)}));
   EXPECT_EQ(report.duplicates, 3u);
@@ -646,7 +646,7 @@ TEST(VisibleSize, HeightAndHorizontalExtentsWhateverTheTurnAboutUp) {
 }
 
 TEST(Extract, WithoutKeypointsStopsAfterTheSurfaces) {
-  const Cloud cube{test::cube(0.3f, 0.006f), std::nullopt};
+  const Cloud cube{test::cube(0.3f, 0.006f), std::nullopt, {}};
   FeatureParams p;
   p.find_keypoints = false;
   auto f = extract(cube, p);

@@ -161,7 +161,7 @@ FeatureState features_of(const Cloud& c, const KeypointParams& kp, int neighbour
 TEST(KeypointOptions, WithoutTheCapABroadSphereHasKeypoints) {
   // A 1 m ball sampled at ~1.3 cm: r ~ 3.7 cm, rho1 = sqrt(2) m > 8 r = 0.3 m: flat for the capped
   // detector, keypoints every rho1 without the cap (the paper's eq. 3 has none).
-  const Cloud c{test::sphere(1.f, 60000), std::nullopt};
+  const Cloud c{test::sphere(1.f, 60000), std::nullopt, {}};
   KeypointParams capped;
   EXPECT_TRUE(features_of(c, capped).keypoints.empty());
   KeypointParams uncapped;
@@ -180,7 +180,7 @@ TEST(KeypointOptions, ClaimsOfRhoOneAloneLetKeypointsCloserThanR) {
   Points pts = test::height_field(0.15f, 0.003f, [](float x, float y) {
     return 0.004f * std::sin(x * 300) * std::sin(y * 300);  // bumps ~1 cm apart, curvature ~360 1/m
   });
-  const Cloud c{pts, Vec3(0, 0, 1)};
+  const Cloud c{pts, Vec3(0, 0, 1), {}};
   KeypointParams floor_r;  // claim_min_supports = 1
   floor_r.exclude_boundary = false;
   KeypointParams rho_only = floor_r;
@@ -204,7 +204,7 @@ TEST(KeypointOptions, TheBoundaryBandSetsHowCloseToTheRimKeypointsMayBe) {
   Points cap;
   for (const Vec3& p : test::sphere(0.05f, 6000))
     if (p.z() > 0.01f) cap.push_back(p);
-  const Cloud c{cap, Vec3(0, 0, 1)};
+  const Cloud c{cap, Vec3(0, 0, 1), {}};
   size_t previous = SIZE_MAX;
   for (float band : {0.f, 1.f, 2.f}) {
     KeypointParams kp;
@@ -225,7 +225,7 @@ TEST(KeypointOptions, TheBoundaryBandSetsHowCloseToTheRimKeypointsMayBe) {
 
 TEST(KeypointOptions, HarrisResponseKeypointsAreLocalMaximaAtTheCubeCorners) {
   const float side = 0.3f;
-  const Cloud c{test::cube(side, 0.006f), std::nullopt};
+  const Cloud c{test::cube(side, 0.006f), std::nullopt, {}};
   KeypointParams kp;
   kp.response = KeypointResponse::kHarris;
   const FeatureState f = features_of(c, kp);

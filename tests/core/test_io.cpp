@@ -84,6 +84,59 @@ TEST_F(IoTest, ASensorAtTheOriginRoundTripsInEveryFormat) {
   }
 }
 
+TEST_F(IoTest, ACamerasFrameRoundTripsInEveryFormat) {
+  Cloud cloud = random_cloud(50, 9);
+  cloud.sensor = Vec3(0.1f, -2.f, 1.2f);
+  cloud.frame = CameraFrame{Vec3(0.1f, 0.99f, -0.3f), Vec3(0.f, 0.3f, 0.95f), 57.f, 43.5f};
+  for (const char* ext : {".pcd", ".ply", ".xyz"}) {
+    SCOPED_TRACE(ext);
+    const std::string p = path(std::string("frame") + ext);
+    ASSERT_TRUE(write_cloud(p, cloud).ok());
+    Expected<Cloud> back = read_cloud(p);
+    ASSERT_TRUE(back.ok()) << back.error().message;
+    ASSERT_TRUE(back->frame.has_value());
+    EXPECT_TRUE(*back->frame == *cloud.frame);
+  }
+}
+
+// PCL's grabbers write a frame in the camera's coordinates (the default VIEWPOINT): the camera at the
+// origin looking along +z, the image's up along -y; a VIEWPOINT's rotation turns both.
+TEST_F(IoTest, ACameraViewTakesItsPoseFromTheViewpointAndItsFieldOfViewFromTheCaller) {
+  const std::string header = "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 1\nHEIGHT 1\n";
+  const std::string kinect = write("kinect.pcd", header + "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 1\nDATA ascii\n0 0 2\n");
+  Expected<Cloud> view = read_camera_view(kinect, 57, 43);
+  ASSERT_TRUE(view.ok()) << view.error().message;
+  ASSERT_TRUE(view->sensor && view->frame);
+  EXPECT_EQ(*view->sensor, Vec3::Zero());
+  EXPECT_TRUE(view->frame->axis.isApprox(Vec3::UnitZ()));
+  EXPECT_TRUE(view->frame->up.isApprox(-Vec3::UnitY()));
+  EXPECT_EQ(view->frame->fov_h_deg, 57.f);
+  EXPECT_EQ(view->frame->fov_v_deg, 43.f);
+  EXPECT_FALSE(read_cloud(kinect)->sensor.has_value());  // read as a plain cloud, the default says nothing
+
+  // A quarter turn about x (w = x = sqrt(1/2)) takes +z to -y and -y to -z; the translation is the sensor.
+  const std::string turned = write("turned.pcd", header + "VIEWPOINT 1 2 3 0.70710678 0.70710678 0 0\nPOINTS 1\nDATA ascii\n0 0 2\n");
+  view = read_camera_view(turned, 57, 43);
+  ASSERT_TRUE(view.ok()) << view.error().message;
+  EXPECT_EQ(*view->sensor, Vec3(1, 2, 3));
+  EXPECT_TRUE(view->frame->axis.isApprox(-Vec3::UnitY(), 1e-5f)) << view->frame->axis.transpose();
+  EXPECT_TRUE(view->frame->up.isApprox(-Vec3::UnitZ(), 1e-5f)) << view->frame->up.transpose();
+
+  Cloud xyz = random_cloud(5, 1);
+  ASSERT_TRUE(write_cloud(path("plain.xyz"), xyz).ok());
+  auto not_pcd = read_camera_view(path("plain.xyz"), 57, 43);
+  ASSERT_FALSE(not_pcd.ok());
+  EXPECT_NE(not_pcd.error().message.find("plain.xyz"), std::string::npos);
+  EXPECT_NE(not_pcd.error().message.find("VIEWPOINT"), std::string::npos);
+  auto bad_fov = read_camera_view(kinect, 57, 180);
+  ASSERT_FALSE(bad_fov.ok());
+  EXPECT_EQ(bad_fov.error().code, ErrorCode::kInvalidArgument);
+  const std::string zero = write("zero.pcd", header + "VIEWPOINT 0 0 0 0 0 0 0\nPOINTS 1\nDATA ascii\n0 0 2\n");
+  auto no_rotation = read_camera_view(zero, 57, 43);
+  ASSERT_FALSE(no_rotation.ok());
+  EXPECT_NE(no_rotation.error().message.find("not a rotation"), std::string::npos);
+}
+
 TEST_F(IoTest, CloudWithoutSensorAndWithNanRoundTrips) {
   Cloud cloud;
   cloud.points = {Vec3(1, 2, 3), Vec3(std::nanf(""), 0, 0), Vec3(-1, -2, -3)};

@@ -219,7 +219,7 @@ TEST(Novelty, JoinsThatOfTheCloudsTopDownPrefix) {
     ASSERT_TRUE(u.ok());
     EXPECT_EQ(u->novelty, b->novelty);
     // Too small for a prefix: every 4th of the first 1000 points of the view (250, a prefix of 138).
-    Cloud few{{}, t.cloud.sensor};
+    Cloud few{{}, t.cloud.sensor, {}};
     for (size_t i = 0; i < 1000 && i < t.cloud.points.size(); i += 4) few.points.push_back(t.cloud.points[i]);
     auto c = classify(s.model, few), d = classify(*before, few);
     ASSERT_TRUE(c.ok() && d.ok());

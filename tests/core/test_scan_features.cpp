@@ -69,7 +69,7 @@ TEST(ScanFeatures, EndOnTheStateExtractGivesTheAccumulatedCloud) {
 // reaches every memo entry it must.
 TEST(ScanFeatures, KeypointOptionsEndOnTheStateExtractGives) {
   // A box corner and a ball, seen from one side: corners, curved patches and a view boundary.
-  Cloud scene{test::jitter(test::cube(0.3f, 0.008f), 0.0005f, 5), Vec3(1.2f, 0.9f, 1.1f)};
+  Cloud scene{test::jitter(test::cube(0.3f, 0.008f), 0.0005f, 5), Vec3(1.2f, 0.9f, 1.1f), {}};
   for (const Vec3& p : test::sphere(0.1f, 3000, Vec3(0.5f, 0.15f, 0.1f))) scene.points.push_back(p);
   struct Option {
     const char* name;

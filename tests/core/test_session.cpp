@@ -253,12 +253,12 @@ TEST(ScanSession, NothingToDecideBeforeEnoughPoints) {
   ASSERT_TRUE(model);
   auto session = *ScanSession::create(model, {});
   const TrainingCloud view = test::synthetic_views(1, 1, 51)[0];
-  auto first = session->add(Cloud{{view.cloud.points.begin(), view.cloud.points.begin() + 15}, view.cloud.sensor});
+  auto first = session->add(Cloud{{view.cloud.points.begin(), view.cloud.points.begin() + 15}, view.cloud.sensor, {}});
   ASSERT_TRUE(first.ok());
   EXPECT_EQ(first->winner, -1);  // fewer than FeatureParams::min_points (20)
   EXPECT_EQ(first->points, 15u);
   EXPECT_FALSE(first->settled);
-  auto second = session->add(Cloud{{view.cloud.points.begin() + 15, view.cloud.points.begin() + 400}, view.cloud.sensor});
+  auto second = session->add(Cloud{{view.cloud.points.begin() + 15, view.cloud.points.begin() + 400}, view.cloud.sensor, {}});
   ASSERT_TRUE(second.ok());
   EXPECT_GE(second->winner, 0);
   EXPECT_EQ(second->chunk_index, 1u);
@@ -292,22 +292,22 @@ TEST(ScanSession, LimitsAndBadInput) {
   sp.max_chunk_points = 100;
   sp.max_points = 150;
   auto session = *ScanSession::create(model, sp);
-  Cloud far{{Vec3(0, 0, 0), Vec3(3e6f, 0, 0)}, std::nullopt};
+  Cloud far{{Vec3(0, 0, 0), Vec3(3e6f, 0, 0)}, std::nullopt, {}};
   auto bad = session->add(far);
   ASSERT_FALSE(bad.ok());
   EXPECT_EQ(bad.error().code, ErrorCode::kInvalidArgument);
   EXPECT_NE(bad.error().message.find("point 1 of chunk 0"), std::string::npos) << bad.error().message;
-  Cloud nan{{Vec3(0, 0, 0), Vec3(NAN, 0, 0)}, std::nullopt};  // dropped and counted, as extract() does
+  Cloud nan{{Vec3(0, 0, 0), Vec3(NAN, 0, 0)}, std::nullopt, {}};  // dropped and counted, as extract() does
   auto dropped = session->add(nan);
   ASSERT_TRUE(dropped.ok()) << dropped.error().message;
   EXPECT_EQ(dropped->points, 1u);
 
   const TrainingCloud view = test::synthetic_views(1, 1, 61)[0];
-  Cloud big{{view.cloud.points.begin(), view.cloud.points.begin() + 101}, std::nullopt};
+  Cloud big{{view.cloud.points.begin(), view.cloud.points.begin() + 101}, std::nullopt, {}};
   EXPECT_EQ(session->add(big).error().code, ErrorCode::kResourceExhausted);
-  Cloud ok{{view.cloud.points.begin(), view.cloud.points.begin() + 100}, view.cloud.sensor};
+  Cloud ok{{view.cloud.points.begin(), view.cloud.points.begin() + 100}, view.cloud.sensor, {}};
   ASSERT_TRUE(session->add(ok).ok());
-  Cloud more{{view.cloud.points.begin() + 100, view.cloud.points.begin() + 200}, view.cloud.sensor};
+  Cloud more{{view.cloud.points.begin() + 100, view.cloud.points.begin() + 200}, view.cloud.sensor, {}};
   auto over = session->add(more);  // 101 held + 100 > 150: refused whole, never cut unsaid
   ASSERT_FALSE(over.ok());
   EXPECT_EQ(over.error().code, ErrorCode::kResourceExhausted);
@@ -315,7 +315,7 @@ TEST(ScanSession, LimitsAndBadInput) {
             std::string::npos) << over.error().message;
   EXPECT_NE(over.error().message.find("it holds 101"), std::string::npos) << over.error().message;
   // The session is as it was: a chunk that fits is taken, all of it.
-  Cloud fits{{view.cloud.points.begin() + 100, view.cloud.points.begin() + 149}, view.cloud.sensor};
+  Cloud fits{{view.cloud.points.begin() + 100, view.cloud.points.begin() + 149}, view.cloud.sensor, {}};
   auto taken = session->add(fits);
   ASSERT_TRUE(taken.ok()) << taken.error().message;
   EXPECT_EQ(taken->chunk_index, 2u);

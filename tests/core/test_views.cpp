@@ -178,7 +178,7 @@ TEST(RotateAboutCentroid, KeepsTheCentroidAndTurnsTheSensor) {
   const Cloud t = rotate_about_centroid(c, half_turn_x);
   EXPECT_TRUE(t.sensor->isApprox(Vec3(1, 1, -3), 1e-5f));
   EXPECT_TRUE(t.points[0].isApprox(Vec3(0, 2, 0), 1e-5f));
-  EXPECT_FALSE(rotate_about_centroid(Cloud{c.points, std::nullopt}, half_turn_x).sensor);
+  EXPECT_FALSE(rotate_about_centroid(Cloud{c.points, std::nullopt, {}}, half_turn_x).sensor);
 }
 
 TEST(Scale, HeightExtentAndGround) {
@@ -300,7 +300,7 @@ TEST(PaperViewpoints, SixAroundAtThirtyDegreesAndThreeRadii) {
 TEST(TopDown, OrderIsByDescendingZThenIndex) {
   const Points pts = {Vec3(0, 0, 1), Vec3(0, 0, 3), Vec3(0, 0, std::nanf("")), Vec3(5, 5, 1), Vec3(0, 0, 2)};
   EXPECT_EQ(top_down_order(pts), (std::vector<uint32_t>{1, 4, 0, 3, 2}));
-  Cloud c{pts, Vec3(9, 9, 9)};
+  Cloud c{pts, Vec3(9, 9, 9), {}};
   const Cloud top2 = reveal_top_down(c, 2);
   ASSERT_EQ(top2.points.size(), 2u);
   EXPECT_EQ(top2.points[0].z(), 3.f);
@@ -340,7 +340,7 @@ TEST(StageCuts, KeypointPrefixHoldsExactlyTheKHighestKeypoints) {
   const std::vector<float> heights = {0.1f, 0.95f, 0.5f, 0.7f, 0.3f};  // unsorted, as extract() gives them
   for (size_t k = 1; k <= heights.size(); ++k) {
     const size_t count = keypoint_prefix(view, heights, k, 0.f);
-    const Cloud prefix = reveal_top_down({view, std::nullopt}, count);
+    const Cloud prefix = reveal_top_down({view, std::nullopt, {}}, count);
     const float lowest = prefix.points.back().z();
     const size_t inside = std::count_if(heights.begin(), heights.end(), [&](float h) { return h >= lowest - 1e-6f; });
     EXPECT_EQ(inside, k) << "k = " << k;
@@ -364,7 +364,7 @@ TEST(StageCuts, FractionPrefixHoldsTheFractionOfTheFullCloud) {
   EXPECT_EQ(fraction_prefix(1500, 10000, 0.20), 1500u);  // the view is smaller: all of it
   EXPECT_EQ(fraction_prefix(1500, 0, 0.20), 0u);
   const Points view = column(3000);
-  const Cloud prefix = reveal_top_down({view, std::nullopt}, fraction_prefix(view.size(), 10000, 0.1));
+  const Cloud prefix = reveal_top_down({view, std::nullopt, {}}, fraction_prefix(view.size(), 10000, 0.1));
   EXPECT_NEAR(double(prefix.points.size()) / 10000.0, 0.10, 1e-9);
 }
 

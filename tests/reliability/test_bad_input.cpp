@@ -51,7 +51,7 @@ Cloud Plane(size_t n) {
   for (Vec3& p : c.points) p.z() = 0;
   return c;
 }
-Cloud Same(size_t n) { return Cloud{Points(n, Vec3(0.1f, 0.2f, 0.3f)), std::nullopt}; }
+Cloud Same(size_t n) { return Cloud{Points(n, Vec3(0.1f, 0.2f, 0.3f)), std::nullopt, {}}; }
 Cloud With(Cloud c, size_t i, Vec3 p) {
   c.points.at(i) = p;
   return c;

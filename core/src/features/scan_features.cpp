@@ -22,6 +22,7 @@ struct ScanFeatures::Impl {
   FeatureState st;
   std::vector<std::optional<Vec3>> viewpoint;  // per point: the sensor of the chunk it came in
   std::optional<Vec3> sensor;
+  size_t chunks = 0;
   std::unique_ptr<VoxelIndex> index;           // cells of the support radius
   BoundaryMemo memo;
   std::vector<std::optional<Descriptor>> cache;
@@ -124,6 +125,7 @@ Expected<size_t> ScanFeatures::add(const Cloud& chunk, const CancelFn& cancel) {
   if (Status s = check_cloud(chunk, "the chunk"); !s.ok()) return s.error();
   FeatureState& st = m.st;
   FeatureDiagnostics& diag = st.diagnostics;
+  st.cloud.frame = joined_frame(st.cloud, chunk, m.chunks++ == 0);
   if (chunk.sensor) m.sensor = chunk.sensor;
   auto t0 = std::chrono::steady_clock::now();
   std::vector<uint32_t> added;
@@ -197,7 +199,10 @@ Expected<FeatureState> extract_fused(const Cloud& cloud, const std::vector<std::
   std::vector<Cloud> groups;
   for (size_t i = 0; i < cloud.points.size(); ++i) {
     auto g = std::find_if(groups.begin(), groups.end(), [&](const Cloud& c) { return c.sensor == point_sensors[i]; });
-    if (g == groups.end()) g = groups.insert(groups.end(), Cloud{{}, point_sensors[i]});
+    if (g == groups.end()) {
+      g = groups.insert(groups.end(), Cloud{{}, point_sensors[i], {}});
+      if (point_sensors[i] == cloud.sensor) g->frame = cloud.frame;  // the cloud's own view keeps its frame
+    }
     g->points.push_back(cloud.points[i]);
   }
   ScanFeatures scan(params);

@@ -51,6 +51,7 @@ Cloud clean(const Cloud& cloud, float duplicate_tolerance_m, CleanReport* report
   r.input = cloud.points.size();
   Cloud out;
   out.sensor = cloud.sensor;
+  out.frame = cloud.frame;
   out.points.reserve(cloud.points.size());
   DuplicateFilter filter(duplicate_tolerance_m, cloud.points.size());
   for (const Vec3& p : cloud.points) {

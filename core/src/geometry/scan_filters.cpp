@@ -156,6 +156,7 @@ Cloud remove_ground_plane(const Cloud& cloud, const ScanFilterParams& params, si
   // there is nothing but noise), not only the band's.
   Cloud out;
   out.sensor = cloud.sensor;
+  out.frame = cloud.frame;
   out.points.reserve(cloud.points.size());
   for (const Vec3& p : cloud.points) {
     if (p.allFinite() && height_above(*plane, p) <= params.ground_distance_m) continue;
@@ -242,6 +243,7 @@ Cloud isolated_removed(const Cloud& cloud, const Points& fin, float spacing, flo
   for (uint32_t i = 0; i < n; ++i) members[fill[cell_of[i]]++] = i;
   Cloud out;
   out.sensor = cloud.sensor;
+  out.frame = cloud.frame;
   out.points.reserve(n);
   for (uint32_t i = 0; i < n; ++i) {
     const Vec3& p = fin[i];
@@ -291,6 +293,7 @@ Cloud voxel_downsample(const Cloud& cloud, float leaf_m) {
   grid.filter(out_pcl);
   Cloud out;
   out.sensor = cloud.sensor;
+  out.frame = cloud.frame;
   out.points.reserve(out_pcl.size());
   for (const pcl::PointXYZ& p : out_pcl) out.points.emplace_back(p.x, p.y, p.z);
   return out;

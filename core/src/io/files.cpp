@@ -2,6 +2,7 @@
 // io_off.cpp (OFF, OBJ), io_ply.cpp and io_pcd.cpp.
 #include "glimpse/io/files.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -119,15 +120,31 @@ Status write_bytes(const std::string& path, const std::string& data) {
   return {};
 }
 
-bool parse_sensor_comment(std::string_view comment, Vec3& sensor) {
+bool parse_view_comment(std::string_view comment, Cloud& view) {
   std::vector<std::string_view> tok;
   split(comment, tok);
-  if (tok.size() != 4 || tok[0] != "glimpse_sensor") return false;
-  double v[3];
-  for (int i = 0; i < 3; ++i)
-    if (!parse_double(tok[1 + i], v[i])) return false;
-  sensor = Vec3(float(v[0]), float(v[1]), float(v[2]));
+  const bool sensor = tok.size() == 4 && tok[0] == "glimpse_sensor", frame = tok.size() == 9 && tok[0] == "glimpse_frame";
+  if (!sensor && !frame) return false;
+  double v[8];
+  for (size_t i = 1; i < tok.size(); ++i)
+    if (!parse_double(tok[i], v[i - 1])) return false;
+  if (sensor) view.sensor = Vec3(float(v[0]), float(v[1]), float(v[2]));
+  if (frame)
+    view.frame = CameraFrame{Vec3(float(v[0]), float(v[1]), float(v[2])), Vec3(float(v[3]), float(v[4]), float(v[5])),
+                             float(v[6]), float(v[7])};
   return true;
+}
+
+void append_view_comments(std::string& out, const Cloud& cloud, std::string_view marker) {
+  auto line = [&](const char* key, std::initializer_list<float> values) {
+    out += marker;
+    out += key;
+    for (float v : values) out += ' ', append_float(out, v);
+    out += '\n';
+  };
+  if (cloud.sensor) line("glimpse_sensor", {cloud.sensor->x(), cloud.sensor->y(), cloud.sensor->z()});
+  if (const auto& f = cloud.frame)
+    line("glimpse_frame", {f->axis.x(), f->axis.y(), f->axis.z(), f->up.x(), f->up.y(), f->up.z(), f->fov_h_deg, f->fov_v_deg});
 }
 
 namespace {
@@ -142,8 +159,7 @@ Expected<Cloud> read_xyz(const std::string& path, std::string_view text) {
   while (lines.next(line)) {
     const std::string_view raw = trim(line);
     if (!raw.empty() && raw.front() == '#') {
-      Vec3 s;
-      if (parse_sensor_comment(raw.substr(1), s)) cloud.sensor = s;
+      parse_view_comment(raw.substr(1), cloud);
       continue;
     }
     split(strip_comment(line), tok, /*commas=*/true);
@@ -174,13 +190,7 @@ Expected<Cloud> read_xyz(const std::string& path, std::string_view text) {
 Status write_xyz(const std::string& path, const Cloud& cloud) {
   std::string s;
   s.reserve(cloud.points.size() * 30 + 64);
-  if (cloud.sensor) {
-    s += "# glimpse_sensor ";
-    for (int i = 0; i < 3; ++i) {
-      append_float(s, (*cloud.sensor)[i]);
-      s += i < 2 ? ' ' : '\n';
-    }
-  }
+  append_view_comments(s, cloud, "# ");
   for (const Vec3& p : cloud.points) {
     for (int i = 0; i < 3; ++i) {
       append_float(s, p[i]);
@@ -241,7 +251,7 @@ Expected<Cloud> read_cloud(const std::string& path) {
     if (ext == ".pcd") return read_pcd(path, *data);
     if (ext == ".xyz" || ext == ".txt" || ext == ".csv") return read_xyz(path, *data);
     Cloud cloud;
-    Expected<Mesh> mesh = ext == ".ply"   ? read_ply(path, *data, true, &cloud.sensor)
+    Expected<Mesh> mesh = ext == ".ply"   ? read_ply(path, *data, true, &cloud)
                           : ext == ".off" ? read_off(path, *data)
                           : ext == ".stl" ? read_stl(path, *data)
                                           : read_obj(path, *data);
@@ -253,6 +263,28 @@ Expected<Cloud> read_cloud(const std::string& path) {
   } catch (const std::exception& e) {
     return internal_error(path + ": " + e.what());
   }
+}
+
+Expected<Cloud> read_camera_view(const std::string& path, float fov_h_deg, float fov_v_deg) {
+  if (!(fov_h_deg > 0 && fov_h_deg < 180 && fov_v_deg > 0 && fov_v_deg < 180))
+    return invalid_argument(path + ": a camera's fields of view are in (0, 180) degrees, not " + std::to_string(fov_h_deg) +
+                            " x " + std::to_string(fov_v_deg));
+  if (extension(path) != ".pcd")
+    return invalid_argument(path + ": a camera's pose comes from a PCD VIEWPOINT; this is not a .pcd file");
+  Expected<std::string> data = read_file(path);
+  if (!data) return data.error();
+  if (data->empty()) return data_loss(path + ": empty file");
+  double v[7];
+  Expected<Cloud> cloud = read_pcd(path, *data, v);
+  if (!cloud) return cloud.error();
+  if (cloud->sensor && cloud->frame) return cloud;
+  const Eigen::Quaternionf q{static_cast<float>(v[3]), static_cast<float>(v[4]), static_cast<float>(v[5]), static_cast<float>(v[6])};
+  if (!q.coeffs().allFinite() || !(q.norm() > 1e-6f))
+    return data_loss(path + ": VIEWPOINT's rotation (w x y z) is not a rotation");
+  const Eigen::Matrix3f r = q.normalized().toRotationMatrix();
+  cloud->sensor = Vec3(float(v[0]), float(v[1]), float(v[2]));
+  cloud->frame = CameraFrame{r * Vec3::UnitZ(), r * -Vec3::UnitY(), fov_h_deg, fov_v_deg};
+  return cloud;
 }
 
 Status write_cloud(const std::string& path, const Cloud& cloud) {

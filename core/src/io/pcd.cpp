@@ -50,7 +50,8 @@ struct PcdHeader {
   uint64_t width = 0, height = 1, points = 0;
   bool have_points = false, have_width = false, binary = false;
   std::optional<Vec3> sensor;            // VIEWPOINT, when not the identity
-  std::optional<Vec3> commented_sensor;  // "# glimpse_sensor x y z": says "at the origin" too
+  Cloud commented;  // "# glimpse_sensor x y z" (says "at the origin" too) and "# glimpse_frame ..." comments
+  double viewpoint[7] = {0, 0, 0, 1, 0, 0, 0};  // VIEWPOINT: translation, then rotation w x y z
 };
 
 // One header line (its tokens `tok`, of line `ln`) into `h`; `data` is set on the DATA line.
@@ -96,6 +97,7 @@ Status read_header_line(const std::string& path, size_t ln, const std::vector<st
     if (tok.size() != 8) return text_error(path, ln, "VIEWPOINT needs 7 numbers");
     for (int i = 0; i < 7; ++i)
       if (!parse_double(tok[1 + i], v[i])) return text_error(path, ln, "bad VIEWPOINT value");
+    std::copy(v, v + 7, h.viewpoint);
     const bool identity = v[0] == 0 && v[1] == 0 && v[2] == 0 && v[3] == 1 && v[4] == 0 && v[5] == 0 && v[6] == 0;
     if (!identity) h.sensor = Vec3(float(v[0]), float(v[1]), float(v[2]));
     return {};
@@ -122,8 +124,7 @@ Expected<PcdHeader> read_header(const std::string& path, LineCursor& lines) {
   bool data = false;
   while (!data && lines.next(line)) {
     if (const std::string_view raw = trim(line); !raw.empty() && raw.front() == '#') {
-      Vec3 s;
-      if (parse_sensor_comment(raw.substr(1), s)) h.commented_sensor = s;
+      parse_view_comment(raw.substr(1), h.commented);
       continue;
     }
     split(strip_comment(line), tok);
@@ -221,7 +222,7 @@ Status read_ascii_body(const std::string& path, LineCursor& lines, const PcdHead
 
 }  // namespace
 
-Expected<Cloud> read_pcd(const std::string& path, std::string_view text) {
+Expected<Cloud> read_pcd(const std::string& path, std::string_view text, double* viewpoint) {
   LineCursor lines(text);
   auto header = read_header(path, lines);
   if (!header) return header.error();
@@ -229,7 +230,9 @@ Expected<Cloud> read_pcd(const std::string& path, std::string_view text) {
   auto layout = field_layout(path, lines.line_no(), h.fields);
   if (!layout) return layout.error();
   Cloud cloud;
-  cloud.sensor = h.commented_sensor ? h.commented_sensor : h.sensor;
+  cloud.sensor = h.commented.sensor ? h.commented.sensor : h.sensor;
+  cloud.frame = h.commented.frame;
+  if (viewpoint) std::copy(h.viewpoint, h.viewpoint + 7, viewpoint);
   const size_t data_line = lines.line_no();
   const uint64_t min_bytes = h.binary ? layout->record_bytes : 2 * layout->columns;
   // Ascii: the last line may lack its newline. Binary: every record is whole (no +1, or the last one
@@ -246,13 +249,7 @@ Expected<Cloud> read_pcd(const std::string& path, std::string_view text) {
 Status write_pcd(const std::string& path, const Cloud& cloud) {
   const std::string n = std::to_string(cloud.points.size());
   std::string s = "# .PCD v0.7 - Point Cloud Data file format (written by glimpse)\n";
-  if (cloud.sensor) {  // the comment keeps a sensor at the origin, which VIEWPOINT alone cannot say
-    s += "# glimpse_sensor ";
-    for (int a = 0; a < 3; ++a) {
-      append_float(s, (*cloud.sensor)[a]);
-      s += a < 2 ? ' ' : '\n';
-    }
-  }
+  append_view_comments(s, cloud, "# ");  // the sensor comment says "at the origin", which VIEWPOINT cannot
   s += "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH " + n + "\nHEIGHT 1\n";
   s += "VIEWPOINT ";
   if (cloud.sensor) {

@@ -181,8 +181,8 @@ Expected<Property> read_property(const std::string& path, size_t ln, const std::
   return p;
 }
 
-// The header, up to end_header; a "comment glimpse_sensor x y z" line sets *sensor.
-Expected<PlyHeader> read_header(const std::string& path, LineCursor& lines, std::optional<Vec3>* sensor) {
+// The header, up to end_header; "comment glimpse_sensor ..." and "comment glimpse_frame ..." lines set *view.
+Expected<PlyHeader> read_header(const std::string& path, LineCursor& lines, Cloud* view) {
   std::string_view line;
   std::vector<std::string_view> tok;
   if (!lines.next(line) || trim(line) != "ply") return text_error(path, 1, "missing 'ply' header");
@@ -193,8 +193,7 @@ Expected<PlyHeader> read_header(const std::string& path, LineCursor& lines, std:
     if (tok.empty()) continue;
     const size_t ln = lines.line_no();
     if (tok[0] == "comment" || tok[0] == "obj_info") {
-      Vec3 s;
-      if (sensor && tok[0] == "comment" && parse_sensor_comment(trim(line).substr(7), s)) *sensor = s;
+      if (view && tok[0] == "comment") parse_view_comment(trim(line).substr(7), *view);
     } else if (tok[0] == "format") {
       if (tok.size() < 2) return text_error(path, ln, "incomplete format line");
       if (tok[1] == "ascii") h.format = Format::kAscii;
@@ -311,10 +310,9 @@ Status read_element(const std::string& path, Body& body, Format format, const El
 
 }  // namespace
 
-Expected<Mesh> read_ply(const std::string& path, std::string_view text, bool vertices_only,
-                        std::optional<Vec3>* sensor) {
+Expected<Mesh> read_ply(const std::string& path, std::string_view text, bool vertices_only, Cloud* view) {
   LineCursor lines(text);
-  auto header = read_header(path, lines, sensor);
+  auto header = read_header(path, lines, view);
   if (!header) return header.error();
   Body body(path, text, lines.offset(), lines.line_no() + 1, header->format);
   Mesh mesh;
@@ -336,13 +334,7 @@ Expected<Mesh> read_ply(const std::string& path, std::string_view text, bool ver
 
 Status write_ply(const std::string& path, const Cloud& cloud) {
   std::string s = "ply\nformat binary_little_endian 1.0\ncomment written by glimpse\n";
-  if (cloud.sensor) {
-    s += "comment glimpse_sensor ";
-    for (int i = 0; i < 3; ++i) {
-      append_float(s, (*cloud.sensor)[i]);
-      s += i < 2 ? ' ' : '\n';
-    }
-  }
+  append_view_comments(s, cloud, "comment ");
   s += "element vertex " + std::to_string(cloud.points.size()) +
        "\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
   const size_t header = s.size();

@@ -61,15 +61,20 @@ Status write_bytes(const std::string& path, const std::string& data);
 // Fan-triangulates a polygon (already validated indices) into `faces`.
 void add_fan(const std::vector<int>& polygon, std::vector<Eigen::Vector3i>& faces);
 
-// The cloud readers keep a sensor position stored by our writers as "glimpse_sensor x y z".
-bool parse_sensor_comment(std::string_view comment, Vec3& sensor);
+// The cloud readers keep a view stored by our writers as comments: "glimpse_sensor x y z" (Cloud.sensor)
+// and "glimpse_frame ax ay az ux uy uz fov_h fov_v" (Cloud.frame). True when `comment` (after its
+// comment marker) is one of them; it then sets that member of `view`.
+bool parse_view_comment(std::string_view comment, Cloud& view);
+// Those comments of `cloud`, each line starting with `marker` ("# ", "comment ").
+void append_view_comments(std::string& out, const Cloud& cloud, std::string_view marker);
 
 Expected<Mesh> read_off(const std::string& path, std::string_view text);
 Expected<Mesh> read_obj(const std::string& path, std::string_view text);
 Expected<Mesh> read_stl(const std::string& path, std::string_view data);  // binary or ASCII
-Expected<Mesh> read_ply(const std::string& path, std::string_view text, bool vertices_only,
-                        std::optional<Vec3>* sensor);
-Expected<Cloud> read_pcd(const std::string& path, std::string_view text);
+// `view`: where a cloud's comments (parse_view_comment) go; nullptr for a mesh.
+Expected<Mesh> read_ply(const std::string& path, std::string_view text, bool vertices_only, Cloud* view);
+// `viewpoint`: when given, the VIEWPOINT's 7 numbers (translation, rotation w x y z; the default's when none).
+Expected<Cloud> read_pcd(const std::string& path, std::string_view text, double* viewpoint = nullptr);
 Status write_ply(const std::string& path, const Cloud& cloud);
 Status write_pcd(const std::string& path, const Cloud& cloud);
 

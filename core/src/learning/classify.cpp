@@ -92,6 +92,7 @@ Expected<Classification> classify_fused(const Model& model, const Cloud& cloud,
     // point, and a scan streamed ends as the same scan classified whole.
     Cloud kept;
     kept.sensor = cloud.sensor;
+    kept.frame = cloud.frame;
     std::vector<std::optional<Vec3>> kept_sensors;
     DuplicateFilter duplicates(model.impl->params.features.duplicate_tolerance_m, cloud.points.size());
     clean_into(cloud, point_sensors, duplicates, kept, point_sensors.empty() ? nullptr : &kept_sensors);

@@ -96,6 +96,7 @@ void judge_unknown(const Model& model, const MethodDecision& decision, const Clo
 
 void judge_cloud(const Model& model, const MethodDecision& decision, const CloudFeatures& f, const Cloud& points,
                  Classification& c) {
+  c.frame_cut = frame_cut(points);
   c.warning = size_warning(model.stats, points);
   c.outside_learnt_sizes = !c.warning.empty();
   judge_unknown(model, decision, f, c);
@@ -129,7 +130,7 @@ std::string size_warning(const TrainingSummary& stats, const Cloud& cloud) {
     std::snprintf(buf, sizeof buf, "the cloud spans %.3g m, %s: %s? Clouds are in metres", extent, known, unit);
     return buf;
   }
-  if (extent < stats.min_extent_m / 4) {
+  if (extent < stats.min_extent_m / 4 && !frame_cut(cloud).any()) {  // a cut cloud is part of its object
     std::snprintf(buf, sizeof buf, "the cloud spans only %.3g m, %s: another unit (clouds are in metres)?", extent, known);
     return buf;
   }

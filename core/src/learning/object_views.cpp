@@ -49,7 +49,7 @@ Points full_cloud(const Mesh& mesh, std::string_view key, const ViewRecipe& reci
 }
 
 std::vector<Cloud> ideal_views(const Points& full, std::string_view key, bool any_pose, const ViewRecipe& recipe) {
-  if (recipe.views == 0) return {Cloud{full, std::nullopt}};
+  if (recipe.views == 0) return {Cloud{full, std::nullopt, {}}};
   const uint64_t seed = object_seed(recipe.seed, key);
   std::vector<Cloud> out;
   for (size_t v = 0; v < recipe.views; ++v)

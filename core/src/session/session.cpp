@@ -83,6 +83,7 @@ class Session final : public ScanSession {
   DuplicateFilter duplicates_;                      // filtered(): clean()'s rule on the raw points
   Cloud raw_;                                       // filtered(): the points as sent, cleaned
   std::vector<std::optional<Vec3>> raw_sensors_;    // per raw point: its chunk's sensor
+  size_t raw_chunks_ = 0;
   size_t fed_ = 0;                                  // raw points added to features_
   size_t filters_at_ = 0;                           // raw points when the filters last ran
   bool filters_change_ = false;                     // ... and whether they changed the scan
@@ -245,6 +246,7 @@ Expected<StreamDecision> Session::add(const Cloud& chunk) {
 }
 
 void Session::add_raw(const Cloud& chunk) {
+  raw_.frame = joined_frame(raw_, chunk, raw_chunks_++ == 0);
   clean_into(chunk, {}, duplicates_, raw_, &raw_sensors_);
   if (chunk.sensor) raw_.sensor = chunk.sensor;
 }
@@ -254,6 +256,7 @@ Expected<size_t> Session::feed_features() {
   while (fed_ < raw_.points.size()) {
     Cloud run;
     run.sensor = raw_sensors_[fed_];
+    run.frame = raw_.frame;  // none once the sensor moved (joined_frame)
     for (; fed_ < raw_.points.size() && raw_sensors_[fed_] == run.sensor; ++fed_) run.points.push_back(raw_.points[fed_]);
     auto kept = features_.add(run);
     if (!kept.ok()) return kept.error();
@@ -310,6 +313,7 @@ Expected<StreamDecision> Session::finish() {
   last_.unknown = c.unknown;
   last_.novelty = c.novelty;
   last_.unknown_reason = c.unknown_reason;
+  last_.frame_cut = c.frame_cut;
   last_.final = true;
   return last_;
 }

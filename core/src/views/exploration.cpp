@@ -42,6 +42,7 @@ Cloud reveal_top_down(const Cloud& cloud, size_t count) {
   const std::vector<uint32_t> order = top_down_order(cloud.points);
   Cloud out;
   out.sensor = cloud.sensor;
+  out.frame = cloud.frame;
   count = std::min(count, order.size());
   out.points.reserve(count);
   for (size_t i = 0; i < count; ++i) out.points.push_back(cloud.points[order[i]]);

@@ -116,6 +116,11 @@ Cloud rotate_about_centroid(const Cloud& cloud, const Eigen::Matrix3f& rotation)
   out.points.reserve(cloud.points.size());
   for (const Vec3& p : cloud.points) out.points.push_back(rotation * (p - centre) + centre);
   if (cloud.sensor) out.sensor = rotation * (*cloud.sensor - centre) + centre;
+  if (cloud.frame) {  // the camera turns with what it saw
+    out.frame = cloud.frame;
+    out.frame->axis = rotation * cloud.frame->axis;
+    out.frame->up = rotation * cloud.frame->up;
+  }
   return out;
 }
 

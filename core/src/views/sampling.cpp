@@ -18,7 +18,7 @@ double triangle_area(const Vec3& a, const Vec3& b, const Vec3& c) {
 
 }  // namespace
 
-Cloud mesh_vertices(const Mesh& mesh) { return Cloud{mesh.vertices, std::nullopt}; }
+Cloud mesh_vertices(const Mesh& mesh) { return Cloud{mesh.vertices, std::nullopt, {}}; }
 
 double surface_area(const Mesh& mesh) {
   double total = 0;

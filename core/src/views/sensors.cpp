@@ -226,6 +226,7 @@ Cloud depth_camera_scan(const RayScene& scene, const SensorPose& pose, const Dep
   if (right.norm() < 1e-6f) right = Vec3::UnitX();  // looking straight down or up
   right.normalize();
   const Vec3 up = right.cross(forward);
+  out.frame = CameraFrame{forward, up, p.fov_h_deg, p.fov_v_deg};
   const float fx = 0.5f * float(p.width) / std::tan(0.5f * p.fov_h_deg * kDeg);
   const float fy = 0.5f * float(p.height) / std::tan(0.5f * p.fov_v_deg * kDeg);
   const double focal_baseline = double(fx) * p.baseline_m;  // disparity (px) x depth (m)

@@ -28,8 +28,16 @@ Expected<Mesh> read_mesh(const std::string& path);
 // Sensor: a PCD VIEWPOINT other than the default "0 0 0 1 0 0 0" sets Cloud.sensor to its translation
 // (its rotation is ignored); files written by write_cloud also carry it as a "glimpse_sensor x y z"
 // comment, which wins over VIEWPOINT and can say "at the origin"; without it a PCD with the default
-// VIEWPOINT has no sensor (the format cannot tell the default from a sensor at the origin).
+// VIEWPOINT has no sensor (the format cannot tell the default from a sensor at the origin). A camera's
+// frame (Cloud.frame) comes from a "glimpse_frame ax ay az ux uy uz fov_h fov_v" comment alike.
 Expected<Cloud> read_cloud(const std::string& path);
+
+// A depth camera's single view in a .pcd as PCL writes one: the camera at the VIEWPOINT's translation
+// (the origin for the default VIEWPOINT: PCL's grabbers write frames in the camera's coordinates),
+// looking along its rotation's +z with the image's up along its -y, and these full fields of view
+// (degrees, in (0, 180)): Cloud.sensor and Cloud.frame. A file with glimpse_sensor and glimpse_frame
+// comments keeps its own. Another format, or fields of view outside (0, 180): an error naming the file.
+Expected<Cloud> read_camera_view(const std::string& path, float fov_h_deg, float fov_v_deg);
 
 // .pcd (ascii, fields x y z), .ply (binary_little_endian, float x y z), .xyz (ascii "x y z" lines).
 // Floats are printed with the shortest text that reads back bit-exactly.

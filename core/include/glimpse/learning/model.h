@@ -15,6 +15,7 @@
 #include "glimpse/cloud.h"
 #include "glimpse/expected.h"
 #include "glimpse/features/methods.h"
+#include "glimpse/geometry/frame_cut.h"
 #include "glimpse/geometry/scan_filters.h"
 
 namespace glimpse {
@@ -150,8 +151,12 @@ struct Classification {
   bool unknown = false;
   std::string unknown_reason;
   // The cloud spans more than 4 x the largest or less than a quarter of the smallest extent the model
-  // learnt (`warning` says which): unknown at every operating point, whatever its novelty.
+  // learnt (`warning` says which): unknown at every operating point, whatever its novelty. A cloud the
+  // camera's frame cuts is never too small (it is part of its object).
   bool outside_learnt_sizes = false;
+  // The edges of the camera's frame the object reaches (after the filters; none without a frame): the
+  // answer is of the part the frame lets through.
+  FrameCut frame_cut;
 };
 
 // The novelty above which a decision is "unknown" when `known_acceptance` (in (0, 1]) of the held-out
@@ -165,7 +170,8 @@ double novelty_threshold(const Calibration& calibration, double known_acceptance
 Status set_known_acceptance(const Model& model, Classification& classification, double known_acceptance);
 
 // A warning when the cloud's largest extent is more than 4x outside the extents the model learnt
-// ("the cloud spans 1700 m, the model knows 0.03-2.1 m objects: millimetres?"); empty otherwise.
+// ("the cloud spans 1700 m, the model knows 0.03-2.1 m objects: millimetres?"); empty otherwise. Never
+// too small when the camera's frame cuts the cloud (geometry/frame_cut.h).
 std::string size_warning(const TrainingSummary& stats, const Cloud& cloud);
 
 // Fold (0..folds-1) of every object: per category, the objects are shuffled (seeded) and dealt round

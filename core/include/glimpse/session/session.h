@@ -104,6 +104,7 @@ struct StreamDecision {
   bool unknown = false;
   double novelty = std::numeric_limits<double>::quiet_NaN();
   std::string unknown_reason;
+  FrameCut frame_cut;  // final decision only: the edges of the camera's frame the scan reaches (Classification)
 };
 
 // How many decisions in a row must be "unknown" before "unknown" settles: the longer of the stability

@@ -222,6 +222,7 @@ void stream_views(Protocol& P) {
         std::max<size_t>(1, static_cast<size_t>(std::lround(P.params.stream_chunk_fraction * double(P.full_points(v)))));
     Cloud part;
     part.sensor = cloud.sensor;
+    part.frame = cloud.frame;
     for (size_t begin = 0; begin < order.size(); begin += chunk) {
       const size_t end = std::min(order.size(), begin + chunk);
       part.points.clear();
