@@ -35,6 +35,7 @@ struct FileResult {
 Expected<Cloud> ReadInput(const std::string& file, const ClassifyOptions& o) {
   auto loaded = LoadFile(file);
   if (!loaded) return loaded.error();
+  if (Status s = ApplyCameraFov(*loaded, o.camera_fov, file); !s.ok()) return s.error();
   if (Status s = ApplySensor(*loaded, o.sensor, file); !s.ok()) return s.error();
   if (loaded->is_mesh)
     return MeshFileView(file, o.placement, o.protocol, o.whole ? std::nullopt : std::optional<int>(o.view));

@@ -86,6 +86,7 @@ Expected<Cloud> StreamView(const StreamOptions& o) {
   }
   auto file = LoadFile(o.file);
   if (!file) return file.error();
+  if (Status s = ApplyCameraFov(*file, o.camera_fov, o.file); !s.ok()) return s.error();
   if (Status s = ApplySensor(*file, o.sensor, o.file); !s.ok()) return s.error();
   if (file->is_mesh) {
     ViewRecipe protocol = o.protocol;
@@ -119,6 +120,7 @@ Expected<std::vector<Cloud>> StreamChunks(const StreamOptions& o) {
   std::vector<Cloud> chunks(ends.size());
   for (size_t i = 0; i < ends.size(); ++i) {
     chunks[i].sensor = scan.sensor;
+    chunks[i].frame = scan.frame;
     chunks[i].points.assign(scan.points.begin() + std::ptrdiff_t(i ? ends[i - 1] : 0),
                             scan.points.begin() + std::ptrdiff_t(ends[i]));
   }

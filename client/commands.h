@@ -11,6 +11,7 @@
 #include "client/connection.h"
 #include "client/inputs.h"
 #include "client/objects.h"
+#include "client/parse.h"
 
 namespace glimpse::client {
 
@@ -50,6 +51,7 @@ struct ClassifyOptions {
   bool view_given = false;   // --view or --whole was given (a cloud file, sent as it is, is warned)
   std::optional<Vec3> sensor;  // clouds: the sensor position, replacing the file's (a PCD's identity
                                // VIEWPOINT reads as "no sensor"; --sensor 0,0,0 says it is at the origin)
+  std::optional<FieldOfView> camera_fov;  // .pcd clouds: a depth camera's view, its pose the VIEWPOINT's
   bool json = false;         // one JSON object per file, errors included
   double known_acceptance = 0;  // the operating point of "unknown" (0: the model's default)
 };
@@ -70,6 +72,7 @@ struct StreamOptions {
   // (default 0); a cloud file streams as it is unless a view is asked for.
   std::optional<int> viewpoint;
   std::optional<Vec3> sensor;  // cloud files: as ClassifyOptions::sensor
+  std::optional<FieldOfView> camera_fov;  // as ClassifyOptions::camera_fov
   Placement placement;        // meshes: --up, --unit, --height
   ViewRecipe protocol;   // meshes: samples
   bool json = false;

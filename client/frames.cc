@@ -149,6 +149,7 @@ std::vector<Cloud> FrameChunks(const std::vector<Cloud>& frames, size_t chunk_po
       const size_t end = std::min(frame.points.size(), begin + step);
       Cloud c;
       c.sensor = frame.sensor;
+      c.frame = frame.frame;
       c.points.assign(frame.points.begin() + std::ptrdiff_t(begin), frame.points.begin() + std::ptrdiff_t(end));
       chunks.push_back(std::move(c));
       begin = end;

@@ -42,6 +42,16 @@ Status ApplySensor(LoadedFile& file, const std::optional<Vec3>& sensor, const st
   return {};
 }
 
+Status ApplyCameraFov(LoadedFile& file, const std::optional<FieldOfView>& fov, const std::string& path) {
+  if (!fov) return {};
+  if (file.is_mesh) return invalid_argument(path + ": --camera-fov is for a depth camera's .pcd; a mesh's view has its own camera");
+  Expected<Cloud> view = read_camera_view(path, fov->h_deg, fov->v_deg);
+  if (!view) return view.error();
+  file.cloud.sensor = view->sensor;
+  file.cloud.frame = view->frame;
+  return {};
+}
+
 Expected<LoadedFile> LoadFile(const std::string& path) {
   const std::string ext = Extension(path);
   LoadedFile out;

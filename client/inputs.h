@@ -39,6 +39,14 @@ Expected<LoadedFile> LoadFile(const std::string& path);
 // `sensor` (the user's --sensor) replaces a cloud file's own; a mesh's views carry their own sensor,
 // so giving one for a mesh is an error naming the file.
 Status ApplySensor(LoadedFile& file, const std::optional<Vec3>& sensor, const std::string& path);
+// A depth camera's full fields of view, degrees.
+struct FieldOfView {
+  float h_deg = 0, v_deg = 0;
+};
+// `fov` (the user's --camera-fov HxV): the cloud file is a depth camera's view as PCL writes one
+// (io's read_camera_view: its sensor and frame from the PCD VIEWPOINT); the answer then says where the
+// frame cuts the object. A mesh or another format is an error naming the file.
+Status ApplyCameraFov(LoadedFile& file, const std::optional<FieldOfView>& fov, const std::string& path);
 
 // Points on a mesh's surface, about `points` of them (kInvalidArgument for a mesh with no area).
 Expected<Cloud> SampleMesh(const Mesh& mesh, size_t points, uint64_t seed);

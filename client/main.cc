@@ -37,6 +37,7 @@ const CLI::Validator kMethod = Checked(glimpse::wire::ParseMethod, "METHOD");
 const CLI::Validator kMethodList = Checked(ParseMethodList, "M1,M2,..");
 const CLI::Validator kOrder = Checked(ParseRevealOrder, "top-down|random|sweep");
 const CLI::Validator kSensor = Checked(ParseSensor, "X,Y,Z");
+const CLI::Validator kFieldOfView = Checked(ParseFieldOfView, "HxV");
 // The share of known clouds to accept: (0, 1] (the wire's 0 is "the model's default", never asked).
 const CLI::Validator kAcceptance(
     [](std::string& text) -> std::string {
@@ -75,6 +76,16 @@ CLI::Option* AddSensorOption(CLI::App& cmd, std::optional<glimpse::Vec3>& sensor
                                               "cloud files: where the sensor was, X,Y,Z in the cloud's frame (replaces "
                                               "the file's; a PCD's default VIEWPOINT 0 0 0 1 0 0 0 reads as no sensor)")
       ->check(kSensor);
+}
+
+// A cloud file that is one depth camera's view: its fields of view (the pose is the PCD VIEWPOINT's).
+CLI::Option* AddCameraFovOption(CLI::App& cmd, std::optional<FieldOfView>& fov) {
+  return cmd.add_option_function<std::string>("--camera-fov", [&fov](const std::string& t) { fov = *ParseFieldOfView(t); },
+                                              "a .pcd that is one depth camera's view: its full fields of view HxV in "
+                                              "degrees (57x43 for a Kinect), the camera at the VIEWPOINT looking along "
+                                              "its +z, image up its -y (PCL's convention); the answer names the edges "
+                                              "of the image the object reaches (cut by the frame)")
+      ->check(kFieldOfView);
 }
 
 // How the files are stood up and sized: meshes (`folder`: a folder's, whose manifest these override)
@@ -218,6 +229,7 @@ void AddClassify(CLI::App& app, CommandLine& cl) {
                    ->capture_default_str()->check(CLI::Range(0, 5))->group("Meshes");
   classify->add_flag("--whole", c.whole, "meshes: the whole sampled cloud instead of a single view")->excludes(view)->group("Meshes");
   AddSensorOption(*classify, c.sensor);
+  AddCameraFovOption(*classify, c.camera_fov);
   AddViewOptions(*classify, c.protocol, false);
   AddPlacementOptions(*classify, c.placement, false, true);
   classify->callback([&cl, view] {
@@ -250,6 +262,7 @@ CLI::App* AddStream(CLI::App& app, CommandLine& cl) {
                                    "shapes [0]; a cloud file streams as it is unless given")
       ->check(CLI::Range(0, 5));
   AddSensorOption(*stream, s.sensor)->excludes(stream_view);
+  AddCameraFovOption(*stream, s.camera_fov)->excludes(stream_view);
   auto* frames = stream->add_option("--frames", s.frames_dir,
                                     "a folder of frames (.pcd/.ply/...), each from its own sensor position (its file's "
                                     "VIEWPOINT or glimpse_sensor comment, or DIR/poses.csv: file,x,y,z for points in the "
@@ -257,7 +270,7 @@ CLI::App* AddStream(CLI::App& app, CommandLine& cl) {
                                     "natural name order, one chunk per frame (--chunk-points cuts a frame into several)")
                      ->check(CLI::ExistingDirectory);
   frames->excludes(file)->excludes(zoo_shape)->excludes(stream_view)->excludes(chunks)->excludes("--order")
-      ->excludes("--sensor");
+      ->excludes("--sensor")->excludes("--camera-fov");
   stream->add_flag("--json", s.json, "one JSON object per decision");
   stream->add_option("--known-acceptance", s.known_acceptance,
                      "operating point of \"unknown\": the share of known clouds to accept, in (0, 1] (default: "

@@ -144,6 +144,7 @@ Status PlaceCloud(Cloud& cloud, const Placement& placement, const std::string& p
   const Eigen::Matrix3f r = placement.up ? upright_rotation(*placement.up) : Eigen::Matrix3f::Identity();
   for (Vec3& p : cloud.points) p = scale * (r * p);
   if (cloud.sensor) *cloud.sensor = scale * (r * *cloud.sensor);
+  if (cloud.frame) cloud.frame->axis = r * cloud.frame->axis, cloud.frame->up = r * cloud.frame->up;
   return {};
 }
 
@@ -157,7 +158,7 @@ Expected<Cloud> MeshFileView(const std::string& path, const Placement& placement
   if (!mesh) return mesh.error();
   Points full = full_cloud(*mesh, object.id, recipe);
   if (full.empty()) return invalid_argument(path + ": the mesh gives no points");
-  if (!view) return Cloud{std::move(full), std::nullopt};
+  if (!view) return Cloud{std::move(full), std::nullopt, {}};
   const uint64_t seed = object_seed(recipe.seed, object.id);
   return object_view(full, static_cast<size_t>(std::clamp(*view, 0, 5)), 6, false, seed, recipe.hpr_radius_factor);
 }

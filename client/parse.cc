@@ -44,6 +44,20 @@ Expected<v1::ModelRef> ParseModelRef(std::string_view text, bool allow_latest) {
   return ref;
 }
 
+Expected<FieldOfView> ParseFieldOfView(std::string_view text) {
+  const std::string bad = "bad field of view '" + std::string(text) + "': HxV, full degrees in (0, 180), e.g. 57x43";
+  const size_t x = text.find_first_of("xX");
+  if (x == std::string_view::npos) return invalid_argument(bad);
+  double v[2];
+  const std::string_view items[2] = {Trim(text.substr(0, x)), Trim(text.substr(x + 1))};
+  for (int k = 0; k < 2; ++k) {
+    auto [end, ec] = std::from_chars(items[k].data(), items[k].data() + items[k].size(), v[k]);
+    if (items[k].empty() || ec != std::errc() || end != items[k].data() + items[k].size() || !(v[k] > 0 && v[k] < 180))
+      return invalid_argument(bad);
+  }
+  return FieldOfView{static_cast<float>(v[0]), static_cast<float>(v[1])};
+}
+
 Expected<Vec3> ParseSensor(std::string_view text) {
   const std::string bad = "bad sensor '" + std::string(text) + "': three finite numbers X,Y,Z in the cloud's own frame and unit";
   Vec3 out;

@@ -8,6 +8,7 @@
 
 #include "glimpse/cloud.h"
 #include "glimpse/expected.h"
+#include "client/inputs.h"
 #include "glimpse/v1/glimpse.pb.h"
 
 namespace glimpse::client {
@@ -27,5 +28,8 @@ Expected<std::vector<v1::Method>> ParseMethodList(std::string_view text);
 // A sensor position "X,Y,Z" in the cloud's frame (metres, finite), e.g. "0,0,0" for a camera-frame
 // scan whose file does not say where the camera was.
 Expected<Vec3> ParseSensor(std::string_view text);
+
+// A depth camera's full fields of view "HxV" in degrees, each in (0, 180), e.g. "57x43" (a Kinect).
+Expected<FieldOfView> ParseFieldOfView(std::string_view text);
 
 }  // namespace glimpse::client

@@ -83,12 +83,20 @@ double WinnerScore(const v1::ClassifyResponse& r) {
   return Shown(r.scores(r.winner_index()));
 }
 
-// ,"unknown":..,"novelty":..,"unknown_reason":.. (novelty null when the method has none)
+// ["a","b"]
+template <class Strings>
+std::string JsonStrings(const Strings& items) {
+  std::string out = "[";
+  for (const std::string& s : items) out += (out.size() > 1 ? "," : "") + JsonString(s);
+  return out + "]";
+}
+
+// ,"unknown":..,"novelty":..,"unknown_reason":..,"frame_cut":[..] (novelty null when the method has none)
 template <class Answer>
 std::string UnknownJson(const Answer& a) {
   return std::string(",\"unknown\":") + (a.unknown() ? "true" : "false") +
          ",\"novelty\":" + (a.has_novelty() ? JsonNumber(a.novelty()) : std::string("null")) +
-         ",\"unknown_reason\":" + JsonString(a.unknown_reason());
+         ",\"unknown_reason\":" + JsonString(a.unknown_reason()) + ",\"frame_cut\":" + JsonStrings(a.frame_cut());
 }
 
 }  // namespace
@@ -200,6 +208,9 @@ std::string ClassifyTable(const std::vector<ClassifyRow>& rows) {
   header.insert(header.end(), categories.begin(), categories.end());
   const bool novelty = std::any_of(rows.begin(), rows.end(), [](const ClassifyRow& r) { return r.response.has_novelty(); });
   if (novelty) header.push_back("NOVELTY");
+  // Where the camera's frame cuts the object (clouds sent with their frame).
+  const bool cut = std::any_of(rows.begin(), rows.end(), [](const ClassifyRow& r) { return r.response.frame_cut_size() > 0; });
+  if (cut) header.push_back("CUT BY FRAME");
   header.insert(header.end(), {"POINTS", "KEYPOINTS", "MS"});
   table.push_back(header);
   for (const ClassifyRow& r : rows) {
@@ -211,6 +222,10 @@ std::string ClassifyTable(const std::vector<ClassifyRow>& rows) {
       line.push_back(cell);
     }
     if (novelty) line.push_back(r.response.has_novelty() ? Fixed(r.response.novelty(), 2) : "-");
+    if (cut) {
+      const std::vector<std::string> edges(r.response.frame_cut().begin(), r.response.frame_cut().end());
+      line.push_back(edges.empty() ? "-" : Joined(edges, ","));
+    }
     line.push_back(std::to_string(r.response.points()));
     line.push_back(std::to_string(r.response.keypoints()));
     line.push_back(Fixed(r.response.timings().total_ms(), 1));
@@ -275,6 +290,10 @@ std::string DecisionPanel(const v1::Decision& d, size_t chunks_total, std::strin
            "   settled " + YesNo(d.settled()) + "   confidence " + Fixed(d.confidence(), 2) +
            (d.has_novelty() ? "   novelty " + Fixed(d.novelty(), 2) : "") + "\n";
     if (d.unknown() && !d.unknown_reason().empty()) out += "unknown: " + d.unknown_reason() + "\n";
+    if (d.frame_cut_size() > 0) {
+      const std::vector<std::string> edges(d.frame_cut().begin(), d.frame_cut().end());
+      out += "the camera's frame cuts the scan at the " + Joined(edges, ", ") + ": the answer is of the part it shows\n";
+    }
   }
   size_t name_width = 0;
   for (const v1::CategoryScore& s : d.scores()) name_width = std::max(name_width, Width(s.category()));

@@ -48,6 +48,7 @@ std::vector<uint32_t> RevealSequence(const Cloud& view, RevealOrder order, uint6
 Cloud Reordered(const Cloud& cloud, const std::vector<uint32_t>& order) {
   Cloud out;
   out.sensor = cloud.sensor;
+  out.frame = cloud.frame;
   out.points.reserve(order.size());
   for (uint32_t i : order) out.points.push_back(cloud.points[i]);
   return out;

@@ -90,6 +90,7 @@ void ToProto(const Classification& c, v1::ClassifyResponse* out) {
   out->set_unknown(c.unknown);
   if (std::isfinite(c.novelty)) out->set_novelty(c.novelty);
   out->set_unknown_reason(c.unknown_reason);
+  for (const std::string& edge : frame_edges(c.frame_cut)) out->add_frame_cut(edge);
 }
 
 void ToProto(const StreamDecision& d, v1::Decision* out) {
@@ -111,6 +112,7 @@ void ToProto(const StreamDecision& d, v1::Decision* out) {
   out->set_unknown(d.unknown);
   if (std::isfinite(d.novelty)) out->set_novelty(d.novelty);
   out->set_unknown_reason(d.unknown_reason);
+  for (const std::string& edge : frame_edges(d.frame_cut)) out->add_frame_cut(edge);
 }
 
 void ToProto(const ModelRecord& record, v1::ModelRef* out) {

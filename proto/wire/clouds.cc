@@ -54,6 +54,20 @@ Status CheckSensor(const Vec3& sensor) {
   return {};
 }
 
+// A frame the image's edges can be found from: a sensor to see from, finite directions, the up not
+// along the axis, fields of view in (0, 180) degrees.
+Status CheckFrame(const CameraFrame& f, bool has_sensor) {
+  if (!has_sensor) return invalid_argument("frame needs the sensor position it is seen from (sensor is unset)");
+  if (!f.axis.allFinite() || !(f.axis.norm() > 0)) return invalid_argument("frame.axis must be a finite, non-zero direction");
+  if (!f.up.allFinite() || !(f.axis.normalized().cross(f.up).norm() > 1e-3f))
+    return invalid_argument("frame.image_up must be a finite direction not along frame.axis");
+  auto fov_ok = [](float deg) { return deg > 0 && deg < 180; };
+  if (!fov_ok(f.fov_h_deg) || !fov_ok(f.fov_v_deg))
+    return invalid_argument("frame fields of view must be in (0, 180) degrees, not " + std::to_string(f.fov_h_deg) +
+                            " x " + std::to_string(f.fov_v_deg));
+  return {};
+}
+
 }  // namespace
 
 std::string PackPoints(const Points& points) {
@@ -87,6 +101,16 @@ void CloudToProto(const Cloud& cloud, size_t begin, size_t end, v1::PointCloud* 
   } else {
     out->clear_sensor();
   }
+  if (cloud.frame) {
+    v1::CameraFrame* f = out->mutable_frame();
+    auto set = [](v1::Vec3* v, const Vec3& from) { v->set_x(from.x()), v->set_y(from.y()), v->set_z(from.z()); };
+    set(f->mutable_axis(), cloud.frame->axis);
+    set(f->mutable_image_up(), cloud.frame->up);
+    f->set_fov_h_deg(cloud.frame->fov_h_deg);
+    f->set_fov_v_deg(cloud.frame->fov_v_deg);
+  } else {
+    out->clear_frame();
+  }
 }
 
 void CloudToProto(const Cloud& cloud, v1::PointCloud* out) { CloudToProto(cloud, 0, cloud.points.size(), out); }
@@ -103,6 +127,11 @@ Expected<Cloud> DecodeCloud(const v1::PointCloud& msg) {
   Cloud cloud;
   cloud.points = std::move(*points);
   if (msg.has_sensor()) cloud.sensor = Vec3(msg.sensor().x(), msg.sensor().y(), msg.sensor().z());
+  if (msg.has_frame()) {
+    const v1::CameraFrame& f = msg.frame();
+    cloud.frame = CameraFrame{Vec3(f.axis().x(), f.axis().y(), f.axis().z()),
+                              Vec3(f.image_up().x(), f.image_up().y(), f.image_up().z()), f.fov_h_deg(), f.fov_v_deg()};
+  }
   return cloud;
 }
 
@@ -116,6 +145,8 @@ Expected<Cloud> CloudFromProto(const v1::PointCloud& msg, size_t max_points) {
   if (Status s = CheckNormals(msg); !s.ok()) return s.error();
   if (cloud->sensor)
     if (Status s = CheckSensor(*cloud->sensor); !s.ok()) return s.error();
+  if (cloud->frame)
+    if (Status s = CheckFrame(*cloud->frame, cloud->sensor.has_value()); !s.ok()) return s.error();
   return cloud;
 }
 

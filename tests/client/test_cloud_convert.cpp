@@ -68,8 +68,41 @@ TEST(CloudConvert, ReusedMessageLosesAnOldSensor) {
   with.sensor = Vec3(0, 0, 1);
   v1::PointCloud proto;
   wire::CloudToProto(with, &proto);
-  wire::CloudToProto(Cloud{with.points, std::nullopt}, &proto);
+  wire::CloudToProto(Cloud{with.points, std::nullopt, {}}, &proto);
   EXPECT_FALSE(proto.has_sensor());
+}
+
+TEST(CloudConvert, TheCamerasFrameTravelsWithTheCloudAndAReusedMessageLosesIt) {
+  Cloud cloud;
+  cloud.points = {Vec3(1, 2, 3)};
+  cloud.sensor = Vec3(0, 0, 1);
+  cloud.frame = CameraFrame{Vec3(1, 0, 0), Vec3(0, 0, 1), 57.f, 43.f};
+  v1::PointCloud proto;
+  wire::CloudToProto(cloud, &proto);
+  auto back = wire::CloudFromProto(proto, 10);
+  ASSERT_TRUE(back.ok()) << back.error().message;
+  ASSERT_TRUE(back->frame.has_value());
+  EXPECT_TRUE(*back->frame == *cloud.frame);
+  wire::CloudToProto(Cloud{cloud.points, cloud.sensor, {}}, &proto);
+  EXPECT_FALSE(proto.has_frame());
+}
+
+TEST(CloudConvert, AFrameItsEdgesCannotBeFoundFromIsInvalidArgumentNamingTheField) {
+  const Cloud good{{Vec3(1, 2, 3)}, Vec3(0, 0, 1), CameraFrame{Vec3(1, 0, 0), Vec3(0, 0, 1), 57.f, 43.f}};
+  auto refused = [&](auto&& spoil, const std::string& field) {
+    Cloud c = good;
+    spoil(c);
+    auto back = wire::CloudFromProto(wire::CloudToProto(c), 10);
+    ASSERT_FALSE(back.ok()) << field;
+    EXPECT_EQ(back.error().code, ErrorCode::kInvalidArgument);
+    EXPECT_NE(back.error().message.find(field), std::string::npos) << back.error().message;
+  };
+  refused([](Cloud& c) { c.sensor.reset(); }, "sensor");
+  refused([](Cloud& c) { c.frame->axis = Vec3::Zero(); }, "frame.axis");
+  refused([](Cloud& c) { c.frame->up = Vec3(2, 0, 0); }, "frame.image_up");
+  refused([](Cloud& c) { c.frame->fov_h_deg = 0; }, "fields of view");
+  refused([](Cloud& c) { c.frame->fov_v_deg = 180; }, "fields of view");
+  refused([](Cloud& c) { c.frame->up.x() = std::numeric_limits<float>::quiet_NaN(); }, "frame.image_up");
 }
 
 TEST(CloudConvert, RejectsBytesNotAMultipleOfTwelve) {

@@ -74,6 +74,19 @@ TEST(ParseSensor, ThreeFiniteNumbers) {
   EXPECT_NE(ParseSensor("x").error().message.find("X,Y,Z"), std::string::npos);
 }
 
+TEST(ParseFieldOfView, FullDegreesWidthByHeightEachInsideZeroTo180) {
+  auto kinect = ParseFieldOfView("57x43");
+  ASSERT_TRUE(kinect.ok());
+  EXPECT_EQ(kinect->h_deg, 57.f);
+  EXPECT_EQ(kinect->v_deg, 43.f);
+  auto spaced = ParseFieldOfView(" 87.5 X 58 ");
+  ASSERT_TRUE(spaced.ok());
+  EXPECT_EQ(spaced->h_deg, 87.5f);
+  for (const char* bad : {"", "57", "57x", "x43", "0x43", "57x180", "-57x43", "57x43x1", "ax43", "nanx43"})
+    EXPECT_FALSE(ParseFieldOfView(bad).ok()) << bad;
+  EXPECT_NE(ParseFieldOfView("57").error().message.find("HxV"), std::string::npos);
+}
+
 TEST(StatusCodeName, MatchesGrpcNames) {
   EXPECT_STREQ(wire::StatusCodeName(grpc::StatusCode::NOT_FOUND), "NOT_FOUND");
   EXPECT_STREQ(wire::StatusCodeName(grpc::StatusCode::DEADLINE_EXCEEDED), "DEADLINE_EXCEEDED");

@@ -211,6 +211,33 @@ TEST_F(CoreEngineTest, ClassifyOverGrpcGivesExactlyCoresScores) {
   }
 }
 
+// A cloud sent with its camera's frame: the answer names the edges core finds cut, and a frame its
+// edges cannot be found from (no sensor) is INVALID_ARGUMENT naming what is missing.
+TEST_F(CoreEngineTest, ClassifyOverGrpcNamesTheEdgesTheCamerasFrameCuts) {
+  TrainingCloud test = Sample("cylinder", 7, 3);
+  ASSERT_TRUE(test.cloud.sensor.has_value());
+  // A narrow camera looking at the object's centre: 0.9 m tall and 2 m away, it overflows 10 degrees.
+  test.cloud.frame = CameraFrame{-*test.cloud.sensor, Vec3::UnitZ(), 10.f, 10.f};
+  auto direct = glimpse::classify(**direct_, test.cloud);
+  ASSERT_TRUE(direct.ok()) << direct.error().message;
+  ASSERT_TRUE(direct->frame_cut.top && direct->frame_cut.bottom);
+  grpc::ClientContext ctx;
+  v1::ClassifyRequest req;
+  req.mutable_model()->set_name("shapes");
+  *req.mutable_cloud() = wire::CloudToProto(test.cloud);
+  v1::ClassifyResponse resp;
+  grpc::Status s = harness_->stub->Classify(&ctx, req, &resp);
+  ASSERT_TRUE(s.ok()) << s.error_message();
+  EXPECT_EQ(std::vector<std::string>(resp.frame_cut().begin(), resp.frame_cut().end()), frame_edges(direct->frame_cut));
+  EXPECT_EQ(resp.winner_index(), direct->winner);
+
+  grpc::ClientContext bad_ctx;
+  req.mutable_cloud()->clear_sensor();
+  grpc::Status bad = harness_->stub->Classify(&bad_ctx, req, &resp);
+  EXPECT_EQ(bad.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(bad.error_message().find("frame needs the sensor"), std::string::npos) << bad.error_message();
+}
+
 // "None of these" at a request's operating point is core's set_known_acceptance, over gRPC too; a model
 // of the default method has a novelty for every answer, and a sheet of metal, never learnt, is unknown.
 TEST_F(CoreEngineTest, KnownAcceptanceOverGrpcIsCoresOperatingPoint) {
@@ -355,7 +382,7 @@ TEST_F(CoreEngineTest, ClassifyBatchGivesExactlyClassifysAnswers) {
   batch.mutable_model()->set_name("shapes");
   std::vector<Cloud> clouds;
   for (const char* category : {"box", "cylinder", "sphere", "box"}) clouds.push_back(Sample(category, 9, 4).cloud);
-  clouds.push_back(Cloud{{Vec3(0, 0, 0), Vec3(1, 0, 0)}, std::nullopt});  // too few points: fails alone
+  clouds.push_back(Cloud{{Vec3(0, 0, 0), Vec3(1, 0, 0)}, std::nullopt, {}});  // too few points: fails alone
   for (const Cloud& c : clouds) *batch.add_clouds() = wire::CloudToProto(c);
   grpc::ClientContext ctx;
   v1::ClassifyBatchResponse resp;
