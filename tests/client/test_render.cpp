@@ -105,10 +105,22 @@ TEST(Render, ClassifyJsonIsOneObjectWithScoresByCategory) {
   EXPECT_EQ(ClassifyJson(MakeRow("dir/\"x\".ply")),
             "{\"file\":\"dir/\\\"x\\\".ply\",\"model\":\"zoo\",\"version\":1,\"method\":\"bok\",\"winner\":\"chair\","
             "\"scores\":{\"human\":0.125,\"chair\":0.875},\"points\":900,\"keypoints\":12,\"total_ms\":4.25,"
-            "\"warning\":\"\",\"unknown\":false,\"novelty\":null,\"unknown_reason\":\"\"}");
+            "\"warning\":\"\",\"unknown\":false,\"novelty\":null,\"unknown_reason\":\"\",\"frame_cut\":[]}");
   ClassifyRow warned = MakeRow("mm.ply");
   warned.response.set_warning("the cloud spans 1.7e+03 m: millimetres?");
   EXPECT_NE(ClassifyJson(warned).find(",\"warning\":\"the cloud spans 1.7e+03 m: millimetres?\","), std::string::npos);
+}
+
+// Where the camera's frame cuts an object: a column when any answer has a cut, and a JSON list.
+TEST(Render, TheEdgesTheFrameCutsAreShownWhereThereAreAny) {
+  ClassifyRow cut = MakeRow("close.pcd");
+  cut.response.add_frame_cut("top");
+  cut.response.add_frame_cut("bottom");
+  EXPECT_EQ(ClassifyTable({cut, MakeRow("far.pcd")}),
+            "FILE       WINNER  human  chair  CUT BY FRAME  POINTS  KEYPOINTS  MS\n"
+            "close.pcd  chair   0.125  0.875  top,bottom    900     12         4.2\n"
+            "far.pcd    chair   0.125  0.875  -             900     12         4.2\n");
+  EXPECT_NE(ClassifyJson(cut).find(",\"frame_cut\":[\"top\",\"bottom\"]}"), std::string::npos) << ClassifyJson(cut);
 }
 
 // A calibrated answer shows its probabilities where it would show scores; JSON gives both.
@@ -137,7 +149,7 @@ TEST(Render, UnknownAnswersNameTheClosestCategory) {
             "FILE       WINNER                          human  chair  NOVELTY  POINTS  KEYPOINTS  MS\n"
             "chair.ply  chair                           0.125  0.875  0.93     900     12         4.2\n"
             "bike.ply   unknown (closest: chair 0.875)  0.125  0.875  2.46     900     12         4.2\n");
-  EXPECT_NE(ClassifyJson(unknown).find(",\"unknown\":true,\"novelty\":2.456,\"unknown_reason\":\"novelty 2.46 above 1.80\"}"),
+  EXPECT_NE(ClassifyJson(unknown).find(",\"unknown\":true,\"novelty\":2.456,\"unknown_reason\":\"novelty 2.46 above 1.80\",\"frame_cut\":[]}"),
             std::string::npos)
       << ClassifyJson(unknown);
   v1::Decision d = MakeDecision();
@@ -150,7 +162,7 @@ TEST(Render, UnknownAnswersNameTheClosestCategory) {
   const std::string panel = DecisionPanel(d, 20, "chair", 10);
   EXPECT_NE(panel.find("winner unknown (closest: chair 0.820)"), std::string::npos) << panel;
   EXPECT_NE(panel.find("unknown: novelty 2.50 above 2.00"), std::string::npos) << panel;
-  EXPECT_NE(DecisionJson(d, 20).find(",\"unknown\":true,\"novelty\":2.5,\"unknown_reason\":\"novelty 2.50 above 2.00\"}"),
+  EXPECT_NE(DecisionJson(d, 20).find(",\"unknown\":true,\"novelty\":2.5,\"unknown_reason\":\"novelty 2.50 above 2.00\",\"frame_cut\":[]}"),
             std::string::npos);
 }
 
@@ -199,7 +211,7 @@ TEST(Render, DecisionJson) {
             "\"scores\":{\"human\":0.1,\"chair\":0.82,\"table\":0.3},\"raw_scores\":{\"human\":0.2,\"chair\":0.7,"
             "\"table\":0.1},\"final\":false,\"changes\":1,\"held\":2,\"settled\":false,"
             "\"confidence\":0.41,\"model\":\"zoo\",\"version\":3,\"method\":\"fusion\",\"latency_ms\":12.5,"
-            "\"unknown\":false,\"novelty\":null,\"unknown_reason\":\"\"}");
+            "\"unknown\":false,\"novelty\":null,\"unknown_reason\":\"\",\"frame_cut\":[]}");
 }
 
 TEST(Render, TrainingProgress) {
