@@ -184,6 +184,16 @@ run 0 classify "$BOX" "$BLOB" --model folder && out_has "^model folder:1  method
 out_has "^$BOX +box " && out_has "^$BLOB +blob "
 run 0 classify "$BOX" "$BLOB" --model tiny:1 --method ush --json && out_lines 2
 out_has '"version":1,"method":"ush"' && out_has '"scores":\{"chair":'
+# A depth camera's frame as PCL writes it (the camera at the origin, +z ahead, -y up): a blob 0.6 m
+# across 0.7 m ahead overflows a 10-degree field, and the answer names the four edges it reaches.
+KINECT="$GLIMPSE_TEST_TMP/kinect.pcd"
+{ printf 'VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 1500\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 1500\nDATA ascii\n'
+  blob 5 1500 | awk '{ print $1, 0.3 - $3, 0.7 + $2 }'; } >"$KINECT"
+run 0 classify "$KINECT" --model folder --camera-fov 10x10 --up=-y && out_has "CUT BY FRAME" && out_has "^$KINECT .* top,bottom,left,right "
+run 0 classify "$KINECT" --model folder --camera-fov 10x10 --up=-y --json && out_has '"frame_cut":\["top","bottom","left","right"\]'
+run 0 classify "$KINECT" --model folder --camera-fov 170x170 --up=-y && grep -q "CUT BY FRAME" "$OUT" && fail "a wide camera cut the blob"
+run 1 classify "$BLOB" --model folder --camera-fov 57x43 && err_has "VIEWPOINT"
+run 2 classify "$KINECT" --model folder --camera-fov 57 && err_has "HxV"
 run 1 classify "$BOX" --model tiny:1 --method bok && err_has "^glimpse: classify $BOX: FAILED_PRECONDITION: .*bok"
 run 1 classify "$BOX" --model nope && err_has "^glimpse: classify $BOX: NOT_FOUND: .*nope"
 run 1 classify "$BOX" --model tiny:9 && err_has "NOT_FOUND"
