@@ -362,5 +362,32 @@ TEST(RunEvaluation, TrainingSensorViewsAreLearntAndNeverTested) {
   EXPECT_GT(std::stoul(timing(*sensed, "train (all folds)")), learnt + learnt / 2);  // the camera's views and prefixes
 }
 
+// Few-shot: a model learns at most K objects of each category and tests what it always tests. K at or
+// above what a fold could learn changes nothing.
+TEST(RunEvaluation, FewShotModelsLearnAtMostKObjectsPerCategoryAndTestTheSame) {
+  const std::vector<EvalObject> objects = zoo_objects(4, 3);  // two folds: 2 learnable per category
+  EvalParams p = ush_training_params();
+  auto samples = [](const EvalResult& r) {
+    for (const PhaseTiming& t : r.timings)
+      if (t.phase == "train (all folds)") return std::stoul(t.detail);
+    return 0ul;
+  };
+  auto all = run_evaluation(objects, p, "zoo");
+  p.objects_per_category = 2;
+  auto two = run_evaluation(objects, p, "zoo");
+  p.objects_per_category = 1;
+  auto one = run_evaluation(objects, p, "zoo");
+  ASSERT_TRUE(all.ok() && two.ok() && one.ok());
+  ASSERT_EQ(one->decisions.size(), all->decisions.size());
+  for (size_t i = 0; i < all->decisions.size(); ++i) {
+    EXPECT_EQ(one->decisions[i].object, all->decisions[i].object);  // the same tested views
+    EXPECT_EQ(one->decisions[i].points, all->decisions[i].points);
+    EXPECT_EQ(two->decisions[i].winner, all->decisions[i].winner);
+  }
+  EXPECT_EQ(samples(*two), samples(*all));
+  EXPECT_GT(samples(*one), samples(*all) * 4 / 10);  // one object of two, give or take a too-small prefix
+  EXPECT_LT(samples(*one), samples(*all) * 6 / 10);
+}
+
 }  // namespace
 }  // namespace glimpse

@@ -277,6 +277,10 @@ void add_run_flags(CLI::App* cmd, EvalOptions& o) {
   cmd->add_option("--pick-objects", o.pick_objects,
                   "N objects per category of every source, drawn by --seed; a folder given as both --train and "
                   "--test then tests the objects it learnt (the paper's tables hold 18 views, 3 objects, per category)");
+  cmd->add_option("--objects-per-category", o.objects_per_category,
+                  "few-shot: every model learns at most K objects of each category (every learnt source together), "
+                  "drawn by --seed and the fold, and tests what it would test with all of them (0: all)")
+      ->capture_default_str();
   cmd->add_option("--export-histograms", o.export_histograms,
                   "folder: every fold's model writes the histograms it decides on (its training clouds and every "
                   "tested stage, one row per cloud and method) to DIR/fold<k>.csv, to try other classifiers on them");

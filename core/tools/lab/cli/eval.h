@@ -48,6 +48,7 @@ struct EvalOptions {
   bool quick = false;
   size_t max_objects = 0;
   size_t pick_objects = 0;         // N objects per category drawn by the seed (0: all)
+  size_t objects_per_category = 0; // few-shot: each model learns at most K objects per category (0: all)
   std::string export_histograms;   // folder: every fold model's histograms as CSV (EvalParams::export_histograms_dir)
   std::string poses = "dataset";   // dataset: categories without a natural up in a random pose; given: as the file has it
   size_t explore_step = 5;

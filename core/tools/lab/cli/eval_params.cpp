@@ -197,6 +197,7 @@ Expected<EvalParams> params_from(const EvalOptions& o) {
   EvalParams p;
   if (Status s = views_from(o, p); !s.ok()) return s.error();
   p.folds = o.folds;
+  p.objects_per_category = o.objects_per_category;
   if (Status s = training_from(o, p); !s.ok()) return s.error();
   p.threads = o.threads;
   p.seed = o.seed;

@@ -65,19 +65,39 @@ Status export_histograms(const Protocol& P, int fold, const ModelImpl& impl, con
 
 // ---- 5. per fold: train on the other folds' (or the training sources') views, classify its test views ----
 
+// The objects fold `fold`'s model may learn (EvalParams::objects_per_category): of each category's
+// learnable objects outside the fold, the K first in the order of their seeds (the run's seed and the
+// fold with the object's name); every one when K is 0.
+std::vector<bool> few_shot_objects(const Protocol& P, int fold) {
+  const size_t k = P.params.objects_per_category;
+  std::vector<bool> learns(P.objects.size(), k == 0);
+  if (k == 0) return learns;
+  std::map<std::string, std::vector<std::pair<uint64_t, size_t>>> by_category;
+  for (size_t o = 0; o < P.objects.size(); ++o)
+    if (P.learnt_object(o) && P.r.object_fold[o] != fold)
+      by_category[P.objects[o].category].push_back(
+          {glimpse::object_seed(P.params.seed + uint64_t(fold + 1), P.objects[o].source + "/" + P.key(o)), o});
+  for (auto& [category, objects] : by_category) {
+    std::sort(objects.begin(), objects.end());
+    for (size_t i = 0; i < std::min(k, objects.size()); ++i) learns[objects[i].second] = true;
+  }
+  return learns;
+}
+
 // The samples fold `fold`'s model learns from (each learnt view whole, then its prefixes, with the same
 // clouds as seen when they differ), and into `test_views` the views it tests. Augmented
 // (TrainingCloud::augmented: learnt, but not what novelty measures against): a simulated sensor's
 // training views, and the procedural zoo's objects when added to real ones (--also-train zoo:N).
 std::vector<TrainingSample> fold_samples(const Protocol& P, int fold, std::vector<size_t>& test_views) {
   std::vector<TrainingSample> samples;
+  const std::vector<bool> learns = few_shot_objects(P, fold);
   for (size_t v = 0; v < P.views.size(); ++v) {
     const int o = P.views[v].object;
     if (P.r.object_fold[static_cast<size_t>(o)] == fold) {
       if (!P.views[v].train_only) test_views.push_back(v);
       continue;
     }
-    if (!P.learnt(v)) continue;
+    if (!P.learnt(v) || !learns[static_cast<size_t>(o)]) continue;
     const EvalObject& object = P.objects[static_cast<size_t>(o)];
     const std::string id = object.source + "/" + object.category + "/" + object.id;  // the zoo's ids repeat per category
     for (size_t k = 0; k < P.train_slots[v].size(); ++k) {  // the whole (learnt) view, then its prefixes

@@ -110,6 +110,10 @@ void training_clouds_row(std::ostringstream& o, const EvalResult& r) {
     trained_on += "; plus the same azimuths seen by a " + describe(c) +
                   " (`--train-sensors`, training only), through the scan filters down to the model's density (the "
                   "median of its ideal training views)";
+  if (p.objects_per_category > 0)
+    trained_on += "; **few-shot**: each model learns at most " + std::to_string(p.objects_per_category) +
+                  " objects of each category (`--objects-per-category`, drawn by the seed and the fold), and tests "
+                  "as with all of them";
   {
     std::map<std::string, size_t> extra;
     if (!r.cross_source)

@@ -97,6 +97,9 @@ struct EvalParams {
   std::vector<Stage> stages = paper_stages();
   float cut_margin_supports = 1.5f;  // keypoint cut margin in support radii (see keypoint_prefix)
   int folds = 5;  // cross-validation; a cross-source evaluation (kTrainOnly/kTestOnly objects) trains one model
+  // Few-shot: every model learns at most this many objects of each category (of those it could learn,
+  // every source together), drawn by the seed and the fold; what it tests is unchanged. 0: all.
+  size_t objects_per_category = 0;
   std::vector<MethodId> methods = {std::begin(kAllMethods), std::end(kAllMethods)};
   size_t explore_max_keypoints = 55;
   size_t explore_step = 5;
