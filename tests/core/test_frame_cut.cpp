@@ -1,13 +1,11 @@
 // Objects cut by the camera's frame: a person-sized box seen from 0.8 m reaches the image's top and
 // bottom, from 4 m it does not; the frame turns with the cloud, lasts a stream while the sensor stays,
-// leaves the top-down prefix out when the object's top is not seen, and keeps a cut part from being
-// "too small".
+// and keeps a cut part from being "too small".
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
 #include <cmath>
 
-#include "glimpse/features/method_features.h"
 #include "glimpse/geometry/frame_cut.h"
 #include "glimpse/learning/model.h"
 #include "glimpse/views/placement.h"
@@ -44,7 +42,6 @@ TEST(FrameCut, APersonSeenFromCloseByReachesTheTopAndBottomOfTheImage) {
   EXPECT_TRUE(cut.bottom);
   EXPECT_FALSE(cut.left);  // 0.35 m wide: inside the 57 degrees
   EXPECT_FALSE(cut.right);
-  EXPECT_TRUE(cut.top_unseen);
   EXPECT_EQ(describe(cut), "top, bottom");
   EXPECT_EQ(frame_edges(cut), (std::vector<std::string>{"top", "bottom"}));
 
@@ -52,7 +49,6 @@ TEST(FrameCut, APersonSeenFromCloseByReachesTheTopAndBottomOfTheImage) {
   ASSERT_GT(far.points.size(), 100u);
   const FrameCut whole = frame_cut(far);
   EXPECT_FALSE(whole.any());
-  EXPECT_FALSE(whole.top_unseen);
   EXPECT_EQ(describe(whole), "");
 }
 
@@ -77,7 +73,6 @@ TEST(FrameCut, TheFrameTurnsWithTheCloud) {
   EXPECT_TRUE(turned.frame->axis.isApprox(turn * close.frame->axis));
   const FrameCut a = frame_cut(close), b = frame_cut(turned);
   EXPECT_EQ(describe(a), describe(b));
-  EXPECT_EQ(a.top_unseen, b.top_unseen);
 }
 
 TEST(FrameCut, AStreamKeepsItsFrameOnlyWhileTheSensorStays) {
@@ -94,21 +89,6 @@ TEST(FrameCut, AStreamKeepsItsFrameOnlyWhileTheSensorStays) {
   Cloud other_frame = chunk;
   other_frame.frame->fov_h_deg = 70;
   EXPECT_FALSE(joined_frame(scan, other_frame, false).has_value());
-}
-
-TEST(FrameCut, AnUnseenTopDescribesNoTopDownPrefix) {
-  const Cloud close = person_seen_from(0.8f);
-  MethodFeatureParams params;
-  params.top_prefix_fraction = 0.55;
-  auto cut = cloud_features(close, params, {MethodId::kUSH}, 1);
-  ASSERT_TRUE(cut.ok()) << cut.error().message;
-  EXPECT_EQ(cut->top_prefix, nullptr);  // its highest points are the frame's edge
-  Cloud unframed = close;
-  unframed.frame.reset();
-  auto whole = cloud_features(unframed, params, {MethodId::kUSH}, 1);
-  ASSERT_TRUE(whole.ok()) << whole.error().message;
-  EXPECT_NE(whole->top_prefix, nullptr);
-  EXPECT_EQ(*cut->ush, *whole->ush);  // the cloud itself is described alike
 }
 
 TEST(FrameCut, APartTheFrameCutsIsNeverTooSmall) {

@@ -8,7 +8,6 @@
 #include <memory>
 #include <string>
 
-#include "glimpse/geometry/frame_cut.h"
 #include "glimpse/views/exploration.h"
 
 namespace glimpse {
@@ -42,13 +41,11 @@ Status describe_points(const Cloud& cloud, const std::vector<LocalSurface>& surf
 // The top-down prefix whose novelty joins the cloud's (MethodFeatureParams::top_prefix_fraction): of every k-th point
 // (at most top_prefix_points of them), the highest top_prefix_fraction, with their local surfaces as
 // fitted on the whole cloud; the keypoints from its lowest point up. None when it would keep fewer than
-// top_prefix_min_points, or all of them, or cannot be described; none when top_prefix_fraction is 0,
-// and none when the camera's frame cuts the cloud's top (its highest points are the frame's edge, not the
-// object's top: geometry/frame_cut.h).
+// top_prefix_min_points, or all of them, or cannot be described; none when top_prefix_fraction is 0.
 std::shared_ptr<const CloudFeatures> top_prefix(const FeatureState& f, const MethodFeatureParams& params,
                                                 const std::vector<MethodId>& methods, int threads) {
   const size_t n = f.cloud.points.size();
-  if (!(params.top_prefix_fraction > 0) || n == 0 || frame_cut(f.cloud).top_unseen) return nullptr;
+  if (!(params.top_prefix_fraction > 0) || n == 0) return nullptr;
   const size_t cap = std::max<size_t>(1, params.top_prefix_points);
   const size_t step = (n + cap - 1) / cap;
   Points sampled;

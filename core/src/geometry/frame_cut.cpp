@@ -24,12 +24,7 @@ FrameCut frame_cut(const Cloud& cloud, const FrameCutParams& params) {
   const Vec3 up = right.cross(axis);
   const float half_u = std::tan(0.5f * f.fov_h_deg * kDeg), half_v = std::tan(0.5f * f.fov_v_deg * kDeg);
   const float edge_u = half_u * (1 - params.edge_share), edge_v = half_v * (1 - params.edge_share);
-  float top_z = -INFINITY, bottom_z = INFINITY;
-  for (const Vec3& p : cloud.points)
-    if (p.allFinite()) top_z = std::max(top_z, p.z()), bottom_z = std::min(bottom_z, p.z());
-  if (!(top_z >= bottom_z)) return cut;
-  const float high = top_z - params.top_share * (top_z - bottom_z);
-  size_t on[4] = {0, 0, 0, 0}, high_on_edge = 0;  // top, bottom, left, right
+  size_t on[4] = {0, 0, 0, 0};  // top, bottom, left, right
   for (const Vec3& p : cloud.points) {
     if (!p.allFinite()) continue;
     const Vec3 d = p - *cloud.sensor;
@@ -38,11 +33,9 @@ FrameCut frame_cut(const Cloud& cloud, const FrameCutParams& params) {
     const float u = d.dot(right) / depth, v = d.dot(up) / depth;
     const bool edge[4] = {v >= edge_v, v <= -edge_v, u <= -edge_u, u >= edge_u};
     for (int k = 0; k < 4; ++k) on[k] += edge[k];
-    high_on_edge += p.z() >= high && (edge[0] || edge[1] || edge[2] || edge[3]);
   }
   cut.top = on[0] >= params.min_points, cut.bottom = on[1] >= params.min_points;
   cut.left = on[2] >= params.min_points, cut.right = on[3] >= params.min_points;
-  cut.top_unseen = high_on_edge >= params.min_points;
   return cut;
 }
 

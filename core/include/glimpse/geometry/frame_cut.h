@@ -1,7 +1,7 @@
 // Objects cut by the frame: which edges of a camera's image a single view's points reach. A person seen
 // from 0.8 m shows the torso; its top is the frame's edge, not the object's, and its size is what the
-// frame lets through. The answer says so, and what assumes the whole object is seen steps aside
-// (features/method_features.h: the top-down prefix; learning/novelty.h: the size rule).
+// frame lets through. The answer says so, and the size rule does not call such a part too small
+// (learning/novelty.h).
 #pragma once
 
 #include <cstddef>
@@ -15,8 +15,6 @@ namespace glimpse {
 struct FrameCut {
   // The image's edges the object reaches (top: the image's up).
   bool top = false, bottom = false, left = false, right = false;
-  // The object's highest points (along +z) lie on an edge: its top is not seen.
-  bool top_unseen = false;
   bool any() const { return top || bottom || left || right; }
 };
 
@@ -26,8 +24,6 @@ struct FrameCutParams {
   float edge_share = 0.01f;
   // An edge cuts the object when at least this many points lie on it (a lone stray is no cut).
   size_t min_points = 5;
-  // The highest points: within this share of the cloud's height below its top.
-  float top_share = 0.03f;
 };
 
 // The edges of `cloud.frame` that its points reach, seen from `cloud.sensor`; nothing cut without a
