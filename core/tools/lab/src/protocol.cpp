@@ -304,6 +304,7 @@ void flag_problems(Protocol& P) {
     size_t clouds = 0;
     std::string example;
     std::set<std::string> objects;
+    size_t sensor_clouds = 0;  // of them, simulated sensors' training views (and their prefixes)
   };
   std::map<std::string, ErrorGroup> errors;
   for (const FeatureSlot& slot : P.slots) {
@@ -320,11 +321,19 @@ void flag_problems(Protocol& P) {
       g.example = object + " view " + std::to_string(P.views[slot.view].view) + ", " + std::to_string(slot.count) +
                   " points: " + slot.error;
     g.objects.insert(object);
+    g.sensor_clouds += P.views[slot.view].train_condition >= 0;
   }
+  constexpr size_t kListed = 12;  // objects named; the rest counted
   for (const auto& [key, g] : errors) {
     std::string list;
-    for (const std::string& o : g.objects) list += (list.empty() ? "" : ", ") + o;
-    r.notes.push_back("features failed on " + std::to_string(g.clouds) + " clouds (views and prefixes) of " +
+    size_t listed = 0;
+    for (const std::string& o : g.objects)
+      if (listed++ < kListed) list += (list.empty() ? "" : ", ") + o;
+    if (g.objects.size() > kListed) list += " and " + std::to_string(g.objects.size() - kListed) + " more";
+    const std::string sensors = g.sensor_clouds ? ", " + std::to_string(g.sensor_clouds) +
+                                                      " of them simulated sensors' training views (a far LiDAR leaves few points)"
+                                                : "";
+    r.notes.push_back("features failed on " + std::to_string(g.clouds) + " clouds (views and prefixes)" + sensors + " of " +
                       std::to_string(g.objects.size()) + " objects (" + list + "), e.g. " + g.example);
   }
   if (contains(P.params.methods, MethodId::kBoK) || contains(P.params.methods, MethodId::kBoG) ||

@@ -106,8 +106,8 @@ void training_clouds_row(std::ostringstream& o, const EvalResult& r) {
                   " deg (seeded), test views as seen";
   for (float e : p.train_elevations_deg)
     trained_on += "; plus the same azimuths from " + pct(e) + " deg elevation (training only)";
-  for (const ScanCondition& c : p.train_conditions)
-    trained_on += "; plus the same azimuths seen by a " + describe(c) +
+  if (!p.train_conditions.empty())
+    trained_on += "; plus the same azimuths seen by a " + describe(p.train_conditions) +
                   " (`--train-sensors`, training only), through the scan filters down to the model's density (the "
                   "median of its ideal training views)";
   if (p.objects_per_category > 0)
