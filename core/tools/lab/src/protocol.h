@@ -143,6 +143,8 @@ void sensor_test_views(Protocol& P);   // 2b. test views of a non-ideal conditio
 void full_view_features(Protocol& P);  // 3. full-view features and the keypoint cut margin
 void prefix_features(Protocol& P);     // 4. stage cuts and training prefixes
 void stage_statistics(Protocol& P);    // over the tested views
+// Phase 8 (protocol_problems.cpp): what looks wrong, as the report's notes.
+void flag_problems(Protocol& P);
 // Phase 9: the robustness matrix (params.matrix) with the trained fold models.
 void robustness_matrix(Protocol& P);
 // The report's sections on a sensor's test views and on the robustness matrix ("" when neither).
