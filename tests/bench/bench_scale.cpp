@@ -19,6 +19,7 @@
 #include "glimpse/learning/object_views.h"
 #include "glimpse/learning/train_params.h"
 #include "glimpse/views/zoo.h"
+#include "median_reporter.h"
 #include "scene.h"
 
 namespace glimpse {
@@ -88,31 +89,13 @@ void BM_ScaleReferences(benchmark::State& state) {
 }
 BENCHMARK(BM_ScaleReferences)->Arg(5)->Arg(10)->Arg(20)->Arg(40)->Unit(benchmark::kMillisecond)->UseRealTime();
 
-// Keeps each run's median (or its single run) for the ratios.
-class MedianReporter : public benchmark::ConsoleReporter {
- public:
-  void ReportRuns(const std::vector<Run>& runs) override {
-    for (const Run& r : runs) {
-      const bool median = r.run_type == Run::RT_Aggregate && r.aggregate_name == "median";
-      const bool single = r.run_type == Run::RT_Iteration && r.repetitions <= 1;
-      if (!r.error_occurred && (median || single)) ms[r.run_name.function_name + "/" + r.run_name.args] = r.GetAdjustedRealTime();
-    }
-    ConsoleReporter::ReportRuns(runs);
-  }
-  double ratio(const std::string& large, const std::string& small) const {
-    const auto a = ms.find(large), b = ms.find(small);
-    return a == ms.end() || b == ms.end() || !(b->second > 0) ? 0.0 : a->second / b->second;
-  }
-  std::map<std::string, double> ms;
-};
-
 }  // namespace
 }  // namespace glimpse
 
 int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  glimpse::MedianReporter reporter;
+  glimpse::bench::MedianReporter reporter;
   benchmark::RunSpecifiedBenchmarks(&reporter);
   if (const double r = reporter.ratio("BM_ScaleCategories/100", "BM_ScaleCategories/5"); r > 0)
     std::printf("classify at 100 categories / at 5 (the same references): %.2f (goal <= 1.3)\n", r);

@@ -14,6 +14,7 @@
 
 #include "glimpse/learning/model.h"
 #include "glimpse/learning/train_params.h"
+#include "median_reporter.h"
 #include "zoo_recipe.h"
 
 namespace glimpse {
@@ -37,36 +38,21 @@ void BM_Train(benchmark::State& state) {
 }
 BENCHMARK(BM_Train)->ArgsProduct({{5, 20}, {1, 0}})->Iterations(1)->Repetitions(3)->Unit(benchmark::kSecond)->UseRealTime();
 
-// Keeps each BM_Train size's median (or its single run) for the ratio.
-class MedianReporter : public benchmark::ConsoleReporter {
- public:
-  void ReportRuns(const std::vector<Run>& runs) override {
-    for (const Run& r : runs) {
-      const bool median = r.run_type == Run::RT_Aggregate && r.aggregate_name == "median";
-      const bool single = r.run_type == Run::RT_Iteration && r.repetitions <= 1;
-      if (!r.error_occurred && (median || single) && r.run_name.function_name == "BM_Train")
-        seconds[r.run_name.args] = r.GetAdjustedRealTime();
-    }
-    ConsoleReporter::ReportRuns(runs);
-  }
-  std::map<std::string, double> seconds;
-};
-
 }  // namespace
 }  // namespace glimpse
 
 int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  glimpse::MedianReporter reporter;
+  glimpse::bench::MedianReporter reporter;
   benchmark::RunSpecifiedBenchmarks(&reporter);
-  for (const char* capped : {"1", "0"}) {
-    const auto small = reporter.seconds.find(std::string("5/") + capped);
-    const auto large = reporter.seconds.find(std::string("20/") + capped);
-    if (small == reporter.seconds.end() || large == reporter.seconds.end() || small->second <= 0) continue;
+  for (const std::string capped : {"1", "0"}) {
+    const std::string small = "BM_Train/5/" + capped, large = "BM_Train/20/" + capped;
+    const double ratio = reporter.ratio(large, small);
+    if (!(ratio > 0)) continue;
     std::printf("training%s: 20 objects per category %.1f s, 5 per category %.1f s: ratio %.2f for 4x the objects%s\n",
-                capped[0] == '1' ? "" : ", every held-out row decided", large->second, small->second,
-                large->second / small->second, capped[0] == '1' ? " (goal <= 4.4)" : "");
+                capped == "1" ? "" : ", every held-out row decided", reporter.medians.at(large), reporter.medians.at(small),
+                ratio, capped == "1" ? " (goal <= 4.4)" : "");
   }
   benchmark::Shutdown();
   return 0;
