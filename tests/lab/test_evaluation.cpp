@@ -305,16 +305,18 @@ EvalParams ush_training_params() {
   return p;
 }
 
+// The samples each model learnt, as the run's "train (all folds)" timing counts them.
+unsigned long trained_samples(const EvalResult& r) {
+  for (const PhaseTiming& t : r.timings)
+    if (t.phase == "train (all folds)") return std::stoul(t.detail);
+  return 0ul;
+}
+
 // Training views from other elevations are learnt, never tested: the same decisions are taken, each
 // model trains on the extra views (and their prefixes) too.
 TEST(RunEvaluation, TrainingElevationsAddTrainingViewsAndNoTestedOnes) {
   const std::vector<EvalObject> objects = zoo_objects(2, 3);
   EvalParams p = ush_training_params();
-  auto samples = [](const EvalResult& r) {
-    for (const PhaseTiming& t : r.timings)
-      if (t.phase == "train (all folds)") return std::stoul(t.detail);
-    return 0ul;
-  };
   auto plain = run_evaluation(objects, p, "zoo");
   p.train_elevations_deg = {0.f, 60.f};
   auto raised = run_evaluation(objects, p, "zoo");
@@ -330,7 +332,7 @@ TEST(RunEvaluation, TrainingElevationsAddTrainingViewsAndNoTestedOnes) {
                             })->detail;
   const size_t extra = 2 * objects.size() * p.views_per_object;
   EXPECT_NE(views.find('(' + std::to_string(extra) + " for training only)"), std::string::npos) << views;
-  EXPECT_GT(samples(*raised), 2 * samples(*plain));  // three elevations' views and prefixes, a few too small
+  EXPECT_GT(trained_samples(*raised), 2 * trained_samples(*plain));  // three elevations' views and prefixes, a few too small
 }
 
 // Training views of a simulated sensor are learnt, never tested: the tested views stay the ideal ones,
@@ -367,11 +369,6 @@ TEST(RunEvaluation, TrainingSensorViewsAreLearntAndNeverTested) {
 TEST(RunEvaluation, FewShotModelsLearnAtMostKObjectsPerCategoryAndTestTheSame) {
   const std::vector<EvalObject> objects = zoo_objects(4, 3);  // two folds: 2 learnable per category
   EvalParams p = ush_training_params();
-  auto samples = [](const EvalResult& r) {
-    for (const PhaseTiming& t : r.timings)
-      if (t.phase == "train (all folds)") return std::stoul(t.detail);
-    return 0ul;
-  };
   auto all = run_evaluation(objects, p, "zoo");
   p.objects_per_category = 2;
   auto two = run_evaluation(objects, p, "zoo");
@@ -384,9 +381,9 @@ TEST(RunEvaluation, FewShotModelsLearnAtMostKObjectsPerCategoryAndTestTheSame) {
     EXPECT_EQ(one->decisions[i].points, all->decisions[i].points);
     EXPECT_EQ(two->decisions[i].winner, all->decisions[i].winner);
   }
-  EXPECT_EQ(samples(*two), samples(*all));
-  EXPECT_GT(samples(*one), samples(*all) * 4 / 10);  // one object of two, give or take a too-small prefix
-  EXPECT_LT(samples(*one), samples(*all) * 6 / 10);
+  EXPECT_EQ(trained_samples(*two), trained_samples(*all));
+  EXPECT_GT(trained_samples(*one), trained_samples(*all) * 4 / 10);  // one object of two, give or take a too-small prefix
+  EXPECT_LT(trained_samples(*one), trained_samples(*all) * 6 / 10);
 }
 
 }  // namespace
