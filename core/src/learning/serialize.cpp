@@ -23,6 +23,7 @@ namespace {
 
 using serial::Reader;
 using serial::Writer;
+using serial::crc32;
 
 constexpr char kMagic[8] = {'G', 'L', 'M', 'P', 'S', 'M', 'D', 'L'};
 // 1: stage slots of the first 5 methods. 2: a u8 slot count first (USH is method 6). 3: the size-only
@@ -49,20 +50,6 @@ constexpr char kMagic[8] = {'G', 'L', 'M', 'P', 'S', 'M', 'D', 'L'};
 constexpr uint32_t kFormatVersion = 12;
 constexpr uint32_t kOldestReadableVersion = 1;
 
-uint32_t crc32(const uint8_t* data, size_t n) {
-  static const std::array<uint32_t, 256> table = [] {
-    std::array<uint32_t, 256> t{};
-    for (uint32_t i = 0; i < 256; ++i) {
-      uint32_t c = i;
-      for (int k = 0; k < 8; ++k) c = (c & 1) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
-      t[i] = c;
-    }
-    return t;
-  }();
-  uint32_t c = 0xFFFFFFFFu;
-  for (size_t i = 0; i < n; ++i) c = table[(c ^ data[i]) & 0xFF] ^ (c >> 8);
-  return c ^ 0xFFFFFFFFu;
-}
 
 }  // namespace
 

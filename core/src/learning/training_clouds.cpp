@@ -1,15 +1,17 @@
 // train() (model.h): the features of every training cloud, whole and as its top-down prefixes, computed in
-// parallel, then train_on_features (training.cpp) learns from them.
+// parallel into a training set (training_set.h), then train_on_features (training.cpp) learns from them.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <map>
 #include <string>
+#include <tuple>
 
 #include "glimpse/clock.h"
 #include "glimpse/learning/model.h"
 #include "glimpse/learning/train_params.h"
 #include "glimpse/learning/training.h"
+#include "glimpse/learning/training_set.h"
 #include "glimpse/random.h"
 #include "glimpse/threads.h"
 #include "glimpse/views/exploration.h"
@@ -33,12 +35,11 @@ struct Job {
 };
 
 // The clouds to learn from: each training cloud whole, then its top-down prefixes; `learnt` receives each
-// training cloud as it is learnt (training_view).
+// training cloud as it is learnt (training_view). `seen`: the views of each object before these.
 std::vector<Job> learning_jobs(const std::vector<TrainingCloud>& data, const TrainParams& params,
-                               std::vector<Cloud>& learnt) {
+                               std::map<std::string, uint64_t> seen, std::vector<Cloud>& learnt) {
   std::vector<Job> jobs;
   learnt.assign(data.size(), Cloud{});
-  std::map<std::string, uint64_t> seen;  // clouds so far per object
   for (size_t i = 0; i < data.size(); ++i) {
     // The tilt is seeded by the object's name and the cloud's place among its views, not by its
     // place in the list: the same views learnt anywhere (the lab, the service) get the same tilts.
@@ -111,16 +112,26 @@ Expected<std::vector<TrainingSample>> training_samples(const std::vector<Trainin
   return samples;
 }
 
+// Each cloud as given, with its relative density (what the scan filters' density is the median of).
+std::vector<GivenCloud> given_clouds(const std::vector<TrainingCloud>& data, const TrainParams& params) {
+  std::vector<GivenCloud> given(data.size());
+  const int threads = resolve_threads(params.threads);
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 4)
+  for (int64_t i = 0; i < static_cast<int64_t>(data.size()); ++i) {
+    const TrainingCloud& d = data[static_cast<size_t>(i)];
+    given[static_cast<size_t>(i)] = {d.category, d.object_id, relative_density(d.cloud.points), d.augmented};
+  }
+  return given;
+}
+
 // The parameters learnt with: the density clouds are classified at, when the scan filters need one and
 // none is given, is the median relative density of the training clouds as given.
-TrainParams with_learnt_density(const std::vector<TrainingCloud>& data, const TrainParams& params) {
+TrainParams with_learnt_density(const std::vector<GivenCloud>& clouds, const TrainParams& params) {
   TrainParams learnt_params = params;
   if (params.filter_scans && params.filters.relative_density <= 0) {
-    const int threads = resolve_threads(params.threads);
-    std::vector<double> density(data.size(), 0.0);
-#pragma omp parallel for num_threads(threads) schedule(dynamic, 4)
-    for (int64_t i = 0; i < static_cast<int64_t>(data.size()); ++i) density[i] = relative_density(data[i].cloud.points);
-    std::erase(density, 0.0);
+    std::vector<double> density;
+    for (const GivenCloud& c : clouds)
+      if (c.relative_density != 0.0) density.push_back(c.relative_density);
     if (!density.empty()) {
       std::nth_element(density.begin(), density.begin() + std::ptrdiff_t(density.size() / 2), density.end());
       learnt_params.filters.relative_density = density[density.size() / 2];
@@ -129,23 +140,32 @@ TrainParams with_learnt_density(const std::vector<TrainingCloud>& data, const Tr
   return learnt_params;
 }
 
+// The rows in the order they are learnt: by category, then object, each object's rows as they came.
+void order_by_object(std::vector<TrainingSample>& samples) {
+  std::stable_sort(samples.begin(), samples.end(), [](const TrainingSample& a, const TrainingSample& b) {
+    return std::tie(a.category, a.object_id) < std::tie(b.category, b.object_id);
+  });
+}
+
 // Statistics count the clouds given, not the prefixes made of them.
-void count_given_clouds(Model& model, const std::vector<TrainingCloud>& data) {
-  model.stats.clouds = data.size();
+void count_given_clouds(Model& model, const std::vector<GivenCloud>& clouds) {
+  model.stats.clouds = clouds.size();
   std::fill(model.stats.clouds_per_category.begin(), model.stats.clouds_per_category.end(), 0);
-  for (const TrainingCloud& d : data)
+  for (const GivenCloud& c : clouds)
     ++model.stats.clouds_per_category[static_cast<size_t>(
-        std::find(model.categories.begin(), model.categories.end(), d.category) - model.categories.begin())];
+        std::find(model.categories.begin(), model.categories.end(), c.category) - model.categories.begin())];
 }
 
 }  // namespace
 
-Expected<Model> train(const std::vector<TrainingCloud>& data, const TrainParams& params, const ProgressFn& progress,
-                      const CancelFn& cancel) {
-  const auto t0 = std::chrono::steady_clock::now();
-  if (Status s = check_training_set(data, params); !s.ok()) return s.error();
+Expected<TrainingSet> training_set(const std::vector<TrainingCloud>& data, const TrainParams& params,
+                                   const ProgressFn& progress, const CancelFn& cancel, const TrainingSet* base) {
+  if (data.empty()) return invalid_argument("no training clouds");
+  std::map<std::string, uint64_t> seen;  // views so far per object: the base's
+  if (base)
+    for (const GivenCloud& c : base->clouds) ++seen[c.object_id];
   std::vector<Cloud> learnt;
-  const std::vector<Job> jobs = learning_jobs(data, params, learnt);
+  const std::vector<Job> jobs = learning_jobs(data, params, std::move(seen), learnt);
   // Tilted training views: the clouds as given are what calibration decides (what a sensor sends).
   const bool tilted = params.tilt_deg > 0 && params.calibration_folds >= 2;
   std::vector<Expected<CloudFeatures>> feats, as_seen;
@@ -153,13 +173,32 @@ Expected<Model> train(const std::vector<TrainingCloud>& data, const TrainParams&
     return s.error();
   auto samples = training_samples(data, jobs, feats, as_seen, tilted);
   if (!samples.ok()) return samples.error();
-  feats.clear();
-  as_seen.clear();
-  auto model = train_on_features(std::move(*samples), with_learnt_density(data, params), progress, cancel);
+  return TrainingSet{kFeaturePipelineVersion, given_clouds(data, params), std::move(*samples)};
+}
+
+Expected<Model> train(TrainingSet set, const TrainParams& params, const ProgressFn& progress, const CancelFn& cancel) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (set.feature_version != kFeaturePipelineVersion)
+    return failed_precondition("the training set's features are of pipeline version " +
+                               std::to_string(set.feature_version) + ", this build computes version " +
+                               std::to_string(kFeaturePipelineVersion) + ": train again from the clouds");
+  order_by_object(set.samples);
+  auto model = train_on_features(std::move(set.samples), with_learnt_density(set.clouds, params), progress, cancel);
   if (model.ok()) {
-    count_given_clouds(*model, data);
+    count_given_clouds(*model, set.clouds);
     model->stats.seconds = ms_since(t0) / 1000.0;
   }
+  return model;
+}
+
+Expected<Model> train(const std::vector<TrainingCloud>& data, const TrainParams& params, const ProgressFn& progress,
+                      const CancelFn& cancel) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (Status s = check_training_set(data, params); !s.ok()) return s.error();
+  auto set = training_set(data, params, progress, cancel);
+  if (!set.ok()) return set.error();
+  auto model = train(std::move(*set), params, progress, cancel);
+  if (model.ok()) model->stats.seconds = ms_since(t0) / 1000.0;
   return model;
 }
 
