@@ -182,14 +182,55 @@ Expected<double> MeasureSensorDensity(const TrainOptions& o, const Folder& folde
   return density->first;
 }
 
-v1::TrainRequest HeaderMessage(const TrainOptions& o, const std::vector<v1::Method>& methods) {
+// The header: a new model's methods and parameters (with the views' density, kept so the model can grow
+// alike), or the base a model grows from (its own).
+v1::TrainRequest HeaderMessage(const TrainOptions& o, const std::vector<v1::Method>& methods, double view_density) {
   v1::TrainRequest header;
-  header.mutable_header()->set_model_name(o.name);
-  for (v1::Method m : methods) header.mutable_header()->add_methods(m);
-  header.mutable_header()->set_description(o.description);
-  if (o.train_seed) header.mutable_header()->mutable_parameters()->set_seed(*o.train_seed);
-  if (o.no_scan_filters) header.mutable_header()->mutable_parameters()->set_filter_scans(false);
+  v1::TrainHeader* h = header.mutable_header();
+  h->set_model_name(o.name.empty() ? ParseModelRef(o.base)->name() : o.name);
+  h->set_description(o.description);
+  if (!o.base.empty()) {
+    *h->mutable_base() = *ParseModelRef(o.base);
+    return header;
+  }
+  for (v1::Method m : methods) h->add_methods(m);
+  if (o.train_seed) h->mutable_parameters()->set_seed(*o.train_seed);
+  if (o.no_scan_filters) h->mutable_parameters()->set_filter_scans(false);
+  if (view_density > 0) h->mutable_parameters()->set_view_density(view_density);
   return header;
+}
+
+// The base version a model grows from (--base), as the server describes it.
+Expected<v1::ModelInfo> BaseModel(v1::Glimpse::Stub& stub, const ConnectionOptions& conn, const std::string& ref) {
+  grpc::ClientContext context;
+  PrepareContext(context, conn, 30);
+  v1::GetModelRequest request;
+  *request.mutable_model() = *ParseModelRef(ref);
+  v1::ModelInfo info;
+  if (grpc::Status s = stub.GetModel(&context, request, &info); !s.ok())
+    return failed_precondition("--base " + ref + ": " + FormatStatus(s));
+  if (info.training_set_bytes() == 0)
+    return failed_precondition("--base " + ref + ": the model keeps no training set, so it cannot grow; train it "
+                               "again with its clouds and the added ones");
+  return info;
+}
+
+// The density the simulated sensors' views are thinned to: the base's when the model grows (its views
+// and the added ones alike), else measured in a first pass (0: no sensor views).
+Expected<double> ViewDensity(v1::Glimpse::Stub& stub, const ConnectionOptions& conn, const TrainOptions& o,
+                             const Folder& folder, const std::set<std::string>& zoo_extra, bool meshes) {
+  if (o.base.empty()) return MeasureSensorDensity(o, folder, zoo_extra, meshes);
+  auto base = BaseModel(stub, conn, o.base);
+  if (!base) return base.error();
+  const double density = base->parameters().view_density();
+  if (density > 0 && meshes && o.protocol.views && !o.protocol.train_sensors.empty()) {
+    if (!o.quiet)
+      std::fprintf(stderr, "train: growing %s:%u; sensor views thinned to its views' density (%.1f points per extent^2)\n",
+                   base->name().c_str(), base->version(), density);
+    return density;
+  }
+  if (!o.quiet) std::fprintf(stderr, "train: growing %s:%u\n", base->name().c_str(), base->version());
+  return MeasureSensorDensity(o, folder, zoo_extra, meshes);
 }
 
 struct TrainCall {
@@ -250,6 +291,10 @@ int RunTrain(const ConnectionOptions& conn, const TrainOptions& o) {
     PrintError(what, methods.error().message);
     return kExitUsage;
   }
+  if (o.name.empty() && o.base.empty()) {
+    PrintError(what, "--name is required (with --base, the base's name is the default)");
+    return kExitUsage;
+  }
   // The folder's listing and manifest first: a bad manifest row fails before anything is sent.
   Folder folder;
   std::set<std::string> zoo_extra;  // with a folder: the zoo adds objects of its categories only
@@ -271,14 +316,15 @@ int RunTrain(const ConnectionOptions& conn, const TrainOptions& o) {
   }
   const bool meshes = o.zoo || !folder.dataset.objects.empty();
   if (!o.quiet) PrintRecipe(o, folder, meshes);
-  auto sensor_density = MeasureSensorDensity(o, folder, zoo_extra, meshes);
+  auto stub = ConnectGlimpse(conn, what);
+  if (!stub) return kExitError;
+  auto sensor_density = ViewDensity(*stub, conn, o, folder, zoo_extra, meshes);
   if (!sensor_density) {
     PrintError(what, sensor_density.error().message);
     return kExitError;
   }
-  auto stub = ConnectGlimpse(conn, what);
-  if (!stub) return kExitError;
-  const TrainCall call = SendTraining(*stub, conn, o, HeaderMessage(o, *methods), folder, zoo_extra, *sensor_density);
+  const TrainCall call = SendTraining(*stub, conn, o, HeaderMessage(o, *methods, *sensor_density), folder, zoo_extra,
+                                      *sensor_density);
   if (!call.loaded.ok()) {
     PrintError(what, call.loaded.error().message);
     return kExitError;

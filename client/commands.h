@@ -28,7 +28,8 @@ struct TrainOptions {
   std::string dir;             // DIR/<category>/<files>; empty with zoo
   bool zoo = false;            // the core's procedural shape zoo: alone, or added to DIR (its categories)
   size_t per_category = 4;     // zoo objects per category
-  std::string name;
+  std::string name;            // empty with base: the base's name
+  std::string base;            // "NAME[:VERSION]": grow that version (its methods and parameters)
   std::string methods;         // "bok,bog"; empty: the server's default set
   std::string description;
   Placement placement;         // --up, --unit, --height (override the folder's manifest)

@@ -195,19 +195,27 @@ CLI::App* AddTrain(CLI::App& app, CommandLine& cl) {
                                       "transfers best to other collections: README)");
   train->add_option("--per-category", t.per_category, "zoo objects per category")->capture_default_str()
       ->check(CLI::Range(size_t{1}, size_t{10000}));
-  train->add_option("--name", t.name, "model name ([A-Za-z0-9._-], 1-128)")->required()
+  train->add_option("--name", t.name, "model name ([A-Za-z0-9._-], 1-128); with --base, the base's by default")
       ->check(Checked([](const std::string& s) { return ParseModelRef(s + ":latest", /*allow_latest=*/true); }, "NAME"));
+  auto* base = train->add_option("--base", t.base,
+                                 "grow this stored version: a new version that learns DIR's objects (new categories or more "
+                                 "objects) beside the base's, computing the features of DIR's clouds alone; the base's methods "
+                                 "and parameters, its views' density; give the view flags the base was trained with")
+                   ->check(kModelRef);
   train->add_option("--methods", t.methods, "comma-separated: bok,bog,kgh,vfh,esf,ush,size,fusion (default: the server's, vfh,ush,size,fusion: the fusion, its components and the size baseline; the keypoint methods and esf take about 5 times as long to train)")
-      ->check(kMethodList);
+      ->check(kMethodList)
+      ->excludes(base);
   train->add_option("--description", t.description, "free text stored with the model");
   AddViewOptions(*train, t.protocol, true);
   AddPlacementOptions(*train, t.placement, true, true);
   train->add_option_function<uint64_t>("--train-seed", [&t](const uint64_t& s) { t.train_seed = s; },
-                                       "k-means and sampling seed of training (default: the server's)");
+                                       "k-means and sampling seed of training (default: the server's)")
+      ->excludes(base);
   AddTrainingViewOptions(*train, t);
   train->add_flag("--no-scan-filters", t.no_scan_filters,
                   "the model classifies every point sent as it is (default: it removes stray returns and a floor and "
-                  "thins dense scans to its training density)");
+                  "thins dense scans to its training density)")
+      ->excludes(base);
   train->add_flag("--json", t.json, "print the stored model as JSON");
   train->add_flag("-q,--quiet", t.quiet, "no progress on stderr");
   train->callback([&cl] { cl.run = [&cl] { return RunTrain(cl.conn, cl.train); }; });

@@ -71,7 +71,8 @@ std::string KeypointsLearnt(const v1::ModelInfo& m) {
 std::string TrainSummary(const v1::ModelInfo& m) {
   return "trained " + m.name() + ":" + std::to_string(m.version()) + (m.is_default() ? " (default)" : "") + ": " +
          std::to_string(m.categories_size()) + " categories, " + std::to_string(m.stats().clouds()) + " clouds, " +
-         KeypointsLearnt(m) + Fixed(m.stats().seconds(), 1) + " s, " + FormatBytes(m.size_bytes());
+         KeypointsLearnt(m) + Fixed(m.stats().seconds(), 1) + " s, " + FormatBytes(m.size_bytes()) +
+         (m.grown_from().empty() ? "" : ", grown from " + m.grown_from());
 }
 
 // ---- models ----
@@ -104,6 +105,9 @@ std::string ModelDetails(const v1::ModelInfo& m) {
                           " objects, " + KeypointsLearnt(m) + Fixed(m.stats().seconds(), 1) + " s"},
       {"size:", FormatBytes(m.size_bytes())},
       {"sha256:", m.sha256().empty() ? "-" : m.sha256()},
+      {"grown from:", m.grown_from().empty() ? "-" : m.grown_from()},
+      {"can grow:", m.training_set_bytes() > 0 ? "yes (training set kept, " + FormatBytes(m.training_set_bytes()) + ")"
+                                               : "no (no training set kept: train --base needs one)"},
   };
   return Table(rows);
 }

@@ -59,6 +59,8 @@ void ToProto(const ModelRecord& r, v1::ModelInfo* out) {
   out->set_feature_version(r.feature_version);
   out->set_min_extent_m(r.stats.min_extent_m);
   out->set_max_extent_m(r.stats.max_extent_m);
+  out->set_grown_from(r.grown_from);
+  out->set_training_set_bytes(r.training_set_bytes);
 }
 
 namespace {

@@ -4,8 +4,12 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <chrono>
+#include <optional>
 
 #include "engine.h"
+#include "glimpse/clock.h"
+#include "glimpse/learning/training_set.h"
 #include "proto/wire/train_params.h"
 
 namespace glimpse::server {
@@ -17,12 +21,36 @@ Engine CoreEngine(int request_threads) {
     if (request_threads > 0) omp_set_num_threads(request_threads);
   };
   Engine e;
-  e.train = [budget](const std::vector<TrainingCloud>& data, const wire::TrainSpec& spec, const ProgressFn& progress,
-                     const CancelFn& cancel) -> Expected<Model> {
+  e.train = [budget](const std::vector<TrainingCloud>& data, const wire::TrainSpec& spec,
+                     std::span<const uint8_t> base_set, size_t keep_set_bytes, const ProgressFn& progress,
+                     const CancelFn& cancel) -> Expected<TrainedModel> {
     auto params = wire::ToTrainParams(spec);
     if (!params) return params.error();
     budget();
-    return glimpse::train(data, *params, progress, cancel);
+    const auto t0 = std::chrono::steady_clock::now();
+    std::optional<TrainingSet> base;
+    if (!base_set.empty()) {
+      auto read = deserialize_training_set(base_set);
+      if (!read) return Error{read.error().code, "the base's training set: " + read.error().message};
+      base = std::move(*read);
+    }
+    auto set = training_set(data, *params, progress, cancel, base ? &*base : nullptr);
+    if (!set) return set.error();
+    if (base) {
+      auto joined = join(std::move(*base), std::move(*set));
+      if (!joined) return joined.error();
+      set = std::move(*joined);
+    }
+    TrainedModel out;
+    if (keep_set_bytes > 0) {
+      out.training_set = serialize(*set);
+      if (out.training_set.size() > keep_set_bytes) out.training_set.clear();
+    }
+    auto model = glimpse::train(std::move(*set), *params, progress, cancel);
+    if (!model) return model.error();
+    out.model = std::move(*model);
+    out.model.stats.seconds = ms_since(t0) / 1000.0;  // the added clouds' features and the learning
+    return out;
   };
   e.classify = [budget](const Model& model, const Cloud& cloud, std::optional<MethodId> method,
                         const CancelFn& cancel) {

@@ -16,9 +16,19 @@
 
 namespace glimpse::server {
 
+// A trained model and the bytes of the training set it learnt from (empty: none kept).
+struct TrainedModel {
+  Model model;
+  std::vector<uint8_t> training_set;
+};
+
 struct Engine {
-  std::function<Expected<Model>(const std::vector<TrainingCloud>&, const wire::TrainSpec&, const ProgressFn&,
-                                const CancelFn&)>
+  // Trains on the clouds, joined with a base version's training set when its bytes are given (the
+  // model grows: only the clouds' features are computed). The set's bytes come back with the model
+  // when they are at most `keep_set_bytes` (0: none kept).
+  std::function<Expected<TrainedModel>(const std::vector<TrainingCloud>&, const wire::TrainSpec&,
+                                       std::span<const uint8_t> base_set, size_t keep_set_bytes,
+                                       const ProgressFn&, const CancelFn&)>
       train;
   std::function<Expected<Classification>(const Model&, const Cloud&, std::optional<MethodId>,
                                          const CancelFn&)>

@@ -56,8 +56,10 @@ constexpr const char* kSelectRecord = R"sql(
   SELECT v.id, v.name, v.version,
          EXISTS(SELECT 1 FROM served s WHERE s.name = v.name AND s.version = v.version),
          v.created_unix_ms, v.description, v.methods, v.default_method, v.params, v.size_bytes, v.sha256,
-         t.clouds, t.objects, t.keypoints, t.seconds, v.feature_version, t.min_extent_m, t.max_extent_m
-    FROM versions v LEFT JOIN training_stats t ON t.version_id = v.id )sql";
+         t.clouds, t.objects, t.keypoints, t.seconds, v.feature_version, t.min_extent_m, t.max_extent_m,
+         v.grown_from, COALESCE(ts.size_bytes, 0)
+    FROM versions v LEFT JOIN training_stats t ON t.version_id = v.id
+                    LEFT JOIN training_sets ts ON ts.version_id = v.id )sql";
 
 float finite_or_zero(float v) { return std::isfinite(v) ? v : 0.f; }
 
@@ -174,6 +176,8 @@ Expected<std::vector<ModelRecord>> ModelStore::Query(std::string_view where,
     r.feature_version = static_cast<uint32_t>(s.i64(15));
     r.stats.min_extent_m = static_cast<float>(s.f64(16));
     r.stats.max_extent_m = static_cast<float>(s.f64(17));
+    r.grown_from = s.text(18);
+    r.training_set_bytes = static_cast<uint64_t>(s.i64(19));
     out.push_back(std::move(r));
   }
   for (ModelRecord& r : out) {
@@ -214,13 +218,20 @@ Expected<ModelRecord> ModelStore::Put(const NewModel& model) {
 
     Stmt ins(db_,
              "INSERT INTO versions (name, version, created_unix_ms, description, methods, default_method,"
-             " params, blob, size_bytes, sha256, feature_version) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+             " params, blob, size_bytes, sha256, feature_version, grown_from)"
+             " VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
     ins.bind(1, model.name).bind(2, version).bind(3, NowUnixMs()).bind(4, model.description);
     ins.bind(5, JoinMethods(model.methods)).bind(6, MethodToken(model.default_method)).bind(7, model.params);
     ins.bind_blob(8, model.blob).bind(9, static_cast<int64_t>(model.blob.size())).bind(10, Sha256Hex(model.blob));
-    ins.bind(11, static_cast<int64_t>(model.feature_version));
+    ins.bind(11, static_cast<int64_t>(model.feature_version)).bind(12, model.grown_from);
     if (Status s = ins.run(); !s.ok()) return s.error();
     id = sqlite3_last_insert_rowid(db_);
+    if (!model.training_set.empty()) {
+      Stmt set(db_, "INSERT INTO training_sets (version_id, blob, size_bytes, sha256) VALUES (?, ?, ?, ?)");
+      set.bind(1, id).bind_blob(2, model.training_set).bind(3, static_cast<int64_t>(model.training_set.size()));
+      set.bind(4, Sha256Hex(model.training_set));
+      if (Status s = set.run(); !s.ok()) return s.error();
+    }
 
     for (size_t i = 0; i < model.stats.categories.size(); ++i) {
       int64_t clouds = i < model.stats.clouds_per_category.size()
@@ -287,6 +298,19 @@ Expected<std::vector<uint8_t>> ModelStore::Blob(int64_t id) const {
   std::vector<uint8_t> blob = s.blob(0);
   if (Sha256Hex(blob) != s.text(1))
     return data_loss("stored model id " + std::to_string(id) + " does not match its sha256");
+  return blob;
+}
+
+Expected<std::vector<uint8_t>> ModelStore::TrainingSet(int64_t id) const {
+  std::lock_guard lock(mutex_);
+  Stmt s(db_, "SELECT blob, sha256 FROM training_sets WHERE version_id = ?");
+  s.bind(1, id);
+  auto row = s.step();
+  if (!row) return row.error();
+  if (!*row) return failed_precondition("model id " + std::to_string(id) + " keeps no training set");
+  std::vector<uint8_t> blob = s.blob(0);
+  if (Sha256Hex(blob) != s.text(1))
+    return data_loss("the training set of model id " + std::to_string(id) + " does not match its sha256");
   return blob;
 }
 

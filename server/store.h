@@ -37,6 +37,8 @@ struct ModelRecord {
   uint32_t feature_version = 0;  // the model's feature pipeline version; 0: stored before it was recorded
   uint64_t size_bytes = 0;
   std::string sha256;  // hex digest of the blob
+  std::string grown_from;  // "name:version" of the version it was grown from; empty: none
+  uint64_t training_set_bytes = 0;  // the training set kept beside it; 0: none (it cannot grow)
 };
 
 // What Put stores: a new version of `name`.
@@ -49,6 +51,8 @@ struct NewModel {
   TrainingSummary stats;
   std::vector<uint8_t> blob;
   uint32_t feature_version = 0;  // Model::feature_version
+  std::string grown_from;             // ModelRecord::grown_from
+  std::vector<uint8_t> training_set;  // kept beside the model (empty: none)
 };
 
 struct StoreOptions {
@@ -74,6 +78,9 @@ class ModelStore {
   Expected<std::vector<ModelRecord>> List(std::string_view name_filter = {}) const;
   // The serialized model, checked against its digest (DATA_LOSS when it does not match).
   Expected<std::vector<uint8_t>> Blob(int64_t id) const;
+  // The training set kept beside a version, checked against its digest (DATA_LOSS when it does not
+  // match); FAILED_PRECONDITION when none is kept.
+  Expected<std::vector<uint8_t>> TrainingSet(int64_t id) const;
   // version 0: every version of the name. Returns the deleted versions.
   Expected<std::vector<uint32_t>> Delete(std::string_view name, uint32_t version);
   // version 0: unpin, serve the latest. Returns the record now served by default.

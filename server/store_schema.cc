@@ -69,6 +69,19 @@ constexpr const char* kMigrations[] = {
     ALTER TABLE training_stats ADD COLUMN min_extent_m REAL NOT NULL DEFAULT 0;
     ALTER TABLE training_stats ADD COLUMN max_extent_m REAL NOT NULL DEFAULT 0;
     )sql",
+    // 4: the version a version was grown from ("name:version", '' none), and the training set kept
+    // beside a version so it can grow (every row's features; none for versions stored before).
+    R"sql(
+    ALTER TABLE versions ADD COLUMN grown_from TEXT NOT NULL DEFAULT '';
+    CREATE TABLE training_sets (
+      version_id INTEGER PRIMARY KEY REFERENCES versions(id) ON DELETE CASCADE,
+      blob       BLOB NOT NULL,
+      size_bytes INTEGER NOT NULL,
+      sha256     TEXT NOT NULL
+    );
+    CREATE TRIGGER training_sets_immutable BEFORE UPDATE ON training_sets
+      BEGIN SELECT RAISE(ABORT, 'training sets are immutable'); END;
+    )sql",
 };
 constexpr int kSchemaVersion = static_cast<int>(std::size(kMigrations));
 

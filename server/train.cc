@@ -5,6 +5,7 @@
 #include <algorithm>
 
 #include "convert.h"
+#include "glimpse/learning/model.h"
 #include "proto/wire/clouds.h"
 
 namespace glimpse::server {
@@ -23,6 +24,7 @@ Status AddTrainRequest(const v1::TrainRequest& msg, const Limits& limits, TrainI
       input.name = msg.header().model_name();
       input.description = msg.header().description();
       input.spec = std::move(*spec);
+      input.keep_set_bytes = limits.max_training_set_bytes;
       return {};
     }
     case v1::TrainRequest::kCloud: {
@@ -57,27 +59,73 @@ Status CheckTrainInput(const TrainInput& input) {
   return {};
 }
 
+namespace {
+
+// The version a spec grows, its kept training set, and the spec with the base's methods and parameters.
+struct Base {
+  std::string name_version;
+  std::vector<uint8_t> training_set;
+};
+
+Expected<Base> BaseOf(wire::TrainSpec& spec, const ModelStore& store) {
+  auto record = store.Get(spec.base->name, spec.base->version);
+  if (!record) return Error{record.error().code, "base: " + record.error().message};
+  Base base{record->name + ":" + std::to_string(record->version), {}};
+  if (record->feature_version != kFeaturePipelineVersion)
+    return failed_precondition("base " + base.name_version + " was trained with feature pipeline version " +
+                               std::to_string(record->feature_version) + ", this server computes version " +
+                               std::to_string(kFeaturePipelineVersion) + ": train it again from its clouds");
+  if (record->training_set_bytes == 0)
+    return failed_precondition("base " + base.name_version +
+                               " keeps no training set (stored by an older server, or larger than "
+                               "--max-training-set-bytes): train it again from its clouds with the added ones");
+  auto set = store.TrainingSet(record->id);
+  if (!set) return Error{set.error().code, "base " + base.name_version + ": " + set.error().message};
+  base.training_set = std::move(*set);
+  spec.methods = record->methods;
+  spec.default_method = record->default_method;
+  google::protobuf::util::JsonParseOptions options;
+  options.ignore_unknown_fields = true;
+  if (!google::protobuf::util::JsonStringToMessage(record->params, &spec.parameters, options).ok())
+    return data_loss("base " + base.name_version + ": its stored training parameters do not parse");
+  return base;
+}
+
+}  // namespace
+
 Expected<ModelRecord> TrainAndStore(const TrainInput& input, const Engine& engine, ModelStore& store,
                                     const ProgressFn& progress, const CancelFn& cancel) {
-  auto model = engine.train(input.clouds, input.spec, progress, cancel);
-  if (!model) return model.error();
+  wire::TrainSpec spec = input.spec;
+  Base base;
+  if (spec.base) {
+    auto found = BaseOf(spec, store);
+    if (!found) return found.error();
+    base = std::move(*found);
+  }
+  auto trained = engine.train(input.clouds, spec, base.training_set, input.keep_set_bytes, progress, cancel);
+  if (!trained) return trained.error();
+  const Model* model = &trained->model;
   if (cancel && cancel()) return cancelled("training was cancelled");
   if (progress) progress({"storing", 0, 1});
   NewModel row;
   row.name = input.name;
+  row.grown_from = base.name_version;
+  row.training_set = std::move(trained->training_set);
   row.description = input.description;
   row.methods = model->methods;
   row.default_method = model->default_method;
   row.stats = model->stats;
   if (row.stats.categories.empty()) row.stats.categories = model->categories;
   row.feature_version = model->feature_version;
-  // What training used (every field), so ModelInfo shows it rather than an echo of the request.
-  v1::TrainParameters used = input.spec.parameters;
+  // What training used (every field), so ModelInfo shows it rather than an echo of the request; the
+  // views' density as the sender gave it (training does not read it).
+  v1::TrainParameters used = spec.parameters;
   if (engine.effective_parameters) {
-    auto effective = engine.effective_parameters(input.spec);
+    auto effective = engine.effective_parameters(spec);
     if (!effective) return effective.error();
     used = std::move(*effective);
   }
+  if (spec.parameters.has_view_density()) used.set_view_density(spec.parameters.view_density());
   (void)google::protobuf::util::MessageToJsonString(used, &row.params);
   row.blob = engine.serialize(*model);
   if (row.blob.empty()) return internal_error("serialized model is empty");

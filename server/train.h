@@ -23,6 +23,7 @@ struct TrainInput {
   wire::TrainSpec spec;
   std::vector<TrainingCloud> clouds;
   size_t points = 0;  // summed over clouds
+  size_t keep_set_bytes = 0;  // the largest training set kept beside the model (Limits)
 };
 
 // Adds one streamed message: the header first and once, then labelled clouds within the limits.
@@ -30,7 +31,8 @@ Status AddTrainRequest(const v1::TrainRequest& msg, const Limits& limits, TrainI
 // Checks the collected input once the stream is closed.
 Status CheckTrainInput(const TrainInput& input);
 
-// Trains, serializes and stores a new version of input.name; nothing is stored on any error.
+// Trains, serializes and stores a new version of input.name (grown from the spec's base when it names
+// one: the base's methods, parameters and kept training set); nothing is stored on any error.
 Expected<ModelRecord> TrainAndStore(const TrainInput& input, const Engine& engine, ModelStore& store,
                                     const ProgressFn& progress, const CancelFn& cancel);
 

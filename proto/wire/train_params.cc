@@ -56,6 +56,8 @@ Status CheckParameters(const Parameters& p) {
   for (const CountField& f : kCounts)
     if ((p.*f.has)() && (p.*f.get)() == 0) return invalid_argument(std::string(f.name) + " must be positive");
   if (!v1::DecisionKind_IsValid(p.decision())) return invalid_argument("unknown decision kind");
+  if (p.has_view_density() && !(std::isfinite(p.view_density()) && p.view_density() >= 0))
+    return invalid_argument("view_density must be a finite number >= 0");
   return {};
 }
 
@@ -85,6 +87,14 @@ Expected<TrainSpec> TrainSpecFromProto(const v1::TrainHeader& header) {
   if (Status s = CheckMethods(header, spec); !s.ok()) return s.error();
   if (Status s = CheckParameters(header.parameters()); !s.ok()) return s.error();
   spec.parameters = header.parameters();
+  if (header.has_base()) {
+    if (Status s = ValidateModelName(header.base().name()); !s.ok())
+      return invalid_argument("base: " + s.error().message);
+    if (!spec.methods.empty() || spec.default_method || header.parameters().ByteSizeLong() > 0)
+      return invalid_argument("a model grown from a base keeps the base's methods and parameters: "
+                              "send no methods, default_method or parameters with base");
+    spec.base = BaseRef{header.base().name(), header.base().version()};
+  }
   return spec;
 }
 

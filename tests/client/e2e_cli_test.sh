@@ -128,6 +128,15 @@ for k in 1 2; do awk '{ print $1 * 3, $2 * 3, $3 * 3 }' "$DATA/blob/s$k.xyz" >"$
 run 0 train "$CLOUDS" --name clouds --methods esf,vfh && out_has "^trained clouds:1 \(default\): 2 categories, 4 clouds"
 err_has "^train: 4 cloud files: \+z up, in metres, sent as they are$"
 grep -qE "surface samples|first pass|simulated" "$ERR" && fail "training on cloud files alone spoke of meshes"
+# Growing it: a third category, learnt beside the base's (its methods, parameters and kept features).
+GROW="$GLIMPSE_TEST_TMP/grow"
+mkdir -p "$GROW/huge"
+for k in 1 2; do awk '{ print $1 * 9, $2 * 9, $3 * 9 }' "$DATA/blob/s$k.xyz" >"$GROW/huge/h$k.xyz"; done
+run 0 train "$GROW" --base clouds && out_has "^trained clouds:2 \(default\): 3 categories, 6 clouds, .*grown from clouds:1$"
+err_has "^train: growing clouds:1$"
+run 0 models show clouds:2 && out_has "^grown from: +clouds:1$" && out_has "^can grow: +yes"
+run 2 train "$GROW" --base clouds --methods vfh  # the base's methods
+run 1 train "$GROW" --base nosuch && err_has "^glimpse: train $GROW: --base nosuch: NOT_FOUND"
 run 0 models delete clouds
 run 2 train "$DATA" --name folder --sensor-views depth:2 && err_has "depth:2"  # a usage error naming the item
 run 1 train "$DATA" --name folder --methods kgh,bok --views 0 --mesh-points 100 -q  # too few keypoints for codebooks

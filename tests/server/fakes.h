@@ -138,8 +138,9 @@ class FakeSession final : public ScanSession {
 
 inline Engine FakeEngine(FakeBehaviour* b) {
   Engine e;
-  e.train = [b](const std::vector<TrainingCloud>& data, const wire::TrainSpec& spec, const ProgressFn& progress,
-                const CancelFn& cancel) -> Expected<Model> {
+  // The fake's training set is its categories, comma-separated: a grown model learns the base's too.
+  e.train = [b](const std::vector<TrainingCloud>& data, const wire::TrainSpec& spec, std::span<const uint8_t> base_set,
+                size_t keep_set_bytes, const ProgressFn& progress, const CancelFn& cancel) -> Expected<TrainedModel> {
     ++b->train_calls;
     if (b->train_error) return *b->train_error;
     if (b->train_waits_for_cancel) {
@@ -147,6 +148,10 @@ inline Engine FakeEngine(FakeBehaviour* b) {
       return cancelled("training cancelled");
     }
     std::set<std::string> cats, objects;
+    for (std::string base(base_set.begin(), base_set.end()), c; !base.empty(); base.erase(0, c.size() + 1)) {
+      c = base.substr(0, base.find(','));
+      cats.insert(c);
+    }
     size_t points = 0;
     b->augmented_clouds = int(std::count_if(data.begin(), data.end(), [](const TrainingCloud& d) { return d.augmented; }));
     for (const auto& d : data) {
@@ -170,7 +175,11 @@ inline Engine FakeEngine(FakeBehaviour* b) {
       m.stats.clouds_per_category.push_back(
           size_t(std::count_if(data.begin(), data.end(), [&](const TrainingCloud& d) { return d.category == c; })));
     m.stats.seconds = 0.25;
-    return m;
+    std::string set;
+    for (const auto& c : m.categories) set += (set.empty() ? "" : ",") + c;
+    TrainedModel out{m, {}};
+    if (set.size() <= keep_set_bytes) out.training_set.assign(set.begin(), set.end());
+    return out;
   };
   e.classify = [b](const Model& model, const Cloud& cloud, std::optional<MethodId> method,
                    const CancelFn& cancel) -> Expected<Classification> {

@@ -234,7 +234,10 @@ TEST(Train, ClientCancelStopsTrainingAndStoresNothing) {
   *cloud.mutable_cloud()->mutable_cloud() = wire::CloudToProto(SpiralCloud(10));
   stream->Write(cloud);
   stream->WritesDone();
-  WaitUntil([&] { return h.behaviour.train_calls > 0; });
+  v1::TrainProgress received;  // read, so the server's first write does not wait for this client
+  ASSERT_TRUE(stream->Read(&received));
+  EXPECT_EQ(received.stage(), "received");
+  ASSERT_TRUE(WaitUntil([&] { return h.behaviour.train_calls > 0; }));
   ctx.TryCancel();
   for (v1::TrainProgress p; stream->Read(&p);) {
   }

@@ -183,6 +183,30 @@ TEST(Store, DeleteOneVersionOrAllAndNeverReuseVersionNumbers) {
   EXPECT_EQ(store->Put(Sample("m", "e"))->version, 5u);
 }
 
+TEST(Store, KeepsATrainingSetBesideAVersionUntilItIsDeleted) {
+  TempDir dir;
+  const std::string path = dir.file("g.db");
+  auto store = OpenOk(path);
+  NewModel with = Sample("m", "a");
+  with.training_set = {1, 2, 3, 4, 5};
+  with.grown_from = "base:2";
+  auto kept = store->Put(with);
+  auto without = store->Put(Sample("m", "b"));
+  ASSERT_TRUE(kept.ok() && without.ok());
+  EXPECT_EQ(kept->training_set_bytes, 5u);
+  EXPECT_EQ(kept->grown_from, "base:2");
+  EXPECT_EQ(without->training_set_bytes, 0u);
+  EXPECT_EQ(without->grown_from, "");
+  EXPECT_EQ(*store->TrainingSet(kept->id), with.training_set);
+  EXPECT_EQ(store->TrainingSet(without->id).error().code, ErrorCode::kFailedPrecondition);
+  EXPECT_EQ(store->Get("m", 1)->training_set_bytes, 5u);
+
+  RawExec(path, "DROP TRIGGER training_sets_immutable; UPDATE training_sets SET blob = x'00';");
+  EXPECT_EQ(store->TrainingSet(kept->id).error().code, ErrorCode::kDataLoss);
+  ASSERT_TRUE(store->Delete("m", 1).ok());
+  EXPECT_EQ(store->TrainingSet(kept->id).error().code, ErrorCode::kFailedPrecondition);  // deleted with it
+}
+
 TEST(Store, SetDefaultPinsAVersionAndFallsBackToLatest) {
   auto store = OpenOk(":memory:");
   for (const char* tag : {"a", "b", "c"}) ASSERT_TRUE(store->Put(Sample("m", tag)).ok());
@@ -322,9 +346,11 @@ TEST(Store, MigratesAnOlderSchema) {
     auto store = OpenOk(path);
     ASSERT_TRUE(store->Put(Sample("m")).ok());
   }
-  // As a schema-1 server left it: no trigger (2), no feature version or extents (3).
+  // As a schema-1 server left it: no trigger (2), no feature version or extents (3), no grown_from or
+  // training sets (4).
   RawExec(path,
-          "DROP TRIGGER versions_immutable; ALTER TABLE versions DROP COLUMN feature_version;"
+          "DROP TABLE training_sets; ALTER TABLE versions DROP COLUMN grown_from;"
+          " DROP TRIGGER versions_immutable; ALTER TABLE versions DROP COLUMN feature_version;"
           " ALTER TABLE training_stats DROP COLUMN min_extent_m; ALTER TABLE training_stats DROP COLUMN max_extent_m;"
           " PRAGMA user_version = 1;");
   auto store = OpenOk(path);
@@ -333,7 +359,9 @@ TEST(Store, MigratesAnOlderSchema) {
   EXPECT_EQ(store->Get("m", 1)->description, "model a");  // data kept
   EXPECT_EQ(store->Get("m", 1)->feature_version, 0u);     // unknown for a version stored before it was recorded
   EXPECT_EQ(store->Get("m", 1)->stats.max_extent_m, 0.f);
+  EXPECT_EQ(store->Get("m", 1)->training_set_bytes, 0u);  // none kept: it cannot grow
   NewModel next = Sample("m");
+  next.training_set = {9, 9};
   next.feature_version = 3;
   next.stats.min_extent_m = 0.25f;
   next.stats.max_extent_m = 1.75f;
@@ -343,6 +371,7 @@ TEST(Store, MigratesAnOlderSchema) {
   EXPECT_EQ(got->feature_version, 3u);
   EXPECT_EQ(got->stats.min_extent_m, 0.25f);
   EXPECT_EQ(got->stats.max_extent_m, 1.75f);
+  EXPECT_EQ(got->training_set_bytes, 2u);
   sqlite3* db = nullptr;
   ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
   EXPECT_NE(sqlite3_exec(db, "UPDATE versions SET description = 'x'", nullptr, nullptr, nullptr), SQLITE_OK);

@@ -161,6 +161,9 @@ void count_given_clouds(Model& model, const std::vector<GivenCloud>& clouds) {
 Expected<TrainingSet> training_set(const std::vector<TrainingCloud>& data, const TrainParams& params,
                                    const ProgressFn& progress, const CancelFn& cancel, const TrainingSet* base) {
   if (data.empty()) return invalid_argument("no training clouds");
+  std::vector<GivenCloud> categories = base ? base->clouds : std::vector<GivenCloud>{};
+  for (const TrainingCloud& d : data) categories.push_back({d.category, {}, 0, false});
+  if (Status s = check_training_set(categories, params); !s.ok()) return s.error();  // before any feature
   std::map<std::string, uint64_t> seen;  // views so far per object: the base's
   if (base)
     for (const GivenCloud& c : base->clouds) ++seen[c.object_id];
@@ -194,7 +197,6 @@ Expected<Model> train(TrainingSet set, const TrainParams& params, const Progress
 Expected<Model> train(const std::vector<TrainingCloud>& data, const TrainParams& params, const ProgressFn& progress,
                       const CancelFn& cancel) {
   const auto t0 = std::chrono::steady_clock::now();
-  if (Status s = check_training_set(data, params); !s.ok()) return s.error();
   auto set = training_set(data, params, progress, cancel);
   if (!set.ok()) return set.error();
   auto model = train(std::move(*set), params, progress, cancel);
