@@ -9,7 +9,7 @@ build_pkgs=(
   build-essential cmake ninja-build pkg-config git ca-certificates
   libeigen3-dev libpcl-dev libnanoflann-dev libqhull-dev libembree-dev liblinear-dev
   libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc
-  libsqlite3-dev sqlite3
+  libsqlite3-dev sqlite3 zlib1g-dev
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev
   prometheus-cpp-dev
   python3 python3-grpcio python3-grpc-tools python3-yaml

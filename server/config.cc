@@ -112,7 +112,7 @@ const std::vector<Option>& Options() {
       {"max-cached-models", "GLIMPSE_MAX_CACHED_MODELS", "N", "deserialized models kept in memory [16]",
        Limit(&Limits::max_cached_models, size_t{1})},
       {"max-training-set-bytes", "GLIMPSE_MAX_TRAINING_SET_BYTES", "N",
-       "largest training set kept beside a model so it can grow (train --base), 0 keeps none [805306368]",
+       "largest training set kept beside a model so it can grow (train --base), compressed; 0 keeps none [268435456]",
        Limit(&Limits::max_training_set_bytes, size_t{0})},
       {"tls-cert", "GLIMPSE_TLS_CERT", "FILE", "PEM server certificate (chain); with --tls-key serves TLS only",
        Text([](ServerConfig& c) { return &c.tls.cert; })},

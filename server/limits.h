@@ -23,9 +23,10 @@ struct Limits {
   size_t max_session_points = 1'000'000;      // accumulated in one StreamClassify session
   size_t max_session_chunks = 10'000;
   size_t max_cached_models = 16;              // deserialized models kept in memory
-  // The largest training set kept beside a trained model (every row's features, about 11 KB a row
-  // with the default methods), so the model can grow (TrainHeader.base); 0: none kept.
-  size_t max_training_set_bytes = 768u << 20;
+  // The largest training set kept beside a trained model, compressed (every row's features: about
+  // 1.2 KB a row with the default methods, 56 MiB for 272 meshes with the recipe), so the model can
+  // grow (TrainHeader.base); 0: none kept.
+  size_t max_training_set_bytes = 256u << 20;
 };
 
 using SteadyClock = std::function<std::chrono::steady_clock::time_point()>;

@@ -220,7 +220,7 @@ grpc::Status GlimpseService::Train(grpc::ServerContext* ctx,
     progress.Received(input.clouds.size());
     auto record = TrainAndStore(
         input, options_.engine, *options_.store, [&](const TrainingProgress& p) { progress.Update(p); },
-        CancelFor(ctx));
+        CancelFor(ctx), [&](double share) { progress.SetFeaturesPercent(share); });
     if (!record) return record.error();
     log.model = LogModelRef(record->name, record->version);
     progress.Done(*record);

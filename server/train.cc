@@ -65,12 +65,13 @@ namespace {
 struct Base {
   std::string name_version;
   std::vector<uint8_t> training_set;
+  size_t clouds = 0;  // the base's training clouds
 };
 
 Expected<Base> BaseOf(wire::TrainSpec& spec, const ModelStore& store) {
   auto record = store.Get(spec.base->name, spec.base->version);
   if (!record) return Error{record.error().code, "base: " + record.error().message};
-  Base base{record->name + ":" + std::to_string(record->version), {}};
+  Base base{record->name + ":" + std::to_string(record->version), {}, record->stats.clouds};
   if (record->feature_version != kFeaturePipelineVersion)
     return failed_precondition("base " + base.name_version + " was trained with feature pipeline version " +
                                std::to_string(record->feature_version) + ", this server computes version " +
@@ -94,13 +95,17 @@ Expected<Base> BaseOf(wire::TrainSpec& spec, const ModelStore& store) {
 }  // namespace
 
 Expected<ModelRecord> TrainAndStore(const TrainInput& input, const Engine& engine, ModelStore& store,
-                                    const ProgressFn& progress, const CancelFn& cancel) {
+                                    const ProgressFn& progress, const CancelFn& cancel,
+                                    const std::function<void(double)>& features_share) {
   wire::TrainSpec spec = input.spec;
   Base base;
   if (spec.base) {
     auto found = BaseOf(spec, store);
     if (!found) return found.error();
     base = std::move(*found);
+    if (features_share)
+      features_share(kFeaturesPercent * static_cast<double>(input.clouds.size()) /
+                     static_cast<double>(input.clouds.size() + base.clouds));
   }
   auto trained = engine.train(input.clouds, spec, base.training_set, input.keep_set_bytes, progress, cancel);
   if (!trained) return trained.error();
@@ -138,21 +143,27 @@ Expected<ModelRecord> TrainAndStore(const TrainInput& input, const Engine& engin
   return store.Put(row);
 }
 
-double TrainPercent(std::string_view stage, size_t done, size_t total) {
+double TrainPercent(std::string_view stage, size_t done, size_t total, double features_percent) {
   struct Span {
     std::string_view stage;
     double from, to;
   };
   // The shares of the time a training run of the default methods takes (SHREC with the zoo on 2 cores:
-  // features 65 %, the stages 4 %, the logistic decision 9 % before calibration starts, calibration 19 %,
-  // the novelty model 3 %), which SecondsLeft extrapolates; in order, so a progress bar only moves on.
+  // features 65 %, the stages 4 % and the logistic decision 9 % ("centres", its last step), calibration
+  // 19 % (a step per inner fold), the novelty model 3 %), which SecondsLeft extrapolates; in order, so a
+  // progress bar only moves on.
   static constexpr Span kSpans[] = {{"received", 0, 0},     {"features", 0, 65},      {"codebooks", 65, 66},
-                                    {"centres", 66, 70},    {"calibration", 79, 97}, {"novelty", 97, 99.5},
+                                    {"centres", 66, 79},    {"calibration", 79, 97}, {"novelty", 97, 99.5},
                                     {"storing", 99.5, 99.9}, {"done", 100, 100}};
   for (const Span& s : kSpans) {
     if (s.stage != stage) continue;
     double f = total > 0 ? std::clamp(static_cast<double>(done) / static_cast<double>(total), 0.0, 1.0) : 0.0;
-    return s.from + f * (s.to - s.from);
+    // The spans as measured, with the features' end moved to features_percent and the rest scaled alike.
+    const double p = std::clamp(features_percent, 0.0, 100.0);
+    auto moved = [&](double x) {
+      return x <= kFeaturesPercent ? x * p / kFeaturesPercent : p + (x - kFeaturesPercent) * (100 - p) / (100 - kFeaturesPercent);
+    };
+    return moved(s.from) + f * (moved(s.to) - moved(s.from));
   }
   return -1;  // unknown stage: the caller keeps its last value
 }
@@ -170,6 +181,11 @@ void TrainProgressWriter::Received(size_t clouds) {
   write_(last_);
 }
 
+void TrainProgressWriter::SetFeaturesPercent(double percent) {
+  std::lock_guard lock(mutex_);
+  features_percent_ = percent;
+}
+
 void TrainProgressWriter::Update(const TrainingProgress& p) {
   if (p.stage == "done") return;  // core's end; the call is done once the model is stored
   std::lock_guard lock(mutex_);
@@ -178,7 +194,8 @@ void TrainProgressWriter::Update(const TrainingProgress& p) {
     last_.set_codebooks_fitted(p.done);
     last_.set_codebooks_total(p.total);
   }
-  const double percent = std::max(last_.percent(), std::min(99.0, TrainPercent(p.stage, p.done, p.total)));
+  const double percent =
+      std::max(last_.percent(), std::min(99.0, TrainPercent(p.stage, p.done, p.total, features_percent_)));
   const bool moved = p.stage != last_.stage() || percent >= last_.percent() + 1.0 || p.done == p.total;
   last_.set_stage(p.stage);
   last_.set_stage_done(p.done);

@@ -32,13 +32,20 @@ Status AddTrainRequest(const v1::TrainRequest& msg, const Limits& limits, TrainI
 Status CheckTrainInput(const TrainInput& input);
 
 // Trains, serializes and stores a new version of input.name (grown from the spec's base when it names
-// one: the base's methods, parameters and kept training set); nothing is stored on any error.
+// one: the base's methods, parameters and kept training set); nothing is stored on any error. A grown
+// model's features are those of the sent clouds alone: `features_share` receives their share of the
+// call (TrainPercent's) once the base is read.
 Expected<ModelRecord> TrainAndStore(const TrainInput& input, const Engine& engine, ModelStore& store,
-                                    const ProgressFn& progress, const CancelFn& cancel);
+                                    const ProgressFn& progress, const CancelFn& cancel,
+                                    const std::function<void(double)>& features_share = {});
+
+// The percent of a training call the features take when every cloud's are computed.
+inline constexpr double kFeaturesPercent = 65;
 
 // Share of the whole call done, 0-100, for a core stage ("features", "codebooks", ...) or one of the
-// server's ("received", "storing", "done").
-double TrainPercent(std::string_view stage, size_t done, size_t total);
+// server's ("received", "storing", "done"), when the features take `features_percent` of the call (the
+// other stages share the rest in their usual proportions).
+double TrainPercent(std::string_view stage, size_t done, size_t total, double features_percent = kFeaturesPercent);
 
 // The seconds left when `percent` of the call is done after `elapsed_s`: elapsed x the share to do over
 // the share done; 0 below 5 % (too little to extrapolate from) and at 100 %.
@@ -53,6 +60,7 @@ class TrainProgressWriter {
   explicit TrainProgressWriter(Write write) : write_(std::move(write)) {}
 
   void Received(size_t clouds);
+  void SetFeaturesPercent(double percent);  // a grown model's (TrainAndStore's features_share)
   void Update(const TrainingProgress& p);  // core's ProgressFn
   void Done(const ModelRecord& record);
 
@@ -60,6 +68,7 @@ class TrainProgressWriter {
   std::mutex mutex_;
   Write write_;
   v1::TrainProgress last_;
+  double features_percent_ = kFeaturesPercent;
   std::chrono::steady_clock::time_point received_ = std::chrono::steady_clock::now();
 };
 

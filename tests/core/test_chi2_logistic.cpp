@@ -9,6 +9,7 @@
 #include "format3.h"
 #include "glimpse/learning/chi2_logistic.h"
 #include "glimpse/learning/model.h"
+#include "glimpse/learning/scores.h"
 #include "glimpse/learning/train_params.h"
 #include "glimpse/features/upright_histogram.h"
 #include "glimpse/features/global_descriptors.h"
@@ -237,6 +238,23 @@ TEST(FusionHead, ItsShareIsCalibratedOnHeldOutFoldsAndItMovesTheScores) {
   auto ush = classify(p.with, p.test.front().cloud, MethodId::kUSH), ush0 = classify(p.without, p.test.front().cloud, MethodId::kUSH);
   ASSERT_TRUE(ush.ok() && ush0.ok());
   EXPECT_EQ(ush->scores, ush0->scores);
+}
+
+TEST(FusionHead, LearnsAtMostItsRowsPerCategoryTheSameOnesEveryTime) {
+  const std::vector<int> labels = {0, 1, 0, 0, 1, 0, 0, 2, 0, 0, 1, 0};  // 8, 3 and 1 rows
+  auto count = [&](const std::vector<uint8_t>& learns, int category) {
+    int n = 0;
+    for (size_t i = 0; i < labels.size(); ++i) n += learns[i] && labels[i] == category;
+    return n;
+  };
+  const std::vector<uint8_t> capped = fusion_head_learns(labels, 3, 2, 7);
+  EXPECT_EQ(count(capped, 0), 2);
+  EXPECT_EQ(count(capped, 1), 2);
+  EXPECT_EQ(count(capped, 2), 1);  // fewer than the cap: all
+  EXPECT_EQ(fusion_head_learns(labels, 3, 2, 7), capped);
+  EXPECT_NE(fusion_head_learns(labels, 3, 2, 8), capped);  // another seed, other rows
+  const std::vector<uint8_t> all = fusion_head_learns(labels, 3, 0, 7);
+  EXPECT_EQ(count(all, 0) + count(all, 1) + count(all, 2), int(labels.size()));
 }
 
 TEST(FusionHead, TheModelBytesKeepItAndAFormat6ModelReadsWithoutIt) {

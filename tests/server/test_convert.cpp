@@ -280,6 +280,22 @@ TEST(TrainPercent, IsMonotonicOverTheStagesInOrder) {
   EXPECT_LT(TrainPercent("mystery", 1, 2), 0);
 }
 
+TEST(TrainPercent, AGrownModelsFewFeaturesTakeTheirShareAndTheStagesTheRest) {
+  const double share = 5;  // a grown model: the features of a few added clouds
+  EXPECT_DOUBLE_EQ(TrainPercent("features", 4, 4, share), share);
+  EXPECT_DOUBLE_EQ(TrainPercent("codebooks", 0, 3, share), share);
+  EXPECT_NEAR(TrainPercent("calibration", 0, 4, share), share + (79.0 - 65) * (100 - share) / 35, 1e-9);
+  EXPECT_EQ(TrainPercent("done", 1, 1, share), 100);
+  double last = 0;
+  for (const char* stage : {"features", "codebooks", "centres", "calibration", "novelty", "storing"})
+    for (size_t done = 0; done <= 4; ++done) {
+      const double p = TrainPercent(stage, done, 4, share);
+      EXPECT_GE(p, last) << stage << " " << done;
+      last = p;
+    }
+  EXPECT_DOUBLE_EQ(TrainPercent("centres", 2, 4), TrainPercent("centres", 2, 4, kFeaturesPercent));
+}
+
 TEST(AddTrainRequest, HeaderFirstOnceThenLabelledCloudsWithinLimits) {
   Limits limits;
   limits.max_train_clouds = 2;

@@ -246,13 +246,18 @@ bool component_decisions(const InnerFolds& in, size_t j, const FoldRows& fold, F
 }
 
 // The fusion's logistic decision learnt on the fold's training rows like the stages, started from the
-// model's own head (all the rows): LIBLINEAR stops at the same tolerance of the same problem, in fewer
+// model's own head (all the rows it learns): LIBLINEAR stops at the same tolerance of the same problem, in fewer
 // steps. Per held-out row its probabilities; empty when the fit fails.
 Eigen::MatrixXd held_out_head_probabilities(const InnerFolds& in, const FoldRows& fold) {
   const TrainParams& p = in.impl.params;
   Eigen::MatrixXd probabilities;
-  auto head = fit_chi2_logistic(fusion_head_rows(in.impl, in.rows.histograms, fold.train_rows, in.threads),
-                                fold.train_labels, in.rows.categories, p.fusion_head, in.threads, &*in.impl.fusion_head);
+  std::vector<Eigen::Index> learnt;
+  std::vector<int> labels;
+  for (size_t i = 0; i < fold.train_rows.size(); ++i)
+    if (in.rows.head_learns.empty() || in.rows.head_learns[static_cast<size_t>(fold.train_rows[i])])
+      learnt.push_back(fold.train_rows[i]), labels.push_back(fold.train_labels[i]);
+  auto head = fit_chi2_logistic(fusion_head_rows(in.impl, in.rows.histograms, learnt, in.threads), labels,
+                                in.rows.categories, p.fusion_head, in.threads, &*in.impl.fusion_head);
   if (head.ok()) {
     const Eigen::MatrixXd x = fusion_head_rows(in.impl, in.rows.queries(), fold.test_rows, in.threads);
     probabilities.resize(x.rows(), in.rows.categories);
@@ -341,7 +346,7 @@ void model_references(Calibration& c, const ModelImpl& impl, const std::vector<M
 }  // namespace
 
 Calibration calibrate(const ModelImpl& impl, MethodId method, const CalibrationRows& rows, bool measure_novelty,
-                      int threads, const CancelFn& cancel) {
+                      int threads, const CancelFn& cancel, const std::function<void(size_t, size_t)>& fold_done) {
   const TrainParams& p = impl.params;
   Calibration c;
   c.method = method;
@@ -360,6 +365,7 @@ Calibration calibrate(const ModelImpl& impl, MethodId method, const CalibrationR
   for (int k = 0; k < folds; ++k) {
     if (cancel && cancel()) return c;  // the caller sees the cancel and stores nothing
     decide_held_out_fold(in, k, cancel, held_out);
+    if (fold_done) fold_done(static_cast<size_t>(k) + 1, static_cast<size_t>(folds));
   }
   if (held_out.scores.empty()) return c;
   if (in.with_head) c.fusion_head_share = choose_head_share(p.fusion_head_shares, held_out, c.fusion_head_share);

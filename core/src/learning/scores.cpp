@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "glimpse/learning/novelty.h"
+#include "glimpse/random.h"
 #include "glimpse/threads.h"
 
 namespace glimpse {
@@ -75,6 +76,21 @@ Eigen::MatrixXd fusion_head_rows(const ModelImpl& impl, const std::vector<Eigen:
 #pragma omp parallel for num_threads(threads > 0 ? threads : omp_get_max_threads()) schedule(static, 64)
   for (Eigen::Index i = 1; i < n; ++i) out.row(i) = features(i).transpose();
   return out;
+}
+
+std::vector<uint8_t> fusion_head_learns(const std::vector<int>& labels, int categories, int per_category,
+                                        uint64_t seed) {
+  std::vector<uint8_t> learns(labels.size(), 1);
+  if (per_category <= 0) return learns;
+  std::vector<std::vector<std::pair<uint64_t, size_t>>> by_category(static_cast<size_t>(categories));
+  for (size_t i = 0; i < labels.size(); ++i)
+    by_category[static_cast<size_t>(labels[i])].push_back({splitmix64(seed, i), i});
+  for (auto& rows : by_category) {
+    if (rows.size() <= static_cast<size_t>(per_category)) continue;
+    std::nth_element(rows.begin(), rows.begin() + per_category, rows.end());
+    for (size_t k = static_cast<size_t>(per_category); k < rows.size(); ++k) learns[rows[k].second] = 0;
+  }
+  return learns;
 }
 
 Eigen::VectorXd fused_scores(const Eigen::VectorXd& mean, const Eigen::VectorXd& probabilities, double share) {

@@ -56,6 +56,7 @@ void visit_params(TrainParams& p, F&& f) {
   f("fusion_head.c", p.fusion_head.c);
   f("fusion_head.sample_steps", p.fusion_head.sample_steps);
   f("fusion_head.sample_interval", p.fusion_head.sample_interval);
+  f("fusion_head_rows_per_category", p.fusion_head_rows_per_category);
   f("kmeans_restarts", p.kmeans_restarts);
   f("calibration_folds", p.calibration_folds);
   f("calibration_queries", p.calibration_queries);

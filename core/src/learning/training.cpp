@@ -182,6 +182,7 @@ DecisionParams model_stage_params(const TrainParams& params, MethodId m) {
 }
 
 // 3. Global histograms and decision stages (sec. 3.3), method by method.
+// Progress: "centres", one step per method and one for the fusion's logistic decision after them.
 Status fit_decision_stages(ModelImpl& impl, CalibrationRows& rows, const std::vector<CloudFeatures>& f,
                            const std::vector<std::optional<CloudFeatures>>& as_seen, const std::vector<MethodId>& base,
                            int threads, const Steps& steps) {
@@ -206,7 +207,7 @@ Status fit_decision_stages(ModelImpl& impl, CalibrationRows& rows, const std::ve
                               threads, rows.objects);
     if (!stage.ok()) return with_method(m, stage.error());
     impl.stages[static_cast<int>(m)] = std::move(*stage);
-    steps.report("centres", ++done, base.size());
+    steps.report("centres", ++done, base.size() + 1);
     if (steps.cancelled_now()) return cancelled("training cancelled");
   }
   if (!features.tilted) rows.as_seen.clear();
@@ -229,7 +230,14 @@ Status fit_fusion_head(ModelImpl& impl, const Model& model, const CalibrationRow
   if (!(needs(model.methods, MethodId::kFusion) && params.fusion_head.c > 0 && model.categories.size() >= 2 &&
         !fusion_head_methods(impl).empty()))
     return {};
-  auto head = fit_chi2_logistic(fusion_head_rows(impl, rows.histograms, {}, threads), rows.labels,
+  std::vector<Eigen::Index> learnt;  // empty: every row
+  std::vector<int> labels = rows.labels;
+  if (!rows.head_learns.empty()) {
+    labels.clear();
+    for (size_t i = 0; i < rows.labels.size(); ++i)
+      if (rows.head_learns[i]) learnt.push_back(static_cast<Eigen::Index>(i)), labels.push_back(rows.labels[i]);
+  }
+  auto head = fit_chi2_logistic(fusion_head_rows(impl, rows.histograms, learnt, threads), labels,
                                 static_cast<int>(model.categories.size()), params.fusion_head, threads);
   if (!head.ok()) return with_method(MethodId::kFusion, head.error());
   impl.fusion_head = std::move(*head);
@@ -294,6 +302,8 @@ Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainP
   auto impl = std::make_shared<ModelImpl>();
   impl->params = params;
   CalibrationRows rows = labelled_rows(data, model.categories);
+  if (params.fusion_head_rows_per_category > 0)
+    rows.head_learns = fusion_head_learns(rows.labels, rows.categories, params.fusion_head_rows_per_category, params.seed + 107);
   // With some clouds augmented, novelty measures against the others, learnt apart (step 5).
   const size_t augmented = static_cast<size_t>(std::count_if(data.begin(), data.end(), [](const TrainingSample& d) { return d.augmented; }));
   const bool novelty_apart = augmented > 0 && augmented < data.size();
@@ -312,11 +322,14 @@ Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainP
   if (Status s = choose_methods(model, *impl, params); !s.ok()) return s.error();
   if (steps.cancelled_now()) return cancelled("training cancelled");
   if (Status s = fit_fusion_head(*impl, model, rows, threads); !s.ok()) return s.error();
+  steps.report("centres", base.size() + 1, base.size() + 1);
   // 4. Calibration of the default method on held-out folds of the training objects. With augmented
   // clouds the novelty model's calibration measures novelty (step 5); this one does only if that fails.
-  steps.report("calibration", 0, 1);
-  impl->calibration = calibrate(*impl, model.default_method, rows, params.measure_novelty && !novelty_apart, threads, cancel);
-  steps.report("calibration", 1, 1);
+  const size_t folds = static_cast<size_t>(std::max(1, params.calibration_folds));
+  steps.report("calibration", 0, folds);
+  impl->calibration = calibrate(*impl, model.default_method, rows, params.measure_novelty && !novelty_apart, threads,
+                                cancel, [&](size_t k, size_t n) { steps.report("calibration", k, n); });
+  if (params.calibration_folds < 2) steps.report("calibration", folds, folds);  // else the last fold said so
   if (steps.cancelled_now()) return cancelled("training cancelled");
   model.stats = training_summary(data, f, rows.labels, model.categories);
   if (novelty_apart)

@@ -1,7 +1,8 @@
 // A training set's bytes: "GLMPSSET", u32 format version, u32 feature pipeline version, u64 payload
-// length, payload, u32 CRC-32 of the payload. The payload: a string table (categories and objects), the
-// given clouds, then the rows with their features (binary32, as computed; a top-down prefix and the
-// cloud as seen nested after the row's own). And join(), which grows a set.
+// length, u64 compressed length, the payload compressed by zlib (level 1: histograms of many empty bins
+// take a quarter of their bytes), u32 CRC-32 of the payload. The payload: a string table (categories and
+// objects), the given clouds, then the rows with their features (binary32, as computed; a top-down
+// prefix and the cloud as seen nested after the row's own). And join(), which grows a set.
 #include <cstring>
 #include <map>
 #include <memory>
@@ -10,6 +11,8 @@
 #include "glimpse/learning/training_set.h"
 
 #include "learning/serialize_bytes.h"
+
+#include <zlib.h>
 
 namespace glimpse {
 
@@ -187,30 +190,41 @@ Expected<TrainingSet> join(TrainingSet base, TrainingSet added) {
 
 std::vector<uint8_t> serialize(const TrainingSet& set) {
   const std::vector<uint8_t> body = payload(set);
+  uLongf packed_size = compressBound(body.size());
+  std::vector<uint8_t> packed(packed_size);
+  if (compress2(packed.data(), &packed_size, body.data(), body.size(), 1) != Z_OK) return {};
+  packed.resize(packed_size);
   Writer w;
   w.bytes.insert(w.bytes.end(), std::begin(kMagic), std::end(kMagic));
   w.u32(kSetFormat);
   w.u32(set.feature_version);
   w.u64(body.size());
-  w.bytes.insert(w.bytes.end(), body.begin(), body.end());
+  w.u64(packed.size());
+  w.bytes.insert(w.bytes.end(), packed.begin(), packed.end());
   w.u32(crc32(body.data(), body.size()));
   return std::move(w.bytes);
 }
 
 Expected<TrainingSet> deserialize_training_set(std::span<const uint8_t> bytes) {
-  if (bytes.size() < sizeof kMagic + 20 || std::memcmp(bytes.data(), kMagic, sizeof kMagic) != 0)
+  constexpr size_t kHead = sizeof kMagic + 24;
+  if (bytes.size() < kHead + 4 || std::memcmp(bytes.data(), kMagic, sizeof kMagic) != 0)
     return invalid_argument("not a Glimpse training set (no GLMPSSET header)");
   Reader head(bytes.data() + sizeof kMagic, bytes.size() - sizeof kMagic);
   const uint32_t format = head.u32("format");
   const uint32_t feature_version = head.u32("feature version");
   const uint64_t length = head.u64("length");
+  const uint64_t packed = head.u64("compressed length");
   if (format != kSetFormat)
     return invalid_argument("training set format " + std::to_string(format) + " is not " + std::to_string(kSetFormat));
-  if (length + 4 != head.left()) return data_loss("training set: its length does not match its bytes");
-  const uint8_t* body = bytes.data() + sizeof kMagic + 16;
-  Reader tail(body + length, 4);
-  if (crc32(body, length) != tail.u32("checksum")) return data_loss("training set checksum mismatch: the bytes are corrupt");
-  Reader r(body, length);
+  if (packed + 4 != head.left()) return data_loss("training set: its length does not match its bytes");
+  if (length / 1100 > packed) return data_loss("training set: it claims more bytes than zlib packs into its own");
+  std::vector<uint8_t> body(length);
+  uLongf unpacked = length;
+  if (uncompress(body.data(), &unpacked, bytes.data() + kHead, packed) != Z_OK || unpacked != length)
+    return data_loss("training set: its compressed bytes are corrupt");
+  Reader tail(bytes.data() + kHead + packed, 4);
+  if (crc32(body.data(), length) != tail.u32("checksum")) return data_loss("training set checksum mismatch: the bytes are corrupt");
+  Reader r(body.data(), length);
   return read_payload(r, feature_version);
 }
 

@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -31,6 +32,9 @@ struct CalibrationRows {
   std::vector<uint8_t> whole;  // per row: a whole cloud (1) or a top-down prefix (0)
   std::vector<std::string> object_categories;  // per object
   int categories = 0;
+  // Per row: whether the fusion's logistic decision learns it (TrainParams::fusion_head_rows_per_category);
+  // empty: every row.
+  std::vector<uint8_t> head_learns;
 
   const std::vector<Eigen::MatrixXd>& queries() const { return as_seen.empty() ? histograms : as_seen; }
 };
@@ -39,7 +43,9 @@ struct CalibrationRows {
 // objects. The codebooks are the model's own (fitted without labels). Without `measure_novelty` no novelty
 // is calibrated (nor any prefix decided): the settle margin, the head's share and the held-out accuracy
 // are the same. A cancel stops it between inner folds with what it has (the caller then stores nothing).
+// `fold_done(k, folds)` after each inner fold: long trainings report where calibration is.
 Calibration calibrate(const ModelImpl& impl, MethodId method, const CalibrationRows& rows, bool measure_novelty,
-                      int threads, const CancelFn& cancel = {});
+                      int threads, const CancelFn& cancel = {},
+                      const std::function<void(size_t, size_t)>& fold_done = {});
 
 }  // namespace glimpse

@@ -19,6 +19,10 @@ Eigen::VectorXd method_histogram(const ModelImpl& impl, MethodId method, const C
 // and a cloud's mapped features from their histograms (`histogram(m)` of each).
 std::vector<MethodId> fusion_head_methods(const ModelImpl& impl);
 Eigen::VectorXd fusion_head_features(const ModelImpl& impl, const std::function<Eigen::VectorXd(MethodId)>& histogram);
+// Per row (of category labels[i]), whether the logistic decision learns it: at most `per_category` rows of
+// each category, those of the smallest seeded hash of their place (every row when per_category <= 0).
+std::vector<uint8_t> fusion_head_learns(const std::vector<int>& labels, int categories, int per_category,
+                                        uint64_t seed);
 // The mapped features of every row of `histograms` (indexed by MethodId, rows aligned; `rows` empty: all),
 // rows shared among `threads` (<= 0: all).
 Eigen::MatrixXd fusion_head_rows(const ModelImpl& impl, const std::vector<Eigen::MatrixXd>& histograms,

@@ -76,6 +76,10 @@ struct TrainParams {
   // in one run of PSB -> SHREC (docs/results.md, "The recipe").
   Chi2LogisticParams fusion_head{.c = 10};
   std::vector<double> fusion_head_shares = {0, 0.05, 0.1, 0.15, 0.2, 0.3};
+  // The logistic decision learns at most this many rows of each category (views and prefixes alike,
+  // drawn by a seeded hash of each row's place), the model's and each calibration fold's alike; its
+  // cost grows with rows x categories. 0: every row.
+  int fusion_head_rows_per_category = 0;
 
   // Train on what will be seen: besides each training cloud, its top-down prefixes holding these
   // fractions of its points (sec. 4's exploration order), as samples of the same object. A scan is

@@ -46,7 +46,8 @@ Expected<Model> train(TrainingSet set, const TrainParams& params, const Progress
 // `base`'s clouds and rows, then `added`'s. A failed precondition when their feature versions differ.
 Expected<TrainingSet> join(TrainingSet base, TrainingSet added);
 
-// Versioned little-endian bytes ("GLMPSSET", CRC-32 checked); features stay binary32, as computed.
+// Versioned little-endian bytes ("GLMPSSET", zlib-compressed, CRC-32 checked); features stay binary32,
+// as computed. Empty when compression fails.
 std::vector<uint8_t> serialize(const TrainingSet& set);
 // Truncated, corrupt or foreign bytes are an error (DATA_LOSS or INVALID_ARGUMENT), never UB.
 Expected<TrainingSet> deserialize_training_set(std::span<const uint8_t> bytes);

@@ -38,6 +38,7 @@ struct EvalOptions {
   std::string decision = "nearest";
   std::string fusion_of;
   double fusion_head_c = -1;  // < 0: the recogniser's; 0: no logistic decision in the fusion
+  int fusion_head_rows = -1;  // < 0: the recogniser's; 0: every row
   std::string augmented_prefixes;  // "on", "off"; empty: the recogniser's
   int neighbours = 0;
   double pca_variance = 0;

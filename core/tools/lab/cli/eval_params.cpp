@@ -104,6 +104,7 @@ Status training_from(const EvalOptions& o, EvalParams& p) {
     }
   }
   if (o.fusion_head_c >= 0) p.train.fusion_head.c = o.fusion_head_c;
+  if (o.fusion_head_rows >= 0) p.train.fusion_head_rows_per_category = o.fusion_head_rows;
   if (!o.augmented_prefixes.empty()) p.train.augmented_prefixes = o.augmented_prefixes == "on";
   if (o.neighbours > 0) p.train.decision.neighbours = o.neighbours;
   if (o.tilt >= 0) p.train.tilt_deg = o.tilt;
