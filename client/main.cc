@@ -89,13 +89,24 @@ CLI::Option* AddCameraFovOption(CLI::App& cmd, std::optional<FieldOfView>& fov) 
 }
 
 // How the files are stood up and sized: meshes (`folder`: a folder's, whose manifest these override)
-// and, where `clouds`, cloud files alike, except --height, which sizes meshes only.
+// and, where `clouds`, cloud files alike, except --height, which sizes meshes only; --up floor where a
+// single cloud file is read (classify, stream).
 void AddPlacementOptions(CLI::App& cmd, Placement& placement, bool folder, bool clouds) {
   const std::string which = clouds ? "meshes and clouds" : "meshes";
-  cmd.add_option_function<std::string>("--up", [&placement](const std::string& t) { placement.up = *glimpse::parse_up(t); },
+  const bool floor = clouds && !folder;  // a single cloud file: classify, stream
+  cmd.add_option_function<std::string>("--up",
+                                       [&placement, floor](const std::string& t) {
+                                         const UpChoice up = *ParseUpChoice(t, floor);
+                                         placement.up = up.axis, placement.up_floor = up.floor;
+                                       },
                                        "the files' axis that points up, turned to +z: +z, -y, x, ... or \"x y z\"; " +
-                                           which + (folder ? " (overrides up_axis.csv)" : ""))
-      ->check(Checked(glimpse::parse_up, "AXIS"))->group("Placement");
+                                           which + (folder ? " (overrides up_axis.csv)" : "") +
+                                           (floor ? "; 'floor': a cloud file's up is the normal of the largest floor "
+                                                    "or table its camera looks down on (a depth camera's frame in "
+                                                    "its own coordinates)"
+                                                  : ""))
+      ->check(Checked([floor](std::string_view t) { return ParseUpChoice(t, floor); }, floor ? "AXIS|floor" : "AXIS"))
+      ->group("Placement");
   auto* unit = cmd.add_option_function<std::string>(
                       "--unit", [&placement](const std::string& t) { placement.sizing = *ParseUnit(t); },
                       "the files' unit: m, cm, mm, in; " + which + (folder ? " (overrides sizes.csv)" : ""))

@@ -9,6 +9,7 @@
 #include <omp.h>
 #include <set>
 
+#include "glimpse/geometry/floor_plane.h"
 #include "glimpse/views/sampling.h"
 #include "glimpse/views/placement.h"
 #include "glimpse/views/hidden_point_removal.h"
@@ -139,17 +140,33 @@ Status PlaceCloud(Cloud& cloud, const Placement& placement, const std::string& p
   if (placement.sizing && placement.sizing->kind == Sizing::kHeight)
     return invalid_argument(path + ": --height scales meshes; a cloud shows part of its object, not its height "
                                    "(--unit gives a cloud's unit)");
-  if (!placement.up && !placement.sizing) return {};
+  if (!placement.up && !placement.up_floor && !placement.sizing) return {};
+  std::error_code ec;
+  if (placement.up_floor && std::filesystem::is_directory(path, ec))
+    return invalid_argument(path + ": --up floor levels one cloud file by the floor it shows; a folder's frames "
+                                   "share one frame: give its up with --up AXIS");
   const float scale = placement.sizing ? placement.sizing->value : 1.f;
-  const Eigen::Matrix3f r = placement.up ? upright_rotation(*placement.up) : Eigen::Matrix3f::Identity();
-  for (Vec3& p : cloud.points) p = scale * (r * p);
-  if (cloud.sensor) *cloud.sensor = scale * (r * *cloud.sensor);
+  for (Vec3& p : cloud.points) p *= scale;  // first: the floor's fit measures in metres
+  if (cloud.sensor) *cloud.sensor *= scale;
+  std::optional<Vec3> up = placement.up;
+  if (placement.up_floor) {
+    Expected<Vec3> floor = floor_up(cloud);
+    if (!floor) return invalid_argument(path + ": --up floor: " + floor.error().message);
+    up = *floor;
+  }
+  if (!up) return {};
+  const Eigen::Matrix3f r = upright_rotation(*up);
+  for (Vec3& p : cloud.points) p = r * p;
+  if (cloud.sensor) *cloud.sensor = r * *cloud.sensor;
   if (cloud.frame) cloud.frame->axis = r * cloud.frame->axis, cloud.frame->up = r * cloud.frame->up;
   return {};
 }
 
 Expected<Cloud> MeshFileView(const std::string& path, const Placement& placement, const ViewRecipe& recipe,
                              std::optional<int> view) {
+  if (placement.up_floor)
+    return invalid_argument(path + ": --up floor levels a cloud file by the floor it shows; a mesh shows none: "
+                                   "give its up with --up AXIS");
   DatasetObject object;
   object.path = path;
   object.id = std::filesystem::path(path).stem().string();

@@ -22,6 +22,7 @@ namespace glimpse::client {
 // What the user says about meshes that have no manifest (or to override it).
 struct Placement {
   std::optional<Vec3> up;         // --up AXIS: this direction of the mesh's own coordinates points up
+  bool up_floor = false;          // --up floor: a cloud file's up is the floor it shows (core's floor_up)
   std::optional<Sizing> sizing;   // --unit U (kUnit) or --height M (kHeight)
 };
 
@@ -59,12 +60,15 @@ using TakeViews = std::function<bool(size_t, Expected<ObjectViews>&&)>;
 bool ViewsInOrder(size_t count, const MakeViews& make, const TakeViews& take);
 
 // A cloud file placed as the user says: --unit scales its points (and sensor) to metres, --up turns
-// that axis to +z. --height is refused: a cloud shows part of its object, not the object's height.
-// Errors name `path`.
+// that axis to +z; --up floor turns the normal of the largest floor or table the cloud's camera looks
+// down on (core's floor_up, on the points in metres) to +z. --height is refused: a cloud shows part of
+// its object, not the object's height. Errors name `path`: no floor found, or --up floor for a folder
+// (`path` a folder of frames, which share one frame that no single frame's floor may set).
 Status PlaceCloud(Cloud& cloud, const Placement& placement, const std::string& path);
 
-// A single mesh file (classify, stream): placed by `placement` (default +z up, metres) and seen from
-// paper viewpoint `view` (0-5), or whole (the full sampled cloud) when view is nullopt.
+// A single mesh file (classify, stream): placed by `placement` (default +z up, metres; --up floor is an
+// error naming `path`) and seen from paper viewpoint `view` (0-5), or whole (the full sampled cloud)
+// when view is nullopt.
 Expected<Cloud> MeshFileView(const std::string& path, const Placement& placement, const ViewRecipe& recipe,
                              std::optional<int> view);
 

@@ -5,6 +5,7 @@
 #include <charconv>
 #include <cmath>
 
+#include "glimpse/views/placement.h"
 #include "proto/wire/methods.h"
 #include "proto/wire/model_names.h"
 
@@ -56,6 +57,17 @@ Expected<FieldOfView> ParseFieldOfView(std::string_view text) {
       return invalid_argument(bad);
   }
   return FieldOfView{static_cast<float>(v[0]), static_cast<float>(v[1])};
+}
+
+Expected<UpChoice> ParseUpChoice(std::string_view text, bool allow_floor) {
+  if (Trim(text) == "floor") {
+    if (allow_floor) return UpChoice{std::nullopt, true};
+    return invalid_argument("--up floor levels a single cloud file (classify, stream) by the floor it shows; give an "
+                            "axis here: +z, -y, x, ... or \"x y z\"");
+  }
+  auto axis = parse_up(text);
+  if (!axis) return axis.error();
+  return UpChoice{*axis, false};
 }
 
 Expected<Vec3> ParseSensor(std::string_view text) {

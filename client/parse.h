@@ -1,7 +1,9 @@
 // Small parsers shared by the commands: model references ("chair:3"), method lists ("bok,bog"), sensor
-// positions. Method and status code names are the wire library's (proto/wire). Pure functions, no I/O.
+// positions, --up's axis or "floor". Method and status code names are the wire library's (proto/wire).
+// Pure functions, no I/O.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -31,5 +33,13 @@ Expected<Vec3> ParseSensor(std::string_view text);
 
 // A depth camera's full fields of view "HxV" in degrees, each in (0, 180), e.g. "57x43" (a Kinect).
 Expected<FieldOfView> ParseFieldOfView(std::string_view text);
+
+// --up's value: an axis as glimpse::parse_up reads it, or "floor" (the up of the floor a cloud file
+// shows) where `allow_floor` (the single cloud files of classify and stream).
+struct UpChoice {
+  std::optional<Vec3> axis;
+  bool floor = false;
+};
+Expected<UpChoice> ParseUpChoice(std::string_view text, bool allow_floor);
 
 }  // namespace glimpse::client

@@ -18,6 +18,7 @@ runtime_pkgs=(
   libgrpc++1.51 libprotobuf32 libsqlite3-0 libqhull-r8.0 libgomp1 libembree3-3 liblinear4
   libpcl-common1.13 libpcl-features1.13 libpcl-search1.13 libpcl-kdtree1.13
   libpcl-filters1.13 libpcl-segmentation1.13 libpcl-sample-consensus1.13 libpcl-octree1.13
+  libpcl-io1.13  # the client's reader of PCD binary_compressed frames (PCL's; it brings VTK's libraries)
   libprometheus-cpp-core1.0 libprometheus-cpp-pull1.0 ca-certificates
   sqlite3  # the shell deploy/model-sync.sh publishes and pulls model stores with
 )

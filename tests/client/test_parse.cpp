@@ -87,6 +87,22 @@ TEST(ParseFieldOfView, FullDegreesWidthByHeightEachInsideZeroTo180) {
   EXPECT_NE(ParseFieldOfView("57").error().message.find("HxV"), std::string::npos);
 }
 
+TEST(ParseUpChoice, AnAxisOrTheFloorWhereAllowed) {
+  auto axis = ParseUpChoice("-y", true);
+  ASSERT_TRUE(axis.ok());
+  EXPECT_FALSE(axis->floor);
+  ASSERT_TRUE(axis->axis.has_value());
+  EXPECT_TRUE(axis->axis->isApprox(Vec3(0, -1, 0)));
+  auto floor = ParseUpChoice(" floor ", true);
+  ASSERT_TRUE(floor.ok());
+  EXPECT_TRUE(floor->floor);
+  EXPECT_FALSE(floor->axis.has_value());
+  auto refused = ParseUpChoice("floor", false);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.error().message.find("single cloud file"), std::string::npos) << refused.error().message;
+  EXPECT_FALSE(ParseUpChoice("sideways", true).ok());
+}
+
 TEST(StatusCodeName, MatchesGrpcNames) {
   EXPECT_STREQ(wire::StatusCodeName(grpc::StatusCode::NOT_FOUND), "NOT_FOUND");
   EXPECT_STREQ(wire::StatusCodeName(grpc::StatusCode::DEADLINE_EXCEEDED), "DEADLINE_EXCEEDED");

@@ -1,17 +1,22 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <bit>
 #include <limits>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <random>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "common/temp_dir.h"
+#include "io_files.h"
 #include "glimpse/io/files.h"
 
 namespace glimpse {
@@ -19,18 +24,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-class IoTest : public ::testing::Test {
- protected:
-  std::string write(const std::string& name, const std::string& bytes) {
-    const std::string path = (dir_ / name).string();
-    std::ofstream(path, std::ios::binary) << bytes;
-    return path;
-  }
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
-
-  glimpse::testing::TempDir tmp_{"io"};
-  fs::path dir_ = tmp_.path();
-};
 
 Cloud random_cloud(size_t n, uint64_t seed) {
   std::mt19937_64 rng(seed);
@@ -44,13 +37,8 @@ Cloud random_cloud(size_t n, uint64_t seed) {
   return c;
 }
 
-template <class T>
-void put(std::string& s, T v, bool big) {
-  char b[sizeof(T)];
-  std::memcpy(b, &v, sizeof(T));
-  if (big != (std::endian::native == std::endian::big)) std::reverse(b, b + sizeof(T));
-  s.append(b, sizeof(T));
-}
+using test::IoTest;
+using test::put;
 
 // ---- round trips ----
 

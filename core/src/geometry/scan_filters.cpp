@@ -1,10 +1,7 @@
 #include "glimpse/geometry/scan_filters.h"
 
-#include <pcl/ModelCoefficients.h>
-#include <pcl/console/print.h>
 #include <pcl/filters/voxel_grid.h>
 #include <pcl/point_types.h>
-#include <pcl/segmentation/sac_segmentation.h>
 
 #include <algorithm>
 #include <cmath>
@@ -14,6 +11,7 @@
 #include <unordered_set>
 #include <utility>
 
+#include "glimpse/geometry/floor_plane.h"
 #include "glimpse/geometry/neighbourhoods.h"
 #include "glimpse/spatial_hash.h"
 
@@ -21,14 +19,10 @@ namespace glimpse {
 
 namespace {
 
-pcl::PointCloud<pcl::PointXYZ>::Ptr to_pcl(const Points& points, const std::vector<uint32_t>* subset = nullptr) {
+pcl::PointCloud<pcl::PointXYZ>::Ptr to_pcl(const Points& points) {
   auto out = std::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
-  const size_t n = subset ? subset->size() : points.size();
-  out->reserve(n);
-  for (size_t i = 0; i < n; ++i) {
-    const Vec3& p = points[subset ? (*subset)[i] : i];
-    out->push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
-  }
+  out->reserve(points.size());
+  for (const Vec3& p : points) out->push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
   return out;
 }
 
@@ -60,32 +54,15 @@ std::vector<uint32_t> lowest_band(const Cloud& cloud, const std::vector<uint32_t
   return band;
 }
 
-// The largest plane within max_tilt_deg of horizontal among the band's points (PCL's RANSAC, its fixed
-// seed: deterministic), as a unit normal facing up and an offset; none when it holds fewer than
-// min_inliers.
+// The largest plane within max_tilt_deg of horizontal among the band's points (fit_plane: RANSAC with
+// PCL's fixed seed, deterministic), as a unit normal facing up and an offset; none when it holds fewer
+// than min_inliers.
 std::optional<Eigen::Vector4f> band_plane(const Cloud& cloud, const std::vector<uint32_t>& band,
                                           const ScanFilterParams& params, size_t min_inliers) {
-  // PCL reports "no model found" (a normal outcome here) on stderr; a service's log is no place for it.
-  static const bool quiet = [] {
-    pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
-    return true;
-  }();
-  (void)quiet;
-  pcl::SACSegmentation<pcl::PointXYZ> seg;  // fixed RANSAC seed (PCL's default 12345): deterministic
-  seg.setOptimizeCoefficients(true);
-  seg.setModelType(pcl::SACMODEL_PERPENDICULAR_PLANE);
-  seg.setMethodType(pcl::SAC_RANSAC);
-  seg.setAxis(Eigen::Vector3f::UnitZ());
-  seg.setEpsAngle(params.max_tilt_deg * std::numbers::pi_v<float> / 180.f);
-  seg.setDistanceThreshold(params.ground_distance_m);
-  seg.setMaxIterations(200);
-  seg.setInputCloud(to_pcl(cloud.points, &band));
-  pcl::PointIndices inliers;
-  pcl::ModelCoefficients plane;
-  seg.segment(inliers, plane);
-  if (inliers.indices.size() < min_inliers || plane.values.size() != 4) return std::nullopt;
-  Eigen::Vector4f abcd(plane.values[0], plane.values[1], plane.values[2], plane.values[3]);
-  abcd /= abcd.head<3>().norm();
+  const std::optional<Plane> plane =
+      fit_plane(cloud.points, band, PlaneFitParams{params.ground_distance_m, 200, Vec3::UnitZ(), params.max_tilt_deg});
+  if (!plane || plane->inliers < min_inliers) return std::nullopt;
+  Eigen::Vector4f abcd(plane->normal.x(), plane->normal.y(), plane->normal.z(), plane->offset);
   if (abcd.z() < 0) abcd = -abcd;  // normal up
   return abcd;
 }

@@ -1,5 +1,5 @@
 // Format dispatch, shared parsing helpers and the plain XYZ format. The other formats live in
-// io_off.cpp (OFF, OBJ), io_ply.cpp and io_pcd.cpp.
+// off.cpp (OFF, OBJ), ply.cpp, stl.cpp, pcd.cpp and pcd_compressed.cpp.
 #include "glimpse/io/files.h"
 
 #include <Eigen/Geometry>
@@ -278,6 +278,10 @@ Expected<Cloud> read_camera_view(const std::string& path, float fov_h_deg, float
   Expected<Cloud> cloud = read_pcd(path, *data, v);
   if (!cloud) return cloud.error();
   if (cloud->sensor && cloud->frame) return cloud;
+  // PCL's OpenNI grabbers turn their frames' viewpoint half round x for their viewer; the points stay in
+  // the camera's coordinates (z forward), where a camera looking along -z would see none of them.
+  const bool openni_grabber = v[0] == 0 && v[1] == 0 && v[2] == 0 && v[3] == 0 && v[4] == 1 && v[5] == 0 && v[6] == 0;
+  if (openni_grabber) v[3] = 1, v[4] = 0;
   const Eigen::Quaternionf q{static_cast<float>(v[3]), static_cast<float>(v[4]), static_cast<float>(v[5]), static_cast<float>(v[6])};
   if (!q.coeffs().allFinite() || !(q.norm() > 1e-6f))
     return data_loss(path + ": VIEWPOINT's rotation (w x y z) is not a rotation");

@@ -1,4 +1,5 @@
-// PCD (Point Cloud Library file format v0.7): ascii and binary bodies; binary_compressed is refused.
+// PCD (Point Cloud Library file format v0.7): the header, ascii and binary bodies; binary_compressed bodies
+// go through PCL (pcd_compressed.cpp).
 #include <algorithm>
 #include <bit>
 #include <cstdint>
@@ -12,14 +13,7 @@
 namespace glimpse::io_detail {
 namespace {
 
-struct Field {
-  std::string name;
-  uint64_t size = 4;
-  char type = 'F';
-  uint64_t count = 1;
-  uint64_t offset = 0;  // bytes into a binary point record
-  uint64_t column = 0;  // token index in an ascii point line
-};
+using Field = PcdField;
 
 // One binary value (host is little-endian on every platform we build for; PCD binary is host order).
 bool decode(const char* p, const Field& f, double& out) {
@@ -48,7 +42,7 @@ bool decode(const char* p, const Field& f, double& out) {
 struct PcdHeader {
   std::vector<Field> fields;
   uint64_t width = 0, height = 1, points = 0;
-  bool have_points = false, have_width = false, binary = false;
+  bool have_points = false, have_width = false, binary = false, compressed = false;
   std::optional<Vec3> sensor;            // VIEWPOINT, when not the identity
   Cloud commented;  // "# glimpse_sensor x y z" (says "at the origin" too) and "# glimpse_frame ..." comments
   double viewpoint[7] = {0, 0, 0, 1, 0, 0, 0};  // VIEWPOINT: translation, then rotation w x y z
@@ -105,11 +99,10 @@ Status read_header_line(const std::string& path, size_t ln, const std::vector<st
   if (key == "data") {
     if (tok.size() != 2) return text_error(path, ln, "bad DATA line");
     const std::string kind = lower(tok[1]);
-    if (kind == "binary_compressed")
-      return invalid_argument(path + ":" + std::to_string(ln) +
-                              ": DATA binary_compressed is not supported; save as ascii or binary");
-    if (kind != "ascii" && kind != "binary") return text_error(path, ln, "unknown DATA '" + kind + "'");
+    if (kind != "ascii" && kind != "binary" && kind != "binary_compressed")
+      return text_error(path, ln, "unknown DATA '" + kind + "'");
     h.binary = kind == "binary";
+    h.compressed = kind == "binary_compressed";
     data = true;
     return {};
   }
@@ -166,6 +159,23 @@ Expected<Layout> field_layout(const std::string& path, size_t ln, std::vector<Fi
   return l;
 }
 
+// x, y, z of `points` records of layout.record_bytes from byte `start` of `bytes`.
+Status read_records(const std::string& path, std::string_view bytes, size_t start, const PcdHeader& h,
+                    const Layout& layout, Cloud& cloud) {
+  const uint64_t record = layout.record_bytes;
+  for (uint64_t i = 0; i < h.points; ++i) {
+    const char* rec = bytes.data() + start + i * record;
+    double v[3];
+    for (int a = 0; a < 3; ++a) {
+      const Field& f = h.fields[size_t(layout.xyz[a])];
+      if (!decode(rec + f.offset, f, v[a]))
+        return byte_error(path, start + i * record, "unsupported SIZE/TYPE for field '" + f.name + "'");
+    }
+    cloud.points.emplace_back(float(v[0]), float(v[1]), float(v[2]));
+  }
+  return {};
+}
+
 // A binary body from byte `start`: `points` records of layout.record_bytes.
 Status read_binary_body(const std::string& path, std::string_view text, size_t start, const PcdHeader& h,
                         const Layout& layout, Cloud& cloud) {
@@ -180,17 +190,22 @@ Status read_binary_body(const std::string& path, std::string_view text, size_t s
                                                            ch == '\r' || ch == '\t';
                                                   });
   if (text_body) return byte_error(path, start, "DATA binary, but the body is text: is it DATA ascii?");
-  for (uint64_t i = 0; i < h.points; ++i) {
-    const char* rec = text.data() + start + i * record;
-    double v[3];
-    for (int a = 0; a < 3; ++a) {
-      const Field& f = h.fields[size_t(layout.xyz[a])];
-      if (!decode(rec + f.offset, f, v[a]))
-        return byte_error(path, start + i * record, "unsupported SIZE/TYPE for field '" + f.name + "'");
-    }
-    cloud.points.emplace_back(float(v[0]), float(v[1]), float(v[2]));
+  return read_records(path, text, start, h, layout, cloud);
+}
+
+// A binary_compressed body from byte `start`, unpacked by PCL into binary records. Its x, y and z are
+// checked before: an error's byte offset then always lies in the file.
+Status read_compressed(const std::string& path, std::string_view text, size_t start, size_t data_line,
+                       const PcdHeader& h, const Layout& layout, Cloud& cloud) {
+  for (int a = 0; a < 3; ++a) {
+    const Field& f = h.fields[size_t(layout.xyz[a])];
+    const char zeros[8] = {};
+    double v;
+    if (!decode(zeros, f, v)) return text_error(path, data_line, "unsupported SIZE/TYPE for field '" + f.name + "'");
   }
-  return {};
+  Expected<std::string> records = read_compressed_body(path, text, start, h.fields, h.points, layout.record_bytes);
+  if (!records) return records.error();
+  return read_records(path, *records, 0, h, layout, cloud);
 }
 
 // An ascii body: one line of exactly layout.columns values per point, nothing after the last point.
@@ -227,6 +242,8 @@ Expected<Cloud> read_pcd(const std::string& path, std::string_view text, double*
   auto header = read_header(path, lines);
   if (!header) return header.error();
   PcdHeader& h = *header;
+  // PCL's writer leaves '_' (padding) fields out of a compressed body, and its reader skips them.
+  if (h.compressed) std::erase_if(h.fields, [](const Field& f) { return f.name == "_"; });
   auto layout = field_layout(path, lines.line_no(), h.fields);
   if (!layout) return layout.error();
   Cloud cloud;
@@ -234,14 +251,18 @@ Expected<Cloud> read_pcd(const std::string& path, std::string_view text, double*
   cloud.frame = h.commented.frame;
   if (viewpoint) std::copy(h.viewpoint, h.viewpoint + 7, viewpoint);
   const size_t data_line = lines.line_no();
-  const uint64_t min_bytes = h.binary ? layout->record_bytes : 2 * layout->columns;
   // Ascii: the last line may lack its newline. Binary: every record is whole (no +1, or the last one
-  // would be read a byte past the end).
-  if (h.points > kMaxPoints || h.points > (lines.remaining() + (h.binary ? 0 : 1)) / min_bytes)
-    return text_error(path, data_line, "POINTS " + std::to_string(h.points) + " exceeds what the file can hold");
+  // would be read a byte past the end). Compressed: LZF expands at most kLzfMaxExpansion times.
+  const uint64_t room = h.compressed ? lines.remaining() * kLzfMaxExpansion / layout->record_bytes
+                        : h.binary   ? lines.remaining() / layout->record_bytes
+                                     : (lines.remaining() + 1) / (2 * layout->columns);
+  if (h.points > kMaxPoints || h.points > room)
+    return text_error(path, data_line, "POINTS " + std::to_string(h.points) + " exceeds what the file can hold" +
+                                           (h.compressed ? " (a truncated binary_compressed body?)" : ""));
   cloud.points.reserve(h.points);
-  const Status body = h.binary ? read_binary_body(path, text, lines.offset(), h, *layout, cloud)
-                               : read_ascii_body(path, lines, h, *layout, cloud);
+  const Status body = h.compressed ? read_compressed(path, text, lines.offset(), data_line, h, *layout, cloud)
+                      : h.binary   ? read_binary_body(path, text, lines.offset(), h, *layout, cloud)
+                                   : read_ascii_body(path, lines, h, *layout, cloud);
   if (!body) return body.error();
   return cloud;
 }

@@ -75,6 +75,24 @@ Expected<Mesh> read_stl(const std::string& path, std::string_view data);  // bin
 Expected<Mesh> read_ply(const std::string& path, std::string_view text, bool vertices_only, Cloud* view);
 // `viewpoint`: when given, the VIEWPOINT's 7 numbers (translation, rotation w x y z; the default's when none).
 Expected<Cloud> read_pcd(const std::string& path, std::string_view text, double* viewpoint = nullptr);
+
+// A PCD field as its header declares it, and where it lies in a point's record (binary) or line (ascii).
+struct PcdField {
+  std::string name;
+  uint64_t size = 4;
+  char type = 'F';
+  uint64_t count = 1;
+  uint64_t offset = 0;  // bytes into a binary point record
+  uint64_t column = 0;  // token index in an ascii point line
+};
+// LZF's densest code, a back reference of 3 bytes, repeats at most 264 bytes: no body expands more.
+inline constexpr uint64_t kLzfMaxExpansion = 88;
+// A DATA binary_compressed body from byte `start` of `text` (LZF, each field's values stored together),
+// decompressed and unpacked by PCL's reader (pcd_compressed.cpp) into `points` records of `record_bytes`,
+// as DATA binary stores them. `fields` hold no '_' padding fields (PCL's writer drops them). Errors
+// (kDataLoss) name the path and the body's byte offset.
+Expected<std::string> read_compressed_body(const std::string& path, std::string_view text, size_t start,
+                                           const std::vector<PcdField>& fields, uint64_t points, uint64_t record_bytes);
 Status write_ply(const std::string& path, const Cloud& cloud);
 Status write_pcd(const std::string& path, const Cloud& cloud);
 
