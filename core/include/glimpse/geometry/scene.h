@@ -1,0 +1,57 @@
+// The objects of a depth camera's frame: the large planes (floor, walls, table tops) removed by RANSAC,
+// largest first, and what remains split into Euclidean clusters, one per object. PCL's SACSegmentation
+// (through fit_plane) and EuclideanClusterExtraction do the work inside the .cpp.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "glimpse/cloud.h"
+#include "glimpse/expected.h"
+#include "glimpse/geometry/floor_plane.h"
+
+namespace glimpse {
+
+struct SceneParams {
+  // Planes and clusters are found on the centroids of voxels this wide; each object then takes back
+  // every frame point of its voxels. 0: on the frame's points themselves.
+  float voxel_m = 0.01f;
+  float plane_distance_m = 0.02f;      // RANSAC inlier distance
+  double min_plane_fraction = 0.05;    // the smallest plane removed, as a share of the frame's voxels
+  // A floor, wall or table top covers at least this much in one connected piece; a plane's smaller
+  // pieces are objects' faces (a box's top, a laptop's screen) and stay for clustering.
+  float min_plane_area_m2 = 0.25f;
+  int max_planes = 8;                  // RANSAC fits at most, largest plane first
+  size_t plane_fit_points = 10000;     // RANSAC scores an even subsample of at most this many voxels
+  // Voxels closer than this belong to the same object: 3 cm bridges the gaps a depth camera leaves on one
+  // object (a bottle's handle behind its shadow) and still parts objects 5 cm apart.
+  float cluster_tolerance_m = 0.03f;
+  size_t min_object_points = 200;      // frame points; fewer: noise or a plane's remnant
+  size_t max_object_points = 200000;   // frame points; more: a wall or floor left over
+  float max_object_extent_m = 1.5f;    // the longest side of an object's box; longer: a wall's remnant
+  size_t max_objects = 32;             // the nearest ones are kept
+};
+
+struct SceneObject {
+  std::vector<uint32_t> indices;  // into the frame's points, ascending
+  Points points;                  // the frame's points at those indices
+  Vec3 box_min = Vec3::Zero();    // axis-aligned box in the frame's coordinates
+  Vec3 box_max = Vec3::Zero();
+  Vec3 centroid = Vec3::Zero();
+  float range_m = 0;              // the centroid's distance from the sensor (Cloud.sensor, else the origin)
+};
+
+struct Scene {
+  std::vector<Plane> planes;         // in the order removed (largest first); inliers count frame points
+  std::vector<SceneObject> objects;  // nearest the sensor first; at equal range the larger first
+  size_t finite_points = 0;          // the frame's points with a depth
+};
+
+// The planes and objects of `frame`. Non-finite points (an organised frame's missing depth) are skipped.
+// Deterministic: the same frame gives the same scene. A frame without finite points gives an empty scene.
+// Errors (kInvalidArgument): a negative voxel size, a non-positive plane distance or cluster tolerance,
+// min_object_points above max_object_points.
+Expected<Scene> segment_scene(const Cloud& frame, const SceneParams& params = {});
+
+}  // namespace glimpse

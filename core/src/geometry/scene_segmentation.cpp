@@ -1,0 +1,276 @@
+#include <pcl/point_types.h>
+#include <pcl/search/kdtree.h>
+#include <pcl/segmentation/extract_clusters.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <string>
+#include <unordered_map>
+
+#include "glimpse/geometry/scene.h"
+
+namespace glimpse {
+namespace {
+
+constexpr uint32_t kNone = std::numeric_limits<uint32_t>::max();
+constexpr int kKeyBits = 21;  // per axis: +-2^20 voxels
+constexpr float kKeyHalf = float(1 << (kKeyBits - 1));
+
+// Voxel labels: 0 = dropped, -(k + 1) = the k-th plane removed, c + 1 = the c-th cluster.
+using Labels = std::vector<int32_t>;
+
+std::unique_ptr<pcl::PointCloud<pcl::PointXYZ>> to_pcl(const Points& points) {
+  auto cloud = std::make_unique<pcl::PointCloud<pcl::PointXYZ>>();
+  cloud->reserve(points.size());
+  for (const Vec3& p : points) cloud->push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
+  return cloud;
+}
+
+// The voxel holding p (floor(x / leaf) per axis), packed in 63 bits.
+std::optional<uint64_t> voxel_key(const Vec3& p, float inverse_leaf) {
+  uint64_t key = 0;
+  for (int a = 0; a < 3; ++a) {
+    const float cell = std::floor(p[a] * inverse_leaf);
+    if (!(std::abs(cell) < kKeyHalf)) return std::nullopt;
+    key = (key << kKeyBits) | uint64_t(int64_t(cell) + int64_t(kKeyHalf));
+  }
+  return key;
+}
+
+// Voxel key -> voxel, open addressing with linear probing: a frame's 300k look-ups stay in two flat
+// arrays instead of a node-based map's scattered nodes.
+class VoxelIndex {
+ public:
+  explicit VoxelIndex(size_t n) {
+    size_t size = 16;
+    for (shift_ = 60; size < 2 * n; --shift_) size *= 2;
+    keys_.assign(size, kEmpty);
+    voxels_.assign(size, kNone);
+    mask_ = size - 1;
+  }
+  // The voxel of `key`, `next` when the key is new.
+  uint32_t find_or_insert(uint64_t key, uint32_t next) {
+    size_t slot = hash(key);
+    while (keys_[slot] != kEmpty && keys_[slot] != key) slot = (slot + 1) & mask_;
+    if (keys_[slot] == kEmpty) keys_[slot] = key, voxels_[slot] = next;
+    return voxels_[slot];
+  }
+
+ private:
+  static constexpr uint64_t kEmpty = std::numeric_limits<uint64_t>::max();  // keys have 63 bits
+  size_t hash(uint64_t key) const { return size_t((key * 0x9E3779B97F4A7C15ull) >> shift_); }  // Fibonacci hashing
+  std::vector<uint64_t> keys_;
+  std::vector<uint32_t> voxels_;
+  size_t mask_ = 0;
+  int shift_ = 60;  // 64 - log2(slots)
+};
+
+struct Voxels {
+  Points centroids;               // one per occupied voxel, in the order the frame first reaches them
+  std::vector<uint32_t> of_point; // per frame point: its voxel, kNone when non-finite
+  size_t finite = 0;
+};
+
+// The frame's finite points averaged per voxel, and each point's voxel (voxel_m 0: every finite point
+// its own voxel). PCL's VoxelGrid averages the same way but says which voxel a point fell in only
+// through its dense leaf layout (an int per cell of the frame's bounding grid: ~400 MB for a room at
+// 1 cm), and each object takes back its voxels' points, so the grid is a hash of the cells here.
+Voxels voxelise(const Points& frame, float voxel_m) {
+  Voxels v;
+  v.of_point.assign(frame.size(), kNone);
+  const float inverse = voxel_m > 0 ? 1.f / voxel_m : 0.f;
+  VoxelIndex index(voxel_m > 0 ? frame.size() : 0);
+  std::vector<Eigen::Vector3d> sums;
+  std::vector<uint32_t> counts;
+  for (uint32_t i = 0; i < frame.size(); ++i) {
+    if (!frame[i].allFinite()) continue;
+    ++v.finite;
+    const std::optional<uint64_t> key = voxel_m > 0 ? voxel_key(frame[i], inverse) : std::optional<uint64_t>(i);
+    if (!key) continue;  // beyond the grid's +-2^20 cells
+    const uint32_t voxel = voxel_m > 0 ? index.find_or_insert(*key, uint32_t(sums.size())) : uint32_t(sums.size());
+    if (voxel == sums.size()) sums.emplace_back(Eigen::Vector3d::Zero()), counts.push_back(0);
+    sums[voxel] += frame[i].cast<double>();
+    ++counts[voxel];
+    v.of_point[i] = voxel;
+  }
+  v.centroids.reserve(sums.size());
+  for (size_t k = 0; k < sums.size(); ++k) v.centroids.push_back((sums[k] / double(counts[k])).cast<float>());
+  return v;
+}
+
+// Every step-th of `subset`, at most `max_points`: RANSAC's cost grows with the points it scores, a
+// plane's coefficients hardly with them.
+std::vector<uint32_t> even_subsample(const std::vector<uint32_t>& subset, size_t max_points) {
+  const size_t step = std::max<size_t>(1, (subset.size() + max_points - 1) / std::max<size_t>(1, max_points));
+  std::vector<uint32_t> out;
+  out.reserve(subset.size() / step + 1);
+  for (size_t k = 0; k < subset.size(); k += step) out.push_back(subset[k]);
+  return out;
+}
+
+// The inliers of a plane that lie in its broad connected regions: the inliers projected onto a grid of
+// cell_m cells in the plane, the occupied cells joined to their 8 neighbours, and a region kept when its
+// cells cover at least min_area_m2. A floor, wall or table top is one broad region; an object's face (a
+// box's top, a screen) or a slice of an object that happens to lie in the plane is a small one.
+std::vector<uint32_t> broad_regions(const Points& voxels, const std::vector<uint32_t>& inliers, const Vec3& normal,
+                                    float cell_m, float min_area_m2) {
+  const Vec3 u = normal.unitOrthogonal(), v = normal.cross(u);
+  auto cell_key = [](int64_t a, int64_t b) { return (uint64_t(a + (int64_t(1) << 31)) << 32) | uint64_t(b + (int64_t(1) << 31)); };
+  std::vector<uint64_t> key_of(inliers.size());
+  std::unordered_map<uint64_t, int32_t> region_of;  // -1: not yet reached
+  for (size_t k = 0; k < inliers.size(); ++k) {
+    const Vec3& p = voxels[inliers[k]];
+    key_of[k] = cell_key(int64_t(std::floor(u.dot(p) / cell_m)), int64_t(std::floor(v.dot(p) / cell_m)));
+    region_of.emplace(key_of[k], -1);
+  }
+  std::vector<size_t> cells_in;  // per region
+  std::vector<uint64_t> stack;
+  for (size_t k = 0; k < inliers.size(); ++k) {  // flood fill from each unreached cell, in the inliers' order
+    if (region_of[key_of[k]] >= 0) continue;
+    const int32_t region = int32_t(cells_in.size());
+    cells_in.push_back(0);
+    region_of[key_of[k]] = region;
+    stack.assign(1, key_of[k]);
+    while (!stack.empty()) {
+      const uint64_t key = stack.back();
+      stack.pop_back();
+      ++cells_in.back();
+      const int64_t a = int64_t(key >> 32) - (int64_t(1) << 31), b = int64_t(key & 0xffffffffu) - (int64_t(1) << 31);
+      for (int64_t da = -1; da <= 1; ++da)
+        for (int64_t db = -1; db <= 1; ++db) {
+          const auto it = region_of.find(cell_key(a + da, b + db));
+          if (it == region_of.end() || it->second >= 0) continue;
+          it->second = region;
+          stack.push_back(it->first);
+        }
+    }
+  }
+  std::vector<uint32_t> broad;
+  for (size_t k = 0; k < inliers.size(); ++k)
+    if (float(cells_in[size_t(region_of[key_of[k]])]) * cell_m * cell_m >= min_area_m2) broad.push_back(inliers[k]);
+  return broad;
+}
+
+// The large planes, largest first (fit_plane: PCL's RANSAC with its fixed seed), each taking the
+// remaining voxels within the inlier distance that lie in its broad regions; the rest of its inliers
+// stay for clustering and leave only RANSAC's candidates, so that the next fit finds another plane.
+// Stops at the first plane holding fewer than min_plane_fraction of all voxels, or after max_planes fits.
+std::vector<Plane> remove_planes(const Points& voxels, const SceneParams& params, Labels& labels) {
+  std::vector<uint32_t> remaining(voxels.size()), inliers, rest;
+  for (uint32_t i = 0; i < remaining.size(); ++i) remaining[i] = i;
+  const size_t min_inliers = std::max<size_t>(3, size_t(std::ceil(params.min_plane_fraction * double(voxels.size()))));
+  const PlaneFitParams fit{params.plane_distance_m, 1000, std::nullopt, 90.f};
+  const float cell_m = std::max(2.f * params.voxel_m, params.cluster_tolerance_m);
+  std::vector<Plane> planes;
+  for (int k = 0; k < params.max_planes && remaining.size() >= min_inliers; ++k) {
+    const std::optional<Plane> plane = fit_plane(voxels, even_subsample(remaining, params.plane_fit_points), fit);
+    if (!plane) break;
+    inliers.clear();
+    rest.clear();
+    for (uint32_t i : remaining)
+      (std::abs(plane->normal.dot(voxels[i]) + plane->offset) <= params.plane_distance_m ? inliers : rest).push_back(i);
+    if (inliers.size() < min_inliers) break;
+    remaining.swap(rest);
+    const std::vector<uint32_t> broad = broad_regions(voxels, inliers, plane->normal, cell_m, params.min_plane_area_m2);
+    if (broad.empty()) continue;
+    for (uint32_t i : broad) labels[i] = -int32_t(planes.size() + 1);
+    planes.push_back(Plane{plane->normal, plane->offset, broad.size()});
+  }
+  return planes;
+}
+
+// The unlabelled voxels split into Euclidean clusters (PCL's EuclideanClusterExtraction on a kd-tree),
+// labelled 1, 2, ... in PCL's order; returns their count.
+int32_t cluster_voxels(const Points& voxels, float tolerance_m, Labels& labels) {
+  auto indices = std::make_shared<pcl::Indices>();
+  for (uint32_t i = 0; i < voxels.size(); ++i)
+    if (labels[i] == 0) indices->push_back(int(i));
+  if (indices->empty()) return 0;
+  pcl::PointCloud<pcl::PointXYZ>::ConstPtr cloud(to_pcl(voxels).release());
+  auto tree = std::make_shared<pcl::search::KdTree<pcl::PointXYZ>>();
+  pcl::EuclideanClusterExtraction<pcl::PointXYZ> extraction;
+  extraction.setClusterTolerance(tolerance_m);
+  extraction.setMinClusterSize(1);
+  extraction.setMaxClusterSize(std::numeric_limits<int>::max());
+  extraction.setSearchMethod(tree);
+  extraction.setInputCloud(cloud);
+  extraction.setIndices(indices);
+  std::vector<pcl::PointIndices> clusters;
+  extraction.extract(clusters);
+  for (size_t c = 0; c < clusters.size(); ++c)
+    for (int i : clusters[c].indices) labels[size_t(i)] = int32_t(c + 1);
+  return int32_t(clusters.size());
+}
+
+SceneObject make_object(const Points& frame, std::vector<uint32_t> indices, const Vec3& sensor) {
+  SceneObject o;
+  o.indices = std::move(indices);
+  o.points.reserve(o.indices.size());
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (uint32_t i : o.indices) {
+    o.points.push_back(frame[i]);
+    sum += frame[i].cast<double>();
+  }
+  const Bounds box = bounds(o.points);
+  o.box_min = box.min;
+  o.box_max = box.max;
+  o.centroid = (sum / double(std::max<size_t>(1, o.indices.size()))).cast<float>();
+  o.range_m = (o.centroid - sensor).norm();
+  return o;
+}
+
+bool keep(const SceneObject& o, const SceneParams& params) {
+  const size_t n = o.indices.size();
+  return n >= params.min_object_points && n <= params.max_object_points &&
+         (o.box_max - o.box_min).maxCoeff() <= params.max_object_extent_m;
+}
+
+Status check(const SceneParams& p) {
+  if (!(p.voxel_m >= 0.f) || !std::isfinite(p.voxel_m)) return invalid_argument("scene: voxel_m must be 0 or more");
+  if (!(p.plane_distance_m > 0.f)) return invalid_argument("scene: plane_distance_m must be positive");
+  if (!(p.cluster_tolerance_m > 0.f)) return invalid_argument("scene: cluster_tolerance_m must be positive");
+  if (p.min_object_points > p.max_object_points)
+    return invalid_argument("scene: min_object_points " + std::to_string(p.min_object_points) + " is above max_object_points " +
+                            std::to_string(p.max_object_points));
+  return {};
+}
+
+}  // namespace
+
+Expected<Scene> segment_scene(const Cloud& frame, const SceneParams& params) {
+  if (Status s = check(params); !s) return s.error();
+  const Voxels voxels = voxelise(frame.points, params.voxel_m);
+  Scene scene;
+  scene.finite_points = voxels.finite;
+  Labels labels(voxels.centroids.size(), 0);
+  scene.planes = remove_planes(voxels.centroids, params, labels);
+  const int32_t clusters = cluster_voxels(voxels.centroids, params.cluster_tolerance_m, labels);
+  // Each frame point follows its voxel, in the frame's order: planes count points, clusters gather them.
+  for (Plane& plane : scene.planes) plane.inliers = 0;
+  std::vector<std::vector<uint32_t>> members(static_cast<size_t>(clusters));
+  for (uint32_t i = 0; i < frame.points.size(); ++i) {
+    if (voxels.of_point[i] == kNone) continue;
+    const int32_t label = labels[voxels.of_point[i]];
+    if (label < 0) ++scene.planes[size_t(-label - 1)].inliers;
+    if (label > 0) members[size_t(label - 1)].push_back(i);
+  }
+  const Vec3 sensor = frame.sensor.value_or(Vec3::Zero());
+  for (std::vector<uint32_t>& indices : members) {
+    if (indices.size() < params.min_object_points || indices.size() > params.max_object_points) continue;
+    SceneObject object = make_object(frame.points, std::move(indices), sensor);
+    if (keep(object, params)) scene.objects.push_back(std::move(object));
+  }
+  std::sort(scene.objects.begin(), scene.objects.end(), [](const SceneObject& a, const SceneObject& b) {
+    if (a.range_m != b.range_m) return a.range_m < b.range_m;
+    if (a.indices.size() != b.indices.size()) return a.indices.size() > b.indices.size();
+    return a.indices.front() < b.indices.front();
+  });
+  if (scene.objects.size() > params.max_objects) scene.objects.resize(params.max_objects);
+  return scene;
+}
+
+}  // namespace glimpse
