@@ -259,7 +259,7 @@ void add_training_flags(CLI::App* cmd, EvalOptions& o) {
                   "nearest references alone (default: the recogniser's, 10)");
   cmd->add_option("--fusion-head-rows", o.fusion_head_rows,
                   "rows of each category the fusion's logistic decision learns at most (0: every row; default: the "
-                  "recogniser's)");
+                  "recogniser's, 2000)");
   cmd->add_option("--augmented-prefixes", o.augmented_prefixes,
                   "on: augmented training views (the cameras', the zoo's beside real objects) are learnt with their "
                   "top-down prefixes like the others; off: whole only (default: the recogniser's)")

@@ -189,8 +189,11 @@ void decision_rows(std::ostringstream& o, const EvalResult& r) {
   if (needs(p.methods, MethodId::kFusion) && t.fusion_head.c > 0) {
     o << "| fusion's logistic decision | (1 - w) x the mean of the components' scores + w x a one-vs-rest logistic "
          "regression (LIBLINEAR, C " << fmt("%g", t.fusion_head.c) << ") over each histogram's additive chi2 map ("
-      << t.fusion_head.sample_steps << " steps, interval " << fmt("%g", t.fusion_head.sample_interval)
-      << "); w of ";
+      << t.fusion_head.sample_steps << " steps, interval " << fmt("%g", t.fusion_head.sample_interval) << "), learning "
+      << (t.fusion_head_rows_per_category > 0 ? "at most " + std::to_string(t.fusion_head_rows_per_category) +
+                                                    " rows of each category (seeded)"
+                                              : std::string("every row"))
+      << "; w of ";
     for (size_t i = 0; i < t.fusion_head_shares.size(); ++i) o << (i ? ", " : "") << fmt("%g", t.fusion_head_shares[i]);
     o << ", the one most often right on held-out folds of the model's own training objects (" << t.calibration_folds
       << " inner folds); w per model:";
