@@ -136,10 +136,10 @@ class FakeSession final : public ScanSession {
   size_t chunks_ = 0;
 };
 
-inline Engine FakeEngine(FakeBehaviour* b) {
-  Engine e;
+// The fake's Train: categories and counts from the clouds, progress for each, no features.
+inline decltype(Engine::train) FakeTrain(FakeBehaviour* b) {
   // The fake's training set is its categories, comma-separated: a grown model learns the base's too.
-  e.train = [b](const std::vector<TrainingCloud>& data, const wire::TrainSpec& spec, std::span<const uint8_t> base_set,
+  return [b](const std::vector<TrainingCloud>& data, const wire::TrainSpec& spec, std::span<const uint8_t> base_set,
                 size_t keep_set_bytes, const ProgressFn& progress, const CancelFn& cancel) -> Expected<TrainedModel> {
     ++b->train_calls;
     if (b->train_error) return *b->train_error;
@@ -181,6 +181,11 @@ inline Engine FakeEngine(FakeBehaviour* b) {
     if (set.size() <= keep_set_bytes) out.training_set.assign(set.begin(), set.end());
     return out;
   };
+}
+
+inline Engine FakeEngine(FakeBehaviour* b) {
+  Engine e;
+  e.train = FakeTrain(b);
   e.classify = [b](const Model& model, const Cloud& cloud, std::optional<MethodId> method,
                    const CancelFn& cancel) -> Expected<Classification> {
     if (b->classify_throws) throw std::runtime_error("boom");
