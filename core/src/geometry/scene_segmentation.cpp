@@ -12,13 +12,12 @@
 #include <unordered_map>
 
 #include "glimpse/geometry/scene.h"
+#include "glimpse/spatial_hash.h"
 
 namespace glimpse {
 namespace {
 
 constexpr uint32_t kNone = std::numeric_limits<uint32_t>::max();
-constexpr int kKeyBits = 21;  // per axis: +-2^20 voxels
-constexpr float kKeyHalf = float(1 << (kKeyBits - 1));
 
 // Voxel labels: 0 = dropped, -(k + 1) = the k-th plane removed, c + 1 = the c-th cluster.
 using Labels = std::vector<int32_t>;
@@ -29,45 +28,6 @@ std::unique_ptr<pcl::PointCloud<pcl::PointXYZ>> to_pcl(const Points& points) {
   for (const Vec3& p : points) cloud->push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
   return cloud;
 }
-
-// The voxel holding p (floor(x / leaf) per axis), packed in 63 bits.
-std::optional<uint64_t> voxel_key(const Vec3& p, float inverse_leaf) {
-  uint64_t key = 0;
-  for (int a = 0; a < 3; ++a) {
-    const float cell = std::floor(p[a] * inverse_leaf);
-    if (!(std::abs(cell) < kKeyHalf)) return std::nullopt;
-    key = (key << kKeyBits) | uint64_t(int64_t(cell) + int64_t(kKeyHalf));
-  }
-  return key;
-}
-
-// Voxel key -> voxel, open addressing with linear probing: a frame's 300k look-ups stay in two flat
-// arrays instead of a node-based map's scattered nodes.
-class VoxelIndex {
- public:
-  explicit VoxelIndex(size_t n) {
-    size_t size = 16;
-    for (shift_ = 60; size < 2 * n; --shift_) size *= 2;
-    keys_.assign(size, kEmpty);
-    voxels_.assign(size, kNone);
-    mask_ = size - 1;
-  }
-  // The voxel of `key`, `next` when the key is new.
-  uint32_t find_or_insert(uint64_t key, uint32_t next) {
-    size_t slot = hash(key);
-    while (keys_[slot] != kEmpty && keys_[slot] != key) slot = (slot + 1) & mask_;
-    if (keys_[slot] == kEmpty) keys_[slot] = key, voxels_[slot] = next;
-    return voxels_[slot];
-  }
-
- private:
-  static constexpr uint64_t kEmpty = std::numeric_limits<uint64_t>::max();  // keys have 63 bits
-  size_t hash(uint64_t key) const { return size_t((key * 0x9E3779B97F4A7C15ull) >> shift_); }  // Fibonacci hashing
-  std::vector<uint64_t> keys_;
-  std::vector<uint32_t> voxels_;
-  size_t mask_ = 0;
-  int shift_ = 60;  // 64 - log2(slots)
-};
 
 struct Voxels {
   Points centroids;               // one per occupied voxel, in the order the frame first reaches them
@@ -82,16 +42,15 @@ struct Voxels {
 Voxels voxelise(const Points& frame, float voxel_m) {
   Voxels v;
   v.of_point.assign(frame.size(), kNone);
-  const float inverse = voxel_m > 0 ? 1.f / voxel_m : 0.f;
-  VoxelIndex index(voxel_m > 0 ? frame.size() : 0);
+  std::unordered_map<CellKey, uint32_t, CellKeyHash> index;
+  index.reserve(voxel_m > 0 ? frame.size() : 0);
   std::vector<Eigen::Vector3d> sums;
   std::vector<uint32_t> counts;
   for (uint32_t i = 0; i < frame.size(); ++i) {
     if (!frame[i].allFinite()) continue;
     ++v.finite;
-    const std::optional<uint64_t> key = voxel_m > 0 ? voxel_key(frame[i], inverse) : std::optional<uint64_t>(i);
-    if (!key) continue;  // beyond the grid's +-2^20 cells
-    const uint32_t voxel = voxel_m > 0 ? index.find_or_insert(*key, uint32_t(sums.size())) : uint32_t(sums.size());
+    const uint32_t voxel =
+        voxel_m > 0 ? index.try_emplace(cell_key(frame[i], voxel_m), uint32_t(sums.size())).first->second : uint32_t(sums.size());
     if (voxel == sums.size()) sums.emplace_back(Eigen::Vector3d::Zero()), counts.push_back(0);
     sums[voxel] += frame[i].cast<double>();
     ++counts[voxel];
@@ -119,16 +78,15 @@ std::vector<uint32_t> even_subsample(const std::vector<uint32_t>& subset, size_t
 std::vector<uint32_t> broad_regions(const Points& voxels, const std::vector<uint32_t>& inliers, const Vec3& normal,
                                     float cell_m, float min_area_m2) {
   const Vec3 u = normal.unitOrthogonal(), v = normal.cross(u);
-  auto cell_key = [](int64_t a, int64_t b) { return (uint64_t(a + (int64_t(1) << 31)) << 32) | uint64_t(b + (int64_t(1) << 31)); };
-  std::vector<uint64_t> key_of(inliers.size());
-  std::unordered_map<uint64_t, int32_t> region_of;  // -1: not yet reached
+  std::vector<CellKey> key_of(inliers.size());  // the cell in the plane's (u, v) coordinates, z 0
+  std::unordered_map<CellKey, int32_t, CellKeyHash> region_of;  // -1: not yet reached
   for (size_t k = 0; k < inliers.size(); ++k) {
     const Vec3& p = voxels[inliers[k]];
-    key_of[k] = cell_key(int64_t(std::floor(u.dot(p) / cell_m)), int64_t(std::floor(v.dot(p) / cell_m)));
+    key_of[k] = {grid_cell<int64_t>(u.dot(p), cell_m), grid_cell<int64_t>(v.dot(p), cell_m), 0};
     region_of.emplace(key_of[k], -1);
   }
   std::vector<size_t> cells_in;  // per region
-  std::vector<uint64_t> stack;
+  std::vector<CellKey> stack;
   for (size_t k = 0; k < inliers.size(); ++k) {  // flood fill from each unreached cell, in the inliers' order
     if (region_of[key_of[k]] >= 0) continue;
     const int32_t region = int32_t(cells_in.size());
@@ -136,13 +94,12 @@ std::vector<uint32_t> broad_regions(const Points& voxels, const std::vector<uint
     region_of[key_of[k]] = region;
     stack.assign(1, key_of[k]);
     while (!stack.empty()) {
-      const uint64_t key = stack.back();
+      const CellKey key = stack.back();
       stack.pop_back();
       ++cells_in.back();
-      const int64_t a = int64_t(key >> 32) - (int64_t(1) << 31), b = int64_t(key & 0xffffffffu) - (int64_t(1) << 31);
       for (int64_t da = -1; da <= 1; ++da)
         for (int64_t db = -1; db <= 1; ++db) {
-          const auto it = region_of.find(cell_key(a + da, b + db));
+          const auto it = region_of.find(CellKey{key.x + da, key.y + db, 0});
           if (it == region_of.end() || it->second >= 0) continue;
           it->second = region;
           stack.push_back(it->first);
