@@ -58,6 +58,21 @@ struct ClassifyOptions {
 };
 int RunClassify(const ConnectionOptions& conn, const ClassifyOptions& options);
 
+struct SceneOptions {
+  std::string file;            // one frame: a cloud file
+  std::string model;           // "NAME[:VERSION]"
+  std::string method;          // empty: the model's default
+  Placement placement;         // --up AXIS|floor, --unit
+  std::optional<Vec3> sensor;  // as ClassifyOptions::sensor; none in the file: the origin
+  std::optional<FieldOfView> camera_fov;  // as ClassifyOptions::camera_fov
+  std::string svg;             // write the top view here
+  bool json = false;
+  double known_acceptance = 0;
+  std::optional<float> cluster_tolerance_m, max_object_extent_m;  // SceneParameters; unset: the server's
+  std::optional<uint32_t> min_object_points;
+};
+int RunScene(const ConnectionOptions& conn, const SceneOptions& options);
+
 struct StreamOptions {
   std::string file;           // or zoo_category, or frames_dir
   std::string frames_dir;     // a folder of frames, each from its own sensor (frames.h)

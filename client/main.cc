@@ -139,6 +139,7 @@ struct CommandLine {
   bool list_json = false, show_json = false;
   TrainOptions train;
   ClassifyOptions classify;
+  SceneOptions scene;
   StreamOptions stream;
   EvaluateOptions evaluate;
   std::function<int()> run;
@@ -257,6 +258,39 @@ void AddClassify(CLI::App& app, CommandLine& cl) {
   });
 }
 
+void AddScene(CLI::App& app, CommandLine& cl) {
+  auto* scene = app.add_subcommand("scene", "find every object in one scanner's frame and classify each (ClassifyScene):\n"
+                                            "the floor, walls and table tops are removed, the rest split into objects; one\n"
+                                            "row per object, nearest first, with its box");
+  SceneOptions& s = cl.scene;
+  scene->add_option("FRAME", s.file, "a frame: .pcd (ascii, binary, binary_compressed; organised frames' NaNs skipped), "
+                                     ".ply, .xyz; +z up, or its camera's own coordinates with --up floor")
+      ->required();
+  scene->add_option("--model", s.model, "NAME[:VERSION]")->envname("GLIMPSE_MODEL")->required()->check(kModelRef);
+  scene->add_option("--method", s.method, "bok|bog|kgh|vfh|esf|ush|size|fusion (default: the model's)")->check(kMethod);
+  scene->add_flag("--json", s.json, "the scene as one JSON object: planes, and every object's box and answer");
+  scene->add_option("--svg", s.svg, "write a top view of the frame to this file, each object's box labelled");
+  scene->add_option("--known-acceptance", s.known_acceptance,
+                    "operating point of \"unknown\" for every object, in (0, 1] (default: the model's)")
+      ->check(kAcceptance);
+  scene->add_option_function<float>("--cluster-tolerance", [&s](const float& m) { s.cluster_tolerance_m = m; },
+                                    "metres: points closer than this are one object (server default 0.03)")
+      ->check(CLI::Range(0.001f, 1.f))->group("Segmentation");
+  scene->add_option_function<uint32_t>("--min-object-points", [&s](const uint32_t& n) { s.min_object_points = n; },
+                                       "fewer points: noise, not an object (server default 200)")
+      ->check(CLI::Range(1u, 1000000u))->group("Segmentation");
+  scene->add_option_function<float>("--max-object-size", [&s](const float& m) { s.max_object_extent_m = m; },
+                                     "metres: a longer box is a wall's remnant, not an object (server default 2.5)")
+      ->check(CLI::Range(0.01f, 50.f))->group("Segmentation");
+  scene->add_option_function<std::string>("--sensor", [&s](const std::string& t) { s.sensor = *ParseSensor(t); },
+                                          "where the camera was, X,Y,Z in the frame's coordinates (default: the file's "
+                                          "VIEWPOINT, else the origin)")
+      ->check(kSensor);
+  AddCameraFovOption(*scene, s.camera_fov);
+  AddPlacementOptions(*scene, s.placement, false, true);
+  scene->callback([&cl] { cl.run = [&cl] { return RunScene(cl.conn, cl.scene); }; });
+}
+
 CLI::App* AddStream(CLI::App& app, CommandLine& cl) {
   auto* stream = app.add_subcommand("stream", "simulate a scanner: reveal one view in chunks over StreamClassify, or "
                                               "stream a folder of frames from several sensor positions (--frames)");
@@ -337,6 +371,7 @@ int Main(int argc, char** argv) {
   AddModels(app, cl);
   const CLI::App* train = AddTrain(app, cl);
   AddClassify(app, cl);
+  AddScene(app, cl);
   const CLI::App* stream = AddStream(app, cl);
   AddEvaluate(app, cl);
   try {

@@ -221,14 +221,21 @@ std::string ClassifyTable(const std::vector<ClassifyRow>& rows) {
 }
 
 std::string ClassifyJson(const ClassifyRow& row) {
-  const v1::ClassifyResponse& r = row.response;
-  return "{\"file\":" + JsonString(row.file) + ",\"model\":" + JsonString(r.model().name()) +
+  return "{\"file\":" + JsonString(row.file) + "," + ClassifyJsonFields(row.response) + "}";
+}
+
+std::string ClassifyJsonFields(const v1::ClassifyResponse& r) {
+  return "\"model\":" + JsonString(r.model().name()) +
          ",\"version\":" + std::to_string(r.model().version()) + ",\"method\":" + JsonString(wire::MethodName(r.method())) +
          ",\"winner\":" + JsonString(r.winner()) + ",\"scores\":" + JsonScores(r.scores()) + JsonProbabilities(r.scores()) +
          ",\"points\":" + std::to_string(r.points()) + ",\"keypoints\":" + std::to_string(r.keypoints()) +
          ",\"total_ms\":" + JsonNumber(r.timings().total_ms()) + ",\"warning\":" + JsonString(r.warning()) +
-         UnknownJson(r) + "}";
+         UnknownJson(r);
 }
+
+std::string WinnerCell(const v1::ClassifyResponse& r) { return WinnerText(r, WinnerScore(r)); }
+
+double WinnerShown(const v1::ClassifyResponse& r) { return WinnerScore(r); }
 
 std::string ClassifyErrorJson(std::string_view file, std::string_view code, std::string_view message) {
   return "{\"file\":" + JsonString(file) + ",\"error\":{\"code\":" + JsonString(code) +

@@ -45,6 +45,11 @@ std::string ClassifyTable(const std::vector<ClassifyRow>& rows);
 //  "keypoints":..,"total_ms":..,"warning":..,"unknown":..,"novelty":..,"unknown_reason":..} (warning ""
 //  when all is well; novelty null when the method has none)
 std::string ClassifyJson(const ClassifyRow& row);
+// ClassifyJson's fields after "file", without braces (for answers nested in other JSON).
+std::string ClassifyJsonFields(const v1::ClassifyResponse& r);
+// "chair", or "unknown (closest: chair 0.310)"; the winner's probability (or score).
+std::string WinnerCell(const v1::ClassifyResponse& r);
+double WinnerShown(const v1::ClassifyResponse& r);
 // A file that got no answer, in the same shape a script can tell apart by "error":
 // {"file":..,"error":{"code":"NOT_FOUND","message":..}}
 std::string ClassifyErrorJson(std::string_view file, std::string_view code, std::string_view message);

@@ -38,13 +38,21 @@ Status CheckBatchResults(const std::vector<Expected<Classification>>& results) {
   return {};
 }
 
-namespace {
 void SetError(const Error& e, v1::ClassifyResult* r) {
   const grpc::Status s = wire::ToGrpcStatus(e);
   r->set_code(static_cast<int32_t>(s.error_code()));
   r->set_message(s.error_message());
 }
-}  // namespace
+
+void SetResult(const Classification& c, const ModelRecord& model, double model_load_ms, v1::ClassifyResult* r) {
+  r->set_code(0);
+  v1::ClassifyResponse* resp = r->mutable_response();
+  ToProto(c, resp);
+  ToProto(model, resp->mutable_model());
+  resp->set_model_id(static_cast<uint64_t>(model.id));
+  resp->mutable_timings()->set_model_load_ms(model_load_ms);
+  resp->mutable_timings()->set_total_ms(c.feature_ms + c.decision_ms);
+}
 
 void FillBatchResponse(const BatchClouds& batch, const std::vector<Expected<Classification>>& results,
                        const ModelRecord& model, double model_load_ms, v1::ClassifyBatchResponse* out) {
@@ -60,13 +68,7 @@ void FillBatchResponse(const BatchClouds& batch, const std::vector<Expected<Clas
       SetError(Error{c.error().code, "cloud " + std::to_string(i) + ": " + c.error().message}, r);
       continue;
     }
-    r->set_code(0);
-    v1::ClassifyResponse* resp = r->mutable_response();
-    ToProto(*c, resp);
-    ToProto(model, resp->mutable_model());
-    resp->set_model_id(static_cast<uint64_t>(model.id));
-    resp->mutable_timings()->set_model_load_ms(model_load_ms);
-    resp->mutable_timings()->set_total_ms(c->feature_ms + c->decision_ms);
+    SetResult(*c, model, model_load_ms, r);
   }
 }
 

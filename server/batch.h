@@ -28,6 +28,11 @@ Expected<BatchClouds> UnpackBatch(const v1::ClassifyBatchRequest& request, const
 // precondition (the model cannot classify at all, e.g. its feature version).
 Status CheckBatchResults(const std::vector<Expected<Classification>>& results);
 
+// One cloud's result: its status, or code 0 and the response Classify would give (model, model id and
+// load time from `model`, total time the cloud's own feature and decision time).
+void SetError(const Error& e, v1::ClassifyResult* r);
+void SetResult(const Classification& c, const ModelRecord& model, double model_load_ms, v1::ClassifyResult* r);
+
 // One result per request cloud: its unpacking error, its classification error, or the response
 // Classify would give (model, model id and load time from `model`).
 void FillBatchResponse(const BatchClouds& batch, const std::vector<Expected<Classification>>& results,

@@ -83,6 +83,10 @@ Engine CoreEngine(int request_threads) {
   };
   e.serialize = [](const Model& model) { return glimpse::serialize(model); };
   e.deserialize = [](std::span<const uint8_t> bytes) { return glimpse::deserialize(bytes); };
+  e.segment_scene = [budget](const Cloud& frame, const SceneParams& params) {
+    budget();
+    return glimpse::segment_scene(frame, params);
+  };
   e.create_session = [](std::shared_ptr<const Model> model, const SessionParams& params) {
     return ScanSession::create(std::move(model), params);
   };

@@ -9,6 +9,7 @@
 #include <span>
 #include <vector>
 
+#include "glimpse/geometry/scene.h"
 #include "glimpse/learning/model.h"
 #include "glimpse/session/session.h"
 #include "glimpse/v1/glimpse.pb.h"
@@ -43,6 +44,9 @@ struct Engine {
   std::function<Status(const Model&, Classification&, double)> set_known_acceptance;
   std::function<std::vector<uint8_t>(const Model&)> serialize;
   std::function<Expected<Model>(std::span<const uint8_t>)> deserialize;
+  // The planes and objects of a scanner's frame (core's segment_scene). Empty: ClassifyScene and
+  // tracking streams are UNIMPLEMENTED.
+  std::function<Expected<Scene>(const Cloud&, const SceneParams&)> segment_scene;
   std::function<Expected<std::unique_ptr<ScanSession>>(std::shared_ptr<const Model>, const SessionParams&)>
       create_session;
   // The parameters a spec trains with, every field set: the request's where it gave them, the

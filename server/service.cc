@@ -12,6 +12,7 @@
 #include "proto/wire/errors.h"
 #include "proto/wire/methods.h"
 #include "proto/wire/model_names.h"
+#include "scene.h"
 #include "stream_classify.h"
 #include "train.h"
 
@@ -160,6 +161,48 @@ grpc::Status GlimpseService::ClassifyBatch(grpc::ServerContext* ctx, const v1::C
           if (Status s = options_.engine.set_known_acceptance(*loaded->model, *r, ask->known_acceptance); !s.ok())
             return s;
     FillBatchResponse(*batch, results, loaded->record, loaded->load_ms, response);
+    ToProto(loaded->record, response->mutable_model());
+    response->set_method(wire::MethodToProto(used));
+    response->set_total_ms(MsSince(start, options_.clock()));
+    log.method = wire::MethodName(used);
+    return {};
+  });
+}
+
+grpc::Status GlimpseService::ClassifyScene(grpc::ServerContext* ctx, const v1::ClassifySceneRequest* request,
+                                           v1::ClassifySceneResponse* response) {
+  RequestLog log;
+  return Handle(ctx, "ClassifyScene", Access::kOpen, log, [&]() -> Status {
+    const auto start = options_.clock();
+    log.model = LogModelRef(request->model().name(), request->model().version());
+    if (!options_.engine.segment_scene) return internal_error("the server's engine cannot split scenes");
+    auto ask = ClassifyAskFromProto(request->model(), request->method(), request->known_acceptance(), &log.method);
+    if (!ask) return ask.error();
+    auto params = SceneParamsFromProto(request->scene());
+    if (!params) return params.error();
+    auto frame = wire::CloudFromProto(request->frame(), options_.limits.max_points_per_cloud);
+    if (!frame) return Error{frame.error().code, "the frame: " + frame.error().message};
+    log.points = frame->points.size();
+    auto loaded = cache_.Load(request->model().name(), request->model().version());
+    if (!loaded) return loaded.error();
+    log.model = LogModelRef(loaded->record.name, loaded->record.version);
+    const MethodId used = ask->method.value_or(loaded->model->default_method);
+    if (Status s = check_trained_for(*loaded->model, used); !s.ok()) return s.error();
+    if (CancelFor(ctx)()) return CancelledBeforeClassification();
+    const auto segment_start = options_.clock();
+    auto scene = options_.engine.segment_scene(*frame, *params);
+    if (!scene) return scene.error();
+    response->set_segment_ms(MsSince(segment_start, options_.clock()));
+    std::vector<Cloud> objects;
+    for (const SceneObject& o : scene->objects) objects.push_back(object_cloud(*frame, o));
+    auto results = options_.engine.classify_batch(*loaded->model, objects, ask->method, CancelFor(ctx));
+    if (Status s = CheckBatchResults(results); !s.ok()) return s;
+    if (ask->known_acceptance > 0 && options_.engine.set_known_acceptance)
+      for (Expected<Classification>& r : results)
+        if (r)
+          if (Status s = options_.engine.set_known_acceptance(*loaded->model, *r, ask->known_acceptance); !s.ok())
+            return s;
+    FillSceneResponse(*scene, results, loaded->record, loaded->load_ms, request->return_indices(), response);
     ToProto(loaded->record, response->mutable_model());
     response->set_method(wire::MethodToProto(used));
     response->set_total_ms(MsSince(start, options_.clock()));

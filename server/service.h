@@ -49,6 +49,8 @@ class GlimpseService final : public v1::Glimpse::Service {
                              v1::ClassifyBatchResponse* response) override;
   grpc::Status StreamClassify(grpc::ServerContext* ctx,
                               grpc::ServerReaderWriter<v1::Decision, v1::ScanChunk>* stream) override;
+  grpc::Status ClassifyScene(grpc::ServerContext* ctx, const v1::ClassifySceneRequest* request,
+                             v1::ClassifySceneResponse* response) override;
   grpc::Status ListModels(grpc::ServerContext* ctx, const v1::ListModelsRequest* request,
                           v1::ListModelsResponse* response) override;
   grpc::Status GetModel(grpc::ServerContext* ctx, const v1::GetModelRequest* request,

@@ -55,8 +55,18 @@ TEST(SegmentScene, FindsEachObjectOnTheFloorAndNothingElse) {
   EXPECT_EQ(scene->finite_points, finite);
   EXPECT_LT(finite, s.frame.points.size());  // the rays above the wall hit nothing
   ASSERT_GE(scene->planes.size(), 2u);  // the floor and the wall
-  EXPECT_GT(std::abs(scene->planes[0].normal.z()), 0.99f);  // the floor holds the most points
-  EXPECT_GT(std::abs(scene->planes[1].normal.y()), 0.99f);
+  // The floor holds the most points; each normal faces the sensor (the floor's up, the wall's towards it).
+  EXPECT_GT(scene->planes[0].normal.z(), 0.99f);
+  EXPECT_LT(scene->planes[1].normal.y(), -0.99f);
+  for (const Plane& p : scene->planes) EXPECT_GT(p.normal.dot(*s.frame.sensor) + p.offset, 0.f);
+  EXPECT_TRUE(has_level_plane(*scene));
+  Scene walls_only = *scene;
+  walls_only.planes.erase(walls_only.planes.begin());
+  EXPECT_FALSE(has_level_plane(walls_only));
+  // An object as Classify takes it: its points, with the frame's sensor.
+  const Cloud object = object_cloud(s.frame, scene->objects.front());
+  EXPECT_EQ(object.points.size(), scene->objects.front().points.size());
+  EXPECT_EQ(object.sensor, s.frame.sensor);
   // The floor's 2 cm of inliers take the objects' bottoms: their boxes start 2 cm up.
   expect_objects_match(*scene, s.truth, 0.03f);
   for (size_t k = 1; k < scene->objects.size(); ++k) EXPECT_LE(scene->objects[k - 1].range_m, scene->objects[k].range_m);

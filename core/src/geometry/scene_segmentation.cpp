@@ -207,7 +207,11 @@ Expected<Scene> segment_scene(const Cloud& frame, const SceneParams& params) {
   scene.planes = remove_planes(voxels.centroids, params, labels);
   const int32_t clusters = cluster_voxels(voxels.centroids, params.cluster_tolerance_m, labels);
   // Each frame point follows its voxel, in the frame's order: planes count points, clusters gather them.
-  for (Plane& plane : scene.planes) plane.inliers = 0;
+  const Vec3 sensor = frame.sensor.value_or(Vec3::Zero());
+  for (Plane& plane : scene.planes) {
+    plane.inliers = 0;
+    if (plane.normal.dot(sensor) + plane.offset < 0) plane.normal = -plane.normal, plane.offset = -plane.offset;
+  }
   std::vector<std::vector<uint32_t>> members(static_cast<size_t>(clusters));
   for (uint32_t i = 0; i < frame.points.size(); ++i) {
     if (voxels.of_point[i] == kNone) continue;
@@ -215,7 +219,6 @@ Expected<Scene> segment_scene(const Cloud& frame, const SceneParams& params) {
     if (label < 0) ++scene.planes[size_t(-label - 1)].inliers;
     if (label > 0) members[size_t(label - 1)].push_back(i);
   }
-  const Vec3 sensor = frame.sensor.value_or(Vec3::Zero());
   for (std::vector<uint32_t>& indices : members) {
     if (indices.size() < params.min_object_points || indices.size() > params.max_object_points) continue;
     SceneObject object = make_object(frame.points, std::move(indices), sensor);

@@ -3,8 +3,11 @@
 // (through fit_plane) and EuclideanClusterExtraction do the work inside the .cpp.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <numbers>
 #include <vector>
 
 #include "glimpse/cloud.h"
@@ -29,7 +32,9 @@ struct SceneParams {
   float cluster_tolerance_m = 0.03f;
   size_t min_object_points = 200;      // frame points; fewer: noise or a plane's remnant
   size_t max_object_points = 200000;   // frame points; more: a wall or floor left over
-  float max_object_extent_m = 1.5f;    // the longest side of an object's box; longer: a wall's remnant
+  // The longest side of an object's box; longer: a wall's remnant. Room for a standing person (2 m) and
+  // a long table.
+  float max_object_extent_m = 2.5f;
   size_t max_objects = 32;             // the nearest ones are kept
 };
 
@@ -43,7 +48,9 @@ struct SceneObject {
 };
 
 struct Scene {
-  std::vector<Plane> planes;         // in the order removed (largest first); inliers count frame points
+  // In the order removed (largest first); inliers count frame points; each normal faces the sensor
+  // (Cloud.sensor, else the origin).
+  std::vector<Plane> planes;
   std::vector<SceneObject> objects;  // nearest the sensor first; at equal range the larger first
   size_t finite_points = 0;          // the frame's points with a depth
 };
@@ -53,5 +60,20 @@ struct Scene {
 // Errors (kInvalidArgument): a negative voxel size, a non-positive plane distance or cluster tolerance,
 // min_object_points above max_object_points.
 Expected<Scene> segment_scene(const Cloud& frame, const SceneParams& params = {});
+
+// Whether a removed plane is a floor or a table top: level and below the sensor (its normal, which faces
+// the sensor, within max_tilt_deg of +z). A frame with planes but no such one is probably not +z up (a
+// camera's own coordinates, where a wall may pass for a ceiling).
+inline bool has_level_plane(const Scene& scene, float max_tilt_deg = 20.f) {
+  const float cos_max = std::cos(max_tilt_deg * std::numbers::pi_v<float> / 180.f);
+  return std::any_of(scene.planes.begin(), scene.planes.end(),
+                     [cos_max](const Plane& p) { return p.normal.z() >= cos_max; });
+}
+
+// One object as Classify takes it: its points with the frame's sensor and camera frame, so that an
+// object at the image's edge is known to be cut there (Classification::frame_cut).
+inline Cloud object_cloud(const Cloud& frame, const SceneObject& object) {
+  return Cloud{object.points, frame.sensor, frame.frame};
+}
 
 }  // namespace glimpse

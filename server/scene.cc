@@ -1,0 +1,90 @@
+#include "scene.h"
+
+#include <cmath>
+#include <string>
+
+#include "batch.h"
+
+namespace glimpse::server {
+namespace {
+
+v1::Vec3 Vec(const Vec3& v) {
+  v1::Vec3 out;
+  out.set_x(v.x()), out.set_y(v.y()), out.set_z(v.z());
+  return out;
+}
+
+Status CheckRange(const char* field, double value, double lo, double hi, bool lo_open) {
+  const bool inside = std::isfinite(value) && (lo_open ? value > lo : value >= lo) && value <= hi;
+  if (inside) return {};
+  return invalid_argument(std::string("scene.") + field + " is " + std::to_string(value) + "; it must be in " +
+                          (lo_open ? "(" : "[") + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+}
+
+}  // namespace
+
+Expected<SceneParams> SceneParamsFromProto(const v1::SceneParameters& in) {
+  SceneParams p;
+  if (in.has_voxel_m()) {
+    if (Status s = CheckRange("voxel_m", in.voxel_m(), 0, 0.2, false); !s.ok()) return s.error();
+    p.voxel_m = in.voxel_m();
+  }
+  if (in.has_cluster_tolerance_m()) {
+    if (Status s = CheckRange("cluster_tolerance_m", in.cluster_tolerance_m(), 0, 1, true); !s.ok()) return s.error();
+    p.cluster_tolerance_m = in.cluster_tolerance_m();
+  }
+  if (in.has_min_object_points()) {
+    if (Status s = CheckRange("min_object_points", in.min_object_points(), 1, 1e6, false); !s.ok()) return s.error();
+    p.min_object_points = in.min_object_points();
+  }
+  if (in.has_max_object_extent_m()) {
+    if (Status s = CheckRange("max_object_extent_m", in.max_object_extent_m(), 0, 50, true); !s.ok()) return s.error();
+    p.max_object_extent_m = in.max_object_extent_m();
+  }
+  if (in.has_max_objects()) {
+    if (Status s = CheckRange("max_objects", in.max_objects(), 1, 256, false); !s.ok()) return s.error();
+    p.max_objects = in.max_objects();
+  }
+  if (in.has_min_plane_area_m2()) {
+    if (Status s = CheckRange("min_plane_area_m2", in.min_plane_area_m2(), 0, 100, false); !s.ok()) return s.error();
+    p.min_plane_area_m2 = in.min_plane_area_m2();
+  }
+  return p;
+}
+
+void ToProto(const SceneObject& object, bool indices, v1::SceneObject* out) {
+  *out->mutable_box_min() = Vec(object.box_min);
+  *out->mutable_box_max() = Vec(object.box_max);
+  *out->mutable_centroid() = Vec(object.centroid);
+  out->set_range_m(object.range_m);
+  out->set_points(object.points.size());
+  if (indices) out->mutable_indices()->Add(object.indices.begin(), object.indices.end());
+}
+
+std::string SceneWarning(const Scene& scene) {
+  if (scene.planes.empty() || has_level_plane(scene)) return {};
+  return "no plane removed from the frame is a floor or a table top (level, below the sensor): is +z up? "
+         "A camera's own coordinates (y down, z forward) need levelling first (glimpse scene --up floor); the "
+         "categories of a frame on its side are not to be trusted";
+}
+
+void FillSceneResponse(const Scene& scene, const std::vector<Expected<Classification>>& results,
+                       const ModelRecord& model, double model_load_ms, bool indices, v1::ClassifySceneResponse* out) {
+  for (const Plane& plane : scene.planes) {
+    v1::ScenePlane* p = out->add_planes();
+    *p->mutable_normal() = Vec(plane.normal);
+    p->set_offset(plane.offset);
+    p->set_points(plane.inliers);
+  }
+  for (size_t i = 0; i < scene.objects.size(); ++i) {
+    v1::SceneObject* o = out->add_objects();
+    ToProto(scene.objects[i], indices, o);
+    const Expected<Classification>& c = results[i];
+    if (c) SetResult(*c, model, model_load_ms, o->mutable_result());
+    else SetError(Error{c.error().code, "object " + std::to_string(i) + ": " + c.error().message}, o->mutable_result());
+  }
+  out->set_frame_points(scene.finite_points);
+  out->set_warning(SceneWarning(scene));
+}
+
+}  // namespace glimpse::server
