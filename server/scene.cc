@@ -52,6 +52,28 @@ Expected<SceneParams> SceneParamsFromProto(const v1::SceneParameters& in) {
   return p;
 }
 
+Expected<TrackTarget> TrackTargetFromProto(const v1::TrackTarget& in) {
+  TrackTarget t;
+  switch (in.target_case()) {
+    case v1::TrackTarget::kNearestAxis:
+      if (!in.nearest_axis()) break;
+      t.kind = TrackTarget::Kind::kNearestAxis;
+      return t;
+    case v1::TrackTarget::kPoint:
+      t.kind = TrackTarget::Kind::kPoint;
+      t.point = Vec3(in.point().x(), in.point().y(), in.point().z());
+      return t;
+    case v1::TrackTarget::kBox:
+      t.kind = TrackTarget::Kind::kBox;
+      t.box_min = Vec3(in.box().min().x(), in.box().min().y(), in.box().min().z());
+      t.box_max = Vec3(in.box().max().x(), in.box().max().y(), in.box().max().z());
+      return t;
+    case v1::TrackTarget::TARGET_NOT_SET:
+      break;
+  }
+  return invalid_argument("track names no target: set nearest_axis (true), point or box");
+}
+
 void ToProto(const SceneObject& object, bool indices, v1::SceneObject* out) {
   *out->mutable_box_min() = Vec(object.box_min);
   *out->mutable_box_max() = Vec(object.box_max);

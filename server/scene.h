@@ -7,6 +7,7 @@
 
 #include "glimpse/geometry/scene.h"
 #include "glimpse/learning/model.h"
+#include "glimpse/session/scene_tracking.h"
 #include "glimpse/v1/glimpse.pb.h"
 #include "store.h"
 
@@ -14,6 +15,9 @@ namespace glimpse::server {
 
 // Core's defaults where a field is unset; INVALID_ARGUMENT naming the field for a value out of range.
 Expected<SceneParams> SceneParamsFromProto(const v1::SceneParameters& in);
+
+// A tracking stream's target; INVALID_ARGUMENT when it names none (core checks its values).
+Expected<TrackTarget> TrackTargetFromProto(const v1::TrackTarget& in);
 
 // An object's box, centroid, range and point count (and its indices into the frame when asked).
 void ToProto(const SceneObject& object, bool indices, v1::SceneObject* out);

@@ -1,6 +1,7 @@
 #include "stream_classify.h"
 
 #include "convert.h"
+#include "scene.h"
 #include "proto/wire/clouds.h"
 #include "proto/wire/methods.h"
 
@@ -27,6 +28,17 @@ Status ScanStream::Open(const v1::ScanChunk& first) {
   params.max_chunks = limits_.max_session_chunks;
   params.max_chunk_points = limits_.max_points_per_cloud;
   params.known_acceptance = known_acceptance_;
+  if (first.has_track()) {
+    auto target = TrackTargetFromProto(first.track());
+    if (!target) return target.error();
+    auto scene = SceneParamsFromProto(first.scene());
+    if (!scene) return scene.error();
+    auto tracker = SceneTracker::create(*target, TrackParams{.scene = *scene});
+    if (!tracker) return Error{tracker.error().code, "track: " + tracker.error().message};
+    tracker_ = std::move(*tracker);
+  } else if (first.has_scene()) {
+    return invalid_argument("scene parameters split a tracking stream's frames: name a target (track) with them");
+  }
   auto created = engine_.create_session(model_.model, params);
   if (!created) return created.error();
   session_ = std::move(*created);
@@ -43,6 +55,9 @@ Status ScanStream::CheckSameSession(const v1::ScanChunk& chunk, uint64_t index) 
   if (!same_model || !same_method || (a != 0 && a != known_acceptance_))
     return invalid_argument("only the first chunk chooses the model, method and known acceptance; chunk " +
                             std::to_string(index) + " names others");
+  if (chunk.has_track() || chunk.has_scene())
+    return invalid_argument("only the first chunk names a target and its scene parameters; chunk " +
+                            std::to_string(index) + " names them again");
   return {};
 }
 
@@ -64,9 +79,34 @@ Expected<v1::Decision> ScanStream::Add(const v1::ScanChunk& chunk, uint64_t inde
   if (!cloud) return Error{cloud.error().code, "chunk " + std::to_string(index) + ": " + cloud.error().message};
   log_.points += cloud->points.size();
   if (cloud->points.empty()) return Reply(session_->last(), index, start);  // nothing new to fuse
+  if (tracker_) return AddFrame(*cloud, index, start);
   auto added = session_->add(*cloud);
   if (!added) return added.error();
   return Reply(*added, index, start);
+}
+
+Expected<v1::Decision> ScanStream::AddFrame(const Cloud& frame, uint64_t index,
+                                            std::chrono::steady_clock::time_point start) {
+  if (!frame.sensor)
+    return invalid_argument("chunk " + std::to_string(index) +
+                            ": a tracking stream's frames need their sensor (PointCloud.sensor): the target is "
+                            "followed as the sensor moves");
+  auto step = tracker_->next(frame);
+  if (!step) return Error{step.error().code, "chunk " + std::to_string(index) + ": " + step.error().message};
+  const StreamDecision* decision = &session_->last();
+  Expected<StreamDecision> added = StreamDecision{};
+  if (step->found) {
+    added = session_->add(object_cloud(frame, step->object));
+    if (!added) return added.error();
+    decision = &*added;
+  }
+  v1::Decision reply = Reply(*decision, index, start);
+  v1::TrackedObject* tracked = reply.mutable_tracked();
+  tracked->set_found(step->found);
+  tracked->set_objects(static_cast<uint32_t>(step->objects));
+  if (step->found) ToProto(step->object, false, tracked->mutable_object());
+  else tracked->set_not_found(step->not_found);
+  return reply;
 }
 
 Expected<v1::Decision> ScanStream::Finish(uint64_t last_index) {

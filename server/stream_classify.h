@@ -1,10 +1,15 @@
 // StreamClassify's domain logic, outside the service class: the first chunk opens a scan session (its
 // model, method and operating point), later chunks must agree with it, each chunk is fused and answered
 // with the evolving decision, and the end of the scan is answered with Classify's decision of all of it.
+// A tracking stream (ScanChunk.track) sends whole frames: each is split into objects, and only the
+// target's points are fused.
 #pragma once
 
 #include <cstdint>
 #include <memory>
+#include <optional>
+
+#include "glimpse/session/scene_tracking.h"
 
 #include "engine.h"
 #include "limits.h"
@@ -31,6 +36,9 @@ class ScanStream {
   Status CheckSameSession(const v1::ScanChunk& chunk, uint64_t index) const;
   v1::Decision Reply(const StreamDecision& decision, uint64_t index,
                      std::chrono::steady_clock::time_point start) const;
+  // A tracking stream's frame: the target's points fused, or the last decision repeated when the
+  // frame does not show it; either way the reply says where the target is.
+  Expected<v1::Decision> AddFrame(const Cloud& frame, uint64_t index, std::chrono::steady_clock::time_point start);
 
   ModelCache& cache_;
   const Engine& engine_;
@@ -41,6 +49,7 @@ class ScanStream {
   LoadedModel model_;
   MethodId method_ = MethodId::kFusion;  // resolved: the model's default when none was asked
   double known_acceptance_ = 0;
+  std::optional<SceneTracker> tracker_;  // set by a first chunk that names a target
 };
 
 }  // namespace glimpse::server
