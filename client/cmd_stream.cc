@@ -56,6 +56,7 @@ void SendChunks(std::stop_token stop, grpc::ClientReaderWriter<v1::ScanChunk, v1
   if (!o.model.empty()) *chunk.mutable_model() = *ParseModelRef(o.model);
   if (!o.method.empty()) chunk.set_method(*wire::ParseMethod(o.method));
   chunk.set_known_acceptance(o.known_acceptance);
+  if (o.track) *chunk.mutable_track() = *o.track;
   for (size_t i = 0; i < scan.size(); ++i) {
     if (o.rate_hz > 0 && i > 0) {
       const auto due = start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
@@ -69,6 +70,7 @@ void SendChunks(std::stop_token stop, grpc::ClientReaderWriter<v1::ScanChunk, v1
       chunk.clear_model();
       chunk.clear_method();
       chunk.clear_known_acceptance();
+      chunk.clear_track();
     }
   }
   stream.WritesDone();

@@ -76,6 +76,7 @@ int RunScene(const ConnectionOptions& conn, const SceneOptions& options);
 struct StreamOptions {
   std::string file;           // or zoo_category, or frames_dir
   std::string frames_dir;     // a folder of frames, each from its own sensor (frames.h)
+  std::optional<v1::TrackTarget> track;  // with frames_dir: follow this object, each frame sent whole
   std::string zoo_category;
   uint64_t seed = 42;         // zoo shape, random order, mesh samples
   std::string model;

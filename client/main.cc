@@ -324,6 +324,11 @@ CLI::App* AddStream(CLI::App& app, CommandLine& cl) {
                      ->check(CLI::ExistingDirectory);
   frames->excludes(file)->excludes(zoo_shape)->excludes(stream_view)->excludes(chunks)->excludes("--order")
       ->excludes("--sensor")->excludes("--camera-fov");
+  stream->add_option_function<std::string>("--track", [&s](const std::string& t) { s.track = *ParseTrackTarget(t); },
+                                           "follow one object among others through --frames: 'nearest' (nearest the "
+                                           "camera's axis), X,Y,Z (the object at that point) or X0,Y0,Z0,X1,Y1,Z1 (in "
+                                           "that box); each frame is sent whole and split into objects by the server")
+      ->check(Checked(ParseTrackTarget, "nearest|X,Y,Z|X0,Y0,Z0,X1,Y1,Z1"))->needs(frames)->excludes("--chunk-points");
   stream->add_flag("--json", s.json, "one JSON object per decision");
   stream->add_option("--known-acceptance", s.known_acceptance,
                      "operating point of \"unknown\": the share of known clouds to accept, in (0, 1] (default: "

@@ -109,4 +109,37 @@ Expected<std::vector<v1::Method>> ParseMethodList(std::string_view text) {
   return methods;
 }
 
+Expected<v1::TrackTarget> ParseTrackTarget(std::string_view text) {
+  const std::string bad = "bad target '" + std::string(text) +
+                          "': 'nearest' (the object nearest the camera's axis), X,Y,Z (the object at that point) or "
+                          "X0,Y0,Z0,X1,Y1,Z1 (the object in that box), finite metres in the stream's frame";
+  v1::TrackTarget target;
+  if (Trim(text) == "nearest") {
+    target.set_nearest_axis(true);
+    return target;
+  }
+  std::vector<double> v;
+  for (std::string_view rest = text;;) {
+    const size_t comma = rest.find(',');
+    const std::string_view item = Trim(rest.substr(0, comma));
+    double x = 0;
+    auto [end, ec] = std::from_chars(item.data(), item.data() + item.size(), x);
+    if (item.empty() || ec != std::errc() || end != item.data() + item.size() || !std::isfinite(x)) return invalid_argument(bad);
+    v.push_back(x);
+    if (comma == std::string_view::npos) break;
+    rest = rest.substr(comma + 1);
+  }
+  auto set = [&v](v1::Vec3* out, size_t at) { out->set_x(float(v[at])), out->set_y(float(v[at + 1])), out->set_z(float(v[at + 2])); };
+  if (v.size() == 3) {
+    set(target.mutable_point(), 0);
+  } else if (v.size() == 6) {
+    if (v[0] > v[3] || v[1] > v[4] || v[2] > v[5]) return invalid_argument(bad + " (the box's first corner is its minimum)");
+    set(target.mutable_box()->mutable_min(), 0);
+    set(target.mutable_box()->mutable_max(), 3);
+  } else {
+    return invalid_argument(bad);
+  }
+  return target;
+}
+
 }  // namespace glimpse::client

@@ -30,6 +30,8 @@ Expected<std::vector<v1::Method>> ParseMethodList(std::string_view text);
 // A sensor position "X,Y,Z" in the cloud's frame (metres, finite), e.g. "0,0,0" for a camera-frame
 // scan whose file does not say where the camera was.
 Expected<Vec3> ParseSensor(std::string_view text);
+// --track: "nearest", "X,Y,Z" (a point) or "X0,Y0,Z0,X1,Y1,Z1" (a box, min then max).
+Expected<v1::TrackTarget> ParseTrackTarget(std::string_view text);
 
 // A depth camera's full fields of view "HxV" in degrees, each in (0, 180), e.g. "57x43" (a Kinect).
 Expected<FieldOfView> ParseFieldOfView(std::string_view text);

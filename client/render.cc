@@ -85,6 +85,31 @@ std::string UnknownJson(const Answer& a) {
          ",\"unknown_reason\":" + JsonString(a.unknown_reason()) + ",\"frame_cut\":" + JsonStrings(a.frame_cut());
 }
 
+// " target at 0.12,1.30,0.20 (4 objects)" or " target not found (why)" in a tracking stream; else empty.
+std::string TrackedText(const v1::Decision& d) {
+  if (!d.has_tracked()) return "";
+  const v1::TrackedObject& t = d.tracked();
+  if (!t.found()) return " target not found (" + t.not_found() + ")";
+  const v1::Vec3& c = t.object().centroid();
+  return " target at " + Fixed(c.x(), 2) + "," + Fixed(c.y(), 2) + "," + Fixed(c.z(), 2) + " (" +
+         std::to_string(t.objects()) + (t.objects() == 1 ? " object)" : " objects)");
+}
+
+// ,"tracked":{"found":..,"objects":..,"centroid":[..],"box_min":[..],"box_max":[..],"not_found":..} in a tracking stream.
+std::string TrackedJson(const v1::Decision& d) {
+  if (!d.has_tracked()) return "";
+  const v1::TrackedObject& t = d.tracked();
+  auto vec = [](const v1::Vec3& v) {
+    return "[" + JsonNumber(v.x()) + "," + JsonNumber(v.y()) + "," + JsonNumber(v.z()) + "]";
+  };
+  std::string out = std::string(",\"tracked\":{\"found\":") + (t.found() ? "true" : "false") +
+                    ",\"objects\":" + std::to_string(t.objects());
+  if (t.found())
+    out += ",\"centroid\":" + vec(t.object().centroid()) + ",\"box_min\":" + vec(t.object().box_min()) +
+           ",\"box_max\":" + vec(t.object().box_max()) + ",\"points\":" + std::to_string(t.object().points());
+  return out + ",\"not_found\":" + JsonString(t.not_found()) + "}";
+}
+
 }  // namespace
 
 std::string Fixed(double v, int decimals) {
@@ -263,7 +288,7 @@ std::string DecisionLine(const v1::Decision& d, size_t chunks_total) {
   return which + " points " +
          std::to_string(d.points()) + " " + KeypointsField(d, " ") + "winner " + winner +
          " changes " + std::to_string(d.category_changes()) + " settled " + YesNo(d.settled()) + " confidence " +
-         Fixed(d.confidence(), 2) + (d.has_novelty() ? " novelty " + Fixed(d.novelty(), 2) : "");
+         Fixed(d.confidence(), 2) + (d.has_novelty() ? " novelty " + Fixed(d.novelty(), 2) : "") + TrackedText(d);
 }
 
 std::string DecisionPanel(const v1::Decision& d, size_t chunks_total, std::string_view previous_winner,
@@ -288,6 +313,7 @@ std::string DecisionPanel(const v1::Decision& d, size_t chunks_total, std::strin
       out += "the camera's frame cuts the scan at the " + Joined(edges, ", ") + ": the answer is of the part it shows\n";
     }
   }
+  if (d.has_tracked()) out += TrackedText(d).substr(1) + "\n";
   size_t name_width = 0;
   for (const v1::CategoryScore& s : d.scores()) name_width = std::max(name_width, Width(s.category()));
   for (int i = 0; i < d.scores_size(); ++i) {
@@ -307,7 +333,7 @@ std::string DecisionJson(const v1::Decision& d, size_t chunks_total) {
          ",\"settled\":" + (d.settled() ? "true" : "false") + ",\"confidence\":" + JsonNumber(d.confidence()) +
          ",\"model\":" + JsonString(d.model().name()) + ",\"version\":" + std::to_string(d.model().version()) +
          ",\"method\":" + JsonString(wire::MethodName(d.method())) + ",\"latency_ms\":" + JsonNumber(d.latency_ms()) +
-         UnknownJson(d) + "}";
+         UnknownJson(d) + TrackedJson(d) + "}";
 }
 
 int LineCount(std::string_view text) { return static_cast<int>(std::count(text.begin(), text.end(), '\n')); }

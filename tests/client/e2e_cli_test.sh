@@ -4,6 +4,7 @@
 # Trains on a tiny zoo, on a folder of meshes and clouds, on a mesh folder with a manifest (up axes and
 # sizes) and on one without (--up/--unit); evaluates a model on another folder; classifies several
 # files in one batch (JSON errors included, unit warnings, "unknown"); streams a sensorless cloud as it is;
+# finds and classifies the objects of a scene's frame (table, JSON, SVG) and follows one through frames;
 # manages models; checks exit codes and error messages. About a minute.
 set -uo pipefail
 GLIMPSE=$1
@@ -279,6 +280,40 @@ run 0 stream --frames "$FRAMES" --model folder --rate 0 --chunk-points 1000 --js
 run 2 stream --frames "$FRAMES" "$DATA/blob/s1.xyz" --model folder
 run 2 stream --frames "$FRAMES" --order random --model folder
 run 1 stream --zoo human --model nope --rate 0 && err_has "^glimpse: stream --zoo human: NOT_FOUND"
+
+# ---- scenes: a frame of a floor with a box and a blob on it ----
+SCENE="$GLIMPSE_TEST_TMP/scene"
+mkdir -p "$SCENE/frames"
+scene_frame() {  # x y z of a 2 x 2 m floor (2 cm grid), a 0.4 m box at (-0.5, 1), a blob at (0.5, 1.2)
+  awk 'BEGIN { for (i = 0; i <= 100; i++) for (j = 0; j <= 100; j++) print -1 + 0.02 * i, 0.02 * j, 0 }'
+  awk 'BEGIN { for (i = 0; i <= 40; i++) for (j = 0; j <= 50; j++) {
+      print -0.7 + 0.01 * i, 0.8, 0.01 * j; print -0.7 + 0.01 * i, 1.2, 0.01 * j;
+      print -0.7, 0.8 + 0.01 * i, 0.01 * j; print -0.3, 0.8 + 0.01 * i, 0.01 * j }
+    for (i = 0; i <= 40; i++) for (j = 0; j <= 40; j++) print -0.7 + 0.01 * i, 0.8 + 0.01 * j, 0.5 }'
+  blob 7 4000 | awk '{ print $1 + 0.5, $2 + 1.2, $3 }'
+}
+scene_frame >"$SCENE/frame.xyz"
+run 0 scene "$SCENE/frame.xyz" --model folder --sensor 0,-1,1.2 --svg "$SCENE/top.svg" && out_has " 2 objects, 1 planes," \
+  && out_has "^1  " && out_has "^2  " && out_has "RANGE_M"
+grep -q "<svg" "$SCENE/top.svg" && grep -q ">1 " "$SCENE/top.svg" || fail "scene --svg wrote no labelled top view"
+run 0 scene "$SCENE/frame.xyz" --model folder --sensor 0,-1,1.2 --json && out_lines 1 \
+  && out_has '"objects":\[\{"object":1,"box_min":' && out_has '"planes":\[\{"normal":\[[-0-9.e]+,[-0-9.e]+,(1|0\.99[0-9]*)\]'
+# The same frame on its side (y up): a warning, the objects still found.
+awk '{ print $1, -$3, $2 }' "$SCENE/frame.xyz" >"$SCENE/side.xyz"
+run 0 scene "$SCENE/side.xyz" --model folder --sensor 0,-1.2,-1 && err_has "warning: .*is \+z up\?"
+run 0 scene "$SCENE/side.xyz" --model folder --sensor 0,-1.2,-1 --up y && out_has " 2 objects,"
+run 1 scene "$BOX" --model folder && err_has "b1\.off: a mesh"
+run 1 scene "$SCENE/frame.xyz" --model nope && err_has "NOT_FOUND"
+run 2 scene "$SCENE/frame.xyz" --model folder --cluster-tolerance 0
+# Following one object through frames from two sensor positions: every frame says where it is.
+cp "$SCENE/frame.xyz" "$SCENE/frames/a.xyz" && cp "$SCENE/frame.xyz" "$SCENE/frames/b.xyz"
+printf 'a.xyz,0,-1,1.2\nb.xyz,0.8,-0.8,1.2\n' >"$SCENE/frames/poses.csv"
+run 0 stream --frames "$SCENE/frames" --model folder --rate 0 --track=-0.5,1,0.25 && out_lines 3 \
+  && out_has "^chunk 1/2 .* target at -0\.50,1\.00,0\.[23][0-9] \(2 objects\)" && out_has "^chunk 2/2 .* target at -0\.50,1\.00"
+# A target no frame shows: each frame says so, and the scan ends without a decision.
+run 1 stream --frames "$SCENE/frames" --model folder --rate 0 --track 5,5,5 \
+  && out_has "^chunk 1/2 .* target not found \(no object within" && err_has "the scan ended without a decision"
+run 2 stream "$BLOB" --model folder --track nearest  # frames only
 run 1 stream "$GLIMPSE_TEST_TMP/nothing.off" --model tiny && err_has "nothing\.off"
 # A scan too small to decide ends in an error, as Classify's does, not in an OK with no answer.
 printf '0 0 0\n0.1 0 0\n' >"$GLIMPSE_TEST_TMP/two.xyz"

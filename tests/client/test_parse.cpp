@@ -74,6 +74,24 @@ TEST(ParseSensor, ThreeFiniteNumbers) {
   EXPECT_NE(ParseSensor("x").error().message.find("X,Y,Z"), std::string::npos);
 }
 
+TEST(ParseTrackTarget, NearestAPointOrABox) {
+  auto nearest = ParseTrackTarget(" nearest ");
+  ASSERT_TRUE(nearest.ok());
+  EXPECT_TRUE(nearest->nearest_axis());
+  auto point = ParseTrackTarget("0.5,-1,0.25");
+  ASSERT_TRUE(point.ok());
+  ASSERT_EQ(point->target_case(), v1::TrackTarget::kPoint);
+  EXPECT_EQ(point->point().y(), -1.f);
+  auto box = ParseTrackTarget("0,0,0, 1,2,0.5");
+  ASSERT_TRUE(box.ok());
+  ASSERT_EQ(box->target_case(), v1::TrackTarget::kBox);
+  EXPECT_EQ(box->box().max().y(), 2.f);
+  EXPECT_EQ(box->box().min().x(), 0.f);
+  for (const char* bad : {"", "near", "1,2", "1,2,3,4", "1,2,3,4,5,6,7", "nan,0,0", "1,,2", "1,1,1,0,0,0"})
+    EXPECT_FALSE(ParseTrackTarget(bad).ok()) << bad;
+  EXPECT_NE(ParseTrackTarget("1,1,1,0,0,0").error().message.find("minimum"), std::string::npos);
+}
+
 TEST(ParseFieldOfView, FullDegreesWidthByHeightEachInsideZeroTo180) {
   auto kinect = ParseFieldOfView("57x43");
   ASSERT_TRUE(kinect.ok());
