@@ -113,6 +113,47 @@ TEST(SegmentScene, ObjectsFiveCentimetresApartStayTwo) {
   EXPECT_EQ(one->objects.size(), 1u);
 }
 
+// A table (a 1.2 x 0.8 m top 0.74 m up on four legs) by a cabinet, and, when `cup`, a cup (a box) on it.
+SyntheticScene table_scene(bool cup) {
+  using Shape = test::SceneShape;
+  std::vector<Shape> shapes = {{Shape::kBox, Vec3(0, 2.2f, 0.70f), Vec3(1.2f, 0.8f, 0.04f)},
+                               {Shape::kCylinder, Vec3(-0.55f, 1.85f, 0), Vec3(0.025f, 0, 0.70f)},
+                               {Shape::kCylinder, Vec3(0.55f, 1.85f, 0), Vec3(0.025f, 0, 0.70f)},
+                               {Shape::kCylinder, Vec3(-0.55f, 2.55f, 0), Vec3(0.025f, 0, 0.70f)},
+                               {Shape::kCylinder, Vec3(0.55f, 2.55f, 0), Vec3(0.025f, 0, 0.70f)},
+                               {Shape::kBox, Vec3(1.2f, 2.4f, 0), Vec3(0.4f, 0.4f, 0.5f)}};
+  if (cup) shapes.push_back({Shape::kBox, Vec3(0.1f, 2.1f, 0.74f), Vec3(0.08f, 0.08f, 0.12f)});
+  return test::render_scene(test::Room{}, shapes, Vec3(0.2f, 0, 1.6f), Vec3(0.2f, 2.2f, 0.4f));
+}
+
+TEST(SegmentScene, ABareTableTopIsTheTablesFaceAndATopWithACupOnItIsRemoved) {
+  Expected<Scene> bare = segment_scene(table_scene(false).frame);
+  ASSERT_TRUE(bare.ok()) << bare.error().message;
+  // The table, its top and front legs (the top hides the back legs' upper half: their feet are apart),
+  // and the cabinet.
+  const auto table = std::find_if(bare->objects.begin(), bare->objects.end(),
+                                  [](const SceneObject& o) { return o.box_max.x() - o.box_min.x() > 1.f; });
+  ASSERT_NE(table, bare->objects.end());
+  EXPECT_EQ(std::count_if(bare->objects.begin(), bare->objects.end(),
+                          [](const SceneObject& o) { return o.points.size() > 2000; }),
+            2);
+  EXPECT_NEAR(table->box_max.x() - table->box_min.x(), 1.2f, 0.05f);
+  EXPECT_NEAR(table->box_max.z(), 0.74f, 0.02f);
+  EXPECT_LT(table->box_min.z(), 0.1f);  // its legs stand on the floor
+
+  // With a cup on it, the top is a table top holding an object: removed, the cup found alone.
+  Expected<Scene> laid = segment_scene(table_scene(true).frame);
+  ASSERT_TRUE(laid.ok()) << laid.error().message;
+  const bool top_removed = std::any_of(laid->planes.begin(), laid->planes.end(), [](const Plane& p) {
+    return p.normal.z() > 0.99f && std::abs(-p.offset / p.normal.z() - 0.74f) < 0.03f;
+  });
+  EXPECT_TRUE(top_removed);
+  const bool cup_alone = std::any_of(laid->objects.begin(), laid->objects.end(), [](const SceneObject& o) {
+    return (o.box_max - o.box_min).head<2>().maxCoeff() < 0.15f && o.box_min.z() > 0.72f;
+  });
+  EXPECT_TRUE(cup_alone);
+}
+
 TEST(SegmentScene, SameSceneWhateverTheThreadCount) {
   const SyntheticScene s = test::four_object_scene(3);
   const int threads = omp_get_max_threads();

@@ -10,6 +10,7 @@
 #include <optional>
 #include <string>
 #include <unordered_map>
+#include <unordered_set>
 
 #include "glimpse/geometry/scene.h"
 #include "glimpse/spatial_hash.h"
@@ -163,6 +164,61 @@ int32_t cluster_voxels(const Points& voxels, float tolerance_m, Labels& labels) 
   return int32_t(clusters.size());
 }
 
+// Whether voxel p lies on the top of the k-th plane: above it (on the sensor's side, which is up for a
+// level plane below the sensor) by at most reach_m, over a cell of its footprint or next to one.
+bool rests_on(const Vec3& p, const Plane& plane, const std::unordered_set<CellKey, CellKeyHash>& footprint,
+              float cell_m, float reach_m) {
+  const float above = plane.normal.dot(p) + plane.offset;
+  if (above <= 0 || above > reach_m) return false;
+  const int64_t x = grid_cell<int64_t>(p.x(), cell_m), y = grid_cell<int64_t>(p.y(), cell_m);
+  for (int64_t dx = -1; dx <= 1; ++dx)
+    for (int64_t dy = -1; dy <= 1; ++dy)
+      if (footprint.count(CellKey{x + dx, y + dy, 0})) return true;
+  return false;
+}
+
+// The level planes above the lowest one (table tops, not the floor) on which nothing rests (fewer than
+// kMinResting of the voxels left for clustering: a stray return or two): such a plane is an object's own
+// face (a bare table's top, a low cabinet's), so its voxels go back to clustering. A frame that is not
+// +z up has no level plane and keeps every plane.
+std::vector<bool> idle_tops(const Points& voxels, const std::vector<Plane>& planes, const Labels& labels,
+                            const SceneParams& params) {
+  std::vector<bool> idle(planes.size(), false);
+  constexpr float kLevelCos = 0.94f;  // within 20 degrees of +z
+  constexpr size_t kMinResting = 10;
+  std::optional<float> floor_height;  // of the lowest level plane
+  for (const Plane& p : planes)
+    if (p.normal.z() >= kLevelCos && (!floor_height || -p.offset / p.normal.z() < *floor_height))
+      floor_height = -p.offset / p.normal.z();
+  const float cell_m = std::max(2.f * params.voxel_m, params.cluster_tolerance_m);
+  const float reach_m = params.plane_distance_m + params.cluster_tolerance_m;
+  for (size_t k = 0; k < planes.size(); ++k) {
+    const Plane& plane = planes[k];
+    if (plane.normal.z() < kLevelCos || -plane.offset / plane.normal.z() <= *floor_height + params.plane_distance_m)
+      continue;
+    std::unordered_set<CellKey, CellKeyHash> footprint;
+    for (size_t i = 0; i < voxels.size(); ++i)
+      if (labels[i] == -int32_t(k + 1))
+        footprint.insert({grid_cell<int64_t>(voxels[i].x(), cell_m), grid_cell<int64_t>(voxels[i].y(), cell_m), 0});
+    size_t resting = 0;
+    for (size_t i = 0; i < voxels.size() && resting < kMinResting; ++i)
+      resting += labels[i] == 0 && rests_on(voxels[i], plane, footprint, cell_m, reach_m);
+    idle[k] = resting < kMinResting;
+  }
+  return idle;
+}
+
+// The planes kept and their voxels' labels renumbered; the idle ones' voxels unlabelled (0).
+std::vector<Plane> restore_planes(std::vector<Plane> planes, const std::vector<bool>& idle, Labels& labels) {
+  std::vector<int32_t> renumbered(planes.size(), 0);
+  std::vector<Plane> kept;
+  for (size_t k = 0; k < planes.size(); ++k)
+    if (!idle[k]) renumbered[k] = -int32_t(kept.size() + 1), kept.push_back(planes[k]);
+  for (int32_t& label : labels)
+    if (label < 0) label = renumbered[size_t(-label - 1)];
+  return kept;
+}
+
 SceneObject make_object(const Points& frame, std::vector<uint32_t> indices, const Vec3& sensor) {
   SceneObject o;
   o.indices = std::move(indices);
@@ -205,6 +261,9 @@ Expected<Scene> segment_scene(const Cloud& frame, const SceneParams& params) {
   scene.finite_points = voxels.finite;
   Labels labels(voxels.centroids.size(), 0);
   scene.planes = remove_planes(voxels.centroids, params, labels);
+  const std::vector<bool> idle = idle_tops(voxels.centroids, scene.planes, labels, params);
+  if (std::find(idle.begin(), idle.end(), true) != idle.end())
+    scene.planes = restore_planes(std::move(scene.planes), idle, labels);
   const int32_t clusters = cluster_voxels(voxels.centroids, params.cluster_tolerance_m, labels);
   // Each frame point follows its voxel, in the frame's order: planes count points, clusters gather them.
   const Vec3 sensor = frame.sensor.value_or(Vec3::Zero());
