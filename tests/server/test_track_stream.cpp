@@ -79,6 +79,7 @@ class TrackStreamTest : public ::testing::Test {
   static v1::ScanChunk First(const Cloud& frame) {
     v1::ScanChunk c = Chunk(frame);
     c.mutable_model()->set_name("shapes");
+    c.mutable_scene()->set_min_object_points(250);  // a quarter of a 640 x 480 frame's pixels
     c.mutable_track()->mutable_point()->set_x(kCylinder.x());
     c.mutable_track()->mutable_point()->set_y(kCylinder.y());
     c.mutable_track()->mutable_point()->set_z(kCylinder.z());
@@ -106,7 +107,9 @@ TEST_F(TrackStreamTest, FollowsTheTargetAmongOthersAndDecidesItsPointsAlone) {
     EXPECT_LT(std::hypot(o.centroid().x() - kCylinder.x(), o.centroid().y() - kCylinder.y()), 0.1f) << "frame " << i;
     EXPECT_LT(o.box_max().x() - o.box_min().x(), 0.25f) << "frame " << i;  // the cylinder alone is 0.2 m wide
     if (i > 0) EXPECT_GE(d.points(), tracked.decisions[i - 1].points());
-    Expected<Scene> scene = segment_scene(wire::CloudFromProto(chunks[i].cloud(), 1'000'000).value());
+    SceneParams quarter;
+    quarter.min_object_points = 250;
+    Expected<Scene> scene = segment_scene(wire::CloudFromProto(chunks[i].cloud(), 1'000'000).value(), quarter);
     ASSERT_TRUE(scene.ok());
     for (const SceneObject& s : scene->objects)
       if (std::abs(s.centroid.x() - o.centroid().x()) < 1e-5f && std::abs(s.centroid.y() - o.centroid().y()) < 1e-5f) {

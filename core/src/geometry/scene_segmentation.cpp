@@ -1,6 +1,5 @@
 #include <pcl/point_types.h>
 #include <pcl/search/kdtree.h>
-#include <pcl/segmentation/extract_clusters.h>
 
 #include <algorithm>
 #include <cmath>
@@ -117,7 +116,12 @@ std::vector<uint32_t> broad_regions(const Points& voxels, const std::vector<uint
 // remaining voxels within the inlier distance that lie in its broad regions; the rest of its inliers
 // stay for clustering and leave only RANSAC's candidates, so that the next fit finds another plane.
 // Stops at the first plane holding fewer than min_plane_fraction of all voxels, or after max_planes fits.
-std::vector<Plane> remove_planes(const Points& voxels, const SceneParams& params, Labels& labels) {
+// How far from a plane a point at `p` may lie and still be on it: the noise grows with the range.
+float plane_reach(const Vec3& p, const Vec3& sensor, const SceneParams& params) {
+  return params.plane_distance_m + params.plane_distance_per_m2 * (p - sensor).squaredNorm();
+}
+
+std::vector<Plane> remove_planes(const Points& voxels, const Vec3& sensor, const SceneParams& params, Labels& labels) {
   std::vector<uint32_t> remaining(voxels.size()), inliers, rest;
   for (uint32_t i = 0; i < remaining.size(); ++i) remaining[i] = i;
   const size_t min_inliers = std::max<size_t>(3, size_t(std::ceil(params.min_plane_fraction * double(voxels.size()))));
@@ -130,38 +134,92 @@ std::vector<Plane> remove_planes(const Points& voxels, const SceneParams& params
     inliers.clear();
     rest.clear();
     for (uint32_t i : remaining)
-      (std::abs(plane->normal.dot(voxels[i]) + plane->offset) <= params.plane_distance_m ? inliers : rest).push_back(i);
+      (std::abs(plane->normal.dot(voxels[i]) + plane->offset) <= plane_reach(voxels[i], sensor, params) ? inliers : rest)
+          .push_back(i);
     if (inliers.size() < min_inliers) break;
     remaining.swap(rest);
     const std::vector<uint32_t> broad = broad_regions(voxels, inliers, plane->normal, cell_m, params.min_plane_area_m2);
     if (broad.empty()) continue;
     for (uint32_t i : broad) labels[i] = -int32_t(planes.size() + 1);
-    planes.push_back(Plane{plane->normal, plane->offset, broad.size()});
+    const float side = plane->normal.dot(sensor) + plane->offset < 0 ? -1.f : 1.f;  // the normal faces the sensor
+    planes.push_back(Plane{side * plane->normal, side * plane->offset, broad.size()});
   }
   return planes;
 }
 
-// The unlabelled voxels split into Euclidean clusters (PCL's EuclideanClusterExtraction on a kd-tree),
-// labelled 1, 2, ... in PCL's order; returns their count.
-int32_t cluster_voxels(const Points& voxels, float tolerance_m, Labels& labels) {
+// The unlabelled voxels split into clusters: two voxels are joined when they lie within join_distance of
+// each other. A breadth-first growth over PCL's kd-tree, each voxel's neighbours searched within its own
+// join distance (PCL's Euclidean and conditional clusterings search one radius for every point, the
+// farthest point's, which costs the near ones, the most, several times over). Labelled 1, 2, ... from
+// the lowest unlabelled voxel up; returns their count.
+int32_t cluster_voxels(const Points& voxels, const Vec3& sensor, const SceneParams& params, Labels& labels) {
   auto indices = std::make_shared<pcl::Indices>();
   for (uint32_t i = 0; i < voxels.size(); ++i)
     if (labels[i] == 0) indices->push_back(int(i));
   if (indices->empty()) return 0;
   pcl::PointCloud<pcl::PointXYZ>::ConstPtr cloud(to_pcl(voxels).release());
-  auto tree = std::make_shared<pcl::search::KdTree<pcl::PointXYZ>>();
-  pcl::EuclideanClusterExtraction<pcl::PointXYZ> extraction;
-  extraction.setClusterTolerance(tolerance_m);
-  extraction.setMinClusterSize(1);
-  extraction.setMaxClusterSize(std::numeric_limits<int>::max());
-  extraction.setSearchMethod(tree);
-  extraction.setInputCloud(cloud);
-  extraction.setIndices(indices);
-  std::vector<pcl::PointIndices> clusters;
-  extraction.extract(clusters);
-  for (size_t c = 0; c < clusters.size(); ++c)
-    for (int i : clusters[c].indices) labels[size_t(i)] = int32_t(c + 1);
-  return int32_t(clusters.size());
+  pcl::search::KdTree<pcl::PointXYZ> tree(true);  // sorted results: the same clusters whatever the build
+  tree.setInputCloud(cloud, indices);
+  int32_t clusters = 0;
+  pcl::Indices found;
+  std::vector<float> distances;
+  std::vector<int> queue;
+  for (int seed : *indices) {
+    if (labels[size_t(seed)] != 0) continue;
+    labels[size_t(seed)] = ++clusters;
+    queue.assign(1, seed);
+    for (size_t head = 0; head < queue.size(); ++head) {
+      const Vec3& p = voxels[size_t(queue[head])];
+      const float reach = std::max(params.cluster_tolerance_m, params.cluster_tolerance_per_m2 * (p - sensor).squaredNorm());
+      tree.radiusSearch(cloud->points[size_t(queue[head])], reach, found, distances);
+      for (int q : found)
+        if (labels[size_t(q)] == 0) labels[size_t(q)] = clusters, queue.push_back(q);
+    }
+  }
+  return clusters;
+}
+
+// A single view parts one object where a near part hides what joins it to the rest (an arm before a
+// body, a chair's back behind its seat): pieces of one object stand over one another as seen from above
+// and share their heights, where two objects side by side do not and a cup on a table stands above it.
+// Clusters of at least kMinVoxels whose boxes overlap in height, and whose footprints (x-y boxes) overlap
+// by at least kShare of the smaller one's, the larger's grown by kMargin, are joined (union-find, in
+// label order); returns the count. Only for a frame that is +z up (it has a floor or a table top).
+int32_t join_overlapping(const Points& voxels, int32_t clusters, Labels& labels) {
+  constexpr size_t kMinVoxels = 5;
+  constexpr float kMargin = 0.f, kShare = 0.3f;  // chosen on scenes of SHREC 2007 meshes (docs/results.md)
+  std::vector<Bounds> box(size_t(clusters), Bounds{Vec3::Constant(INFINITY), Vec3::Constant(-INFINITY)});
+  std::vector<size_t> count(size_t(clusters), 0);
+  for (size_t i = 0; i < voxels.size(); ++i)
+    if (labels[i] > 0) {
+      Bounds& b = box[size_t(labels[i] - 1)];
+      b.min = b.min.cwiseMin(voxels[i]), b.max = b.max.cwiseMax(voxels[i]);
+      ++count[size_t(labels[i] - 1)];
+    }
+  std::vector<int32_t> root(static_cast<size_t>(clusters));
+  for (int32_t c = 0; c < clusters; ++c) root[size_t(c)] = c;
+  auto find = [&root](int32_t c) {
+    while (root[size_t(c)] != c) c = root[size_t(c)] = root[size_t(root[size_t(c)])];
+    return c;
+  };
+  auto area = [](const Bounds& b) { return std::max(0.f, b.max.x() - b.min.x()) * std::max(0.f, b.max.y() - b.min.y()); };
+  for (int32_t a = 0; a < clusters; ++a)
+    for (int32_t b = a + 1; b < clusters && count[size_t(a)] >= kMinVoxels; ++b) {
+      const Bounds &p = box[size_t(a)], &q = box[size_t(b)];
+      if (count[size_t(b)] < kMinVoxels || p.max.z() < q.min.z() || q.max.z() < p.min.z()) continue;
+      const bool a_smaller = area(p) < area(q);
+      const Bounds& small = a_smaller ? p : q;
+      const Bounds grown{(a_smaller ? q : p).min - Vec3::Constant(kMargin), (a_smaller ? q : p).max + Vec3::Constant(kMargin)};
+      const Bounds both{small.min.cwiseMax(grown.min), small.max.cwiseMin(grown.max)};
+      if (area(both) >= kShare * area(small)) root[size_t(find(b))] = find(a);
+    }
+  std::vector<int32_t> renumbered(size_t(clusters), 0);
+  int32_t joined = 0;
+  for (int32_t c = 0; c < clusters; ++c)
+    if (find(c) == c) renumbered[size_t(c)] = ++joined;
+  for (int32_t& label : labels)
+    if (label > 0) label = renumbered[size_t(find(label - 1))];
+  return joined;
 }
 
 // Whether voxel p lies on the top of the k-th plane: above it (on the sensor's side, which is up for a
@@ -185,7 +243,8 @@ std::vector<bool> idle_tops(const Points& voxels, const std::vector<Plane>& plan
                             const SceneParams& params) {
   std::vector<bool> idle(planes.size(), false);
   constexpr float kLevelCos = 0.94f;  // within 20 degrees of +z
-  constexpr size_t kMinResting = 10;
+  // At least 20 cm² of it within reach of the top (a cup's foot), counted in voxels.
+  const size_t kMinResting = std::max<size_t>(3, size_t(0.002f / std::max(1e-4f, params.voxel_m * params.voxel_m)));
   std::optional<float> floor_height;  // of the lowest level plane
   for (const Plane& p : planes)
     if (p.normal.z() >= kLevelCos && (!floor_height || -p.offset / p.normal.z() < *floor_height))
@@ -236,10 +295,22 @@ SceneObject make_object(const Points& frame, std::vector<uint32_t> indices, cons
   return o;
 }
 
-bool keep(const SceneObject& o, const SceneParams& params) {
+// Whether the object is a removed plane's remnant: most of its points within twice the plane's reach.
+bool remnant(const SceneObject& o, const std::vector<Plane>& planes, const Vec3& sensor, const SceneParams& params) {
+  if (planes.empty()) return false;
+  size_t near = 0;
+  for (const Vec3& p : o.points) {
+    const float reach = 2.f * plane_reach(p, sensor, params);
+    near += std::any_of(planes.begin(), planes.end(),
+                        [&](const Plane& plane) { return std::abs(plane.normal.dot(p) + plane.offset) <= reach; });
+  }
+  return double(near) >= params.max_remnant_share * double(o.points.size());
+}
+
+bool keep(const SceneObject& o, const std::vector<Plane>& planes, const Vec3& sensor, const SceneParams& params) {
   const size_t n = o.indices.size();
   return n >= params.min_object_points && n <= params.max_object_points &&
-         (o.box_max - o.box_min).maxCoeff() <= params.max_object_extent_m;
+         (o.box_max - o.box_min).maxCoeff() <= params.max_object_extent_m && !remnant(o, planes, sensor, params);
 }
 
 Status check(const SceneParams& p) {
@@ -260,17 +331,15 @@ Expected<Scene> segment_scene(const Cloud& frame, const SceneParams& params) {
   Scene scene;
   scene.finite_points = voxels.finite;
   Labels labels(voxels.centroids.size(), 0);
-  scene.planes = remove_planes(voxels.centroids, params, labels);
+  const Vec3 sensor = frame.sensor.value_or(Vec3::Zero());
+  scene.planes = remove_planes(voxels.centroids, sensor, params, labels);
   const std::vector<bool> idle = idle_tops(voxels.centroids, scene.planes, labels, params);
   if (std::find(idle.begin(), idle.end(), true) != idle.end())
     scene.planes = restore_planes(std::move(scene.planes), idle, labels);
-  const int32_t clusters = cluster_voxels(voxels.centroids, params.cluster_tolerance_m, labels);
+  int32_t clusters = cluster_voxels(voxels.centroids, sensor, params, labels);
+  if (has_level_plane(scene)) clusters = join_overlapping(voxels.centroids, clusters, labels);  // +z is up
   // Each frame point follows its voxel, in the frame's order: planes count points, clusters gather them.
-  const Vec3 sensor = frame.sensor.value_or(Vec3::Zero());
-  for (Plane& plane : scene.planes) {
-    plane.inliers = 0;
-    if (plane.normal.dot(sensor) + plane.offset < 0) plane.normal = -plane.normal, plane.offset = -plane.offset;
-  }
+  for (Plane& plane : scene.planes) plane.inliers = 0;
   std::vector<std::vector<uint32_t>> members(static_cast<size_t>(clusters));
   for (uint32_t i = 0; i < frame.points.size(); ++i) {
     if (voxels.of_point[i] == kNone) continue;
@@ -281,7 +350,7 @@ Expected<Scene> segment_scene(const Cloud& frame, const SceneParams& params) {
   for (std::vector<uint32_t>& indices : members) {
     if (indices.size() < params.min_object_points || indices.size() > params.max_object_points) continue;
     SceneObject object = make_object(frame.points, std::move(indices), sensor);
-    if (keep(object, params)) scene.objects.push_back(std::move(object));
+    if (keep(object, scene.planes, sensor, params)) scene.objects.push_back(std::move(object));
   }
   std::sort(scene.objects.begin(), scene.objects.end(), [](const SceneObject& a, const SceneObject& b) {
     if (a.range_m != b.range_m) return a.range_m < b.range_m;

@@ -21,7 +21,11 @@ struct SceneParams {
   // Planes and clusters are found on the centroids of voxels this wide; each object then takes back
   // every frame point of its voxels. 0: on the frame's points themselves.
   float voxel_m = 0.01f;
-  float plane_distance_m = 0.02f;      // RANSAC inlier distance
+  // A point within plane_distance_m + plane_distance_per_m2 x range^2 of a plane is on it (range: from
+  // the sensor): a depth camera's noise and depth steps grow with the square of the range (Nguyen et al.
+  // 2012; 1/8-pixel disparity steps are 2.5 cm at 3 m), so a floor 3.5 m away is as thick as 6 cm.
+  float plane_distance_m = 0.02f;
+  float plane_distance_per_m2 = 0.003f;
   double min_plane_fraction = 0.05;    // the smallest plane removed, as a share of the frame's voxels
   // A floor, wall or table top covers at least this much in one connected piece; a plane's smaller
   // pieces are objects' faces (a box's top, a laptop's screen) and stay for clustering.
@@ -31,11 +35,20 @@ struct SceneParams {
   // Voxels closer than this belong to the same object: 3 cm bridges the gaps a depth camera leaves on one
   // object (a bottle's handle behind its shadow) and still parts objects 5 cm apart.
   float cluster_tolerance_m = 0.03f;
-  size_t min_object_points = 200;      // frame points; fewer: noise or a plane's remnant
+  // ... and farther out more: the depth camera's steps (1/8 pixel of disparity: 3.5 cm at 3.5 m) part one
+  // surface into slabs. Two voxels join within max(cluster_tolerance_m, cluster_tolerance_per_m2 x
+  // range^2): 3 cm to 2.6 m, 5.5 cm at 3.5 m.
+  float cluster_tolerance_per_m2 = 0.0045f;
+  // Frame points; fewer: noise, a plane's remnant or a piece of an object (a 20 cm object 4 m away
+  // still has 1000).
+  size_t min_object_points = 1000;
   size_t max_object_points = 200000;   // frame points; more: a wall or floor left over
   // The longest side of an object's box; longer: a wall's remnant. Room for a standing person (2 m) and
   // a long table.
   float max_object_extent_m = 2.5f;
+  // A cluster with at least this share of its points within twice the inlier distance of a removed
+  // plane is that plane's remnant (noise beyond the inlier distance), not an object.
+  double max_remnant_share = 1.1;
   size_t max_objects = 32;             // the nearest ones are kept
 };
 
