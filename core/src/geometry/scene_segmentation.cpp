@@ -116,11 +116,6 @@ std::vector<uint32_t> broad_regions(const Points& voxels, const std::vector<uint
 // remaining voxels within the inlier distance that lie in its broad regions; the rest of its inliers
 // stay for clustering and leave only RANSAC's candidates, so that the next fit finds another plane.
 // Stops at the first plane holding fewer than min_plane_fraction of all voxels, or after max_planes fits.
-// How far from a plane a point at `p` may lie and still be on it: the noise grows with the range.
-float plane_reach(const Vec3& p, const Vec3& sensor, const SceneParams& params) {
-  return params.plane_distance_m + params.plane_distance_per_m2 * (p - sensor).squaredNorm();
-}
-
 std::vector<Plane> remove_planes(const Points& voxels, const Vec3& sensor, const SceneParams& params, Labels& labels) {
   std::vector<uint32_t> remaining(voxels.size()), inliers, rest;
   for (uint32_t i = 0; i < remaining.size(); ++i) remaining[i] = i;

@@ -75,6 +75,12 @@ struct Scene {
 // min_object_points above max_object_points.
 Expected<Scene> segment_scene(const Cloud& frame, const SceneParams& params = {});
 
+// How far from a plane a point at `p` may lie and still be on it, seen from `sensor`: the noise grows with
+// the range (SceneParams::plane_distance_per_m2).
+inline float plane_reach(const Vec3& p, const Vec3& sensor, const SceneParams& params) {
+  return params.plane_distance_m + params.plane_distance_per_m2 * (p - sensor).squaredNorm();
+}
+
 // Whether a removed plane is a floor or a table top: level and below the sensor (its normal, which faces
 // the sensor, within max_tilt_deg of +z). A frame with planes but no such one is probably not +z up (a
 // camera's own coordinates, where a wall may pass for a ceiling).
