@@ -95,8 +95,8 @@ Expected<v1::Decision> ScanStream::AddFrame(const Cloud& frame, uint64_t index,
   if (!step) return Error{step.error().code, "chunk " + std::to_string(index) + ": " + step.error().message};
   const StreamDecision* decision = &session_->last();
   Expected<StreamDecision> added = StreamDecision{};
-  if (step->found) {
-    added = session_->add(object_cloud(frame, step->object));
+  if (step->found && !step->fresh.empty()) {  // the target's surface this frame adds
+    added = session_->add(Cloud{std::move(step->fresh), frame.sensor, frame.frame});
     if (!added) return added.error();
     decision = &*added;
   }

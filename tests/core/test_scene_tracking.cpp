@@ -173,6 +173,33 @@ TEST(SceneTracker, LosesTheTargetOutOfViewOrHiddenAndFindsItAgain) {
   }
 }
 
+// A still camera's frames repeat one surface with new noise each time: the first frame's cluster is fresh
+// whole, and twenty more add a fraction of it, not twenty copies, the last ten less than the first ten.
+TEST(SceneTracker, AStillCamerasFramesAddLittleAfterTheFirst) {
+  const std::vector<SceneShape> shapes = {{SceneShape::kBox, Vec3(-0.4f, 2.0f, 0), Vec3(0.3f, 0.3f, 0.4f)},
+                                          {SceneShape::kCylinder, Vec3(0.3f, 2.2f, 0), Vec3(0.12f, 0, 0.4f)}};
+  SceneTracker tracker = make_tracker(point_target(Vec3(0.3f, 2.2f, 0.2f)));
+  size_t first = 0, added = 0, added_late = 0;
+  for (uint32_t k = 0; k < 21; ++k) {
+    SyntheticScene s = test::render_scene(test::Room{3.f, 4.f, 2.f}, shapes, Vec3(0, 0, 1.3f), Vec3(0, 2.1f, 0.2f),
+                                          320, 240, 0.004f, 100 + k);
+    const TrackStep step = step_of(tracker, s.frame);
+    ASSERT_TRUE(step.found) << step.not_found;
+    EXPECT_LE(step.fresh.size(), step.object.points.size());
+    if (k == 0) {
+      EXPECT_EQ(step.fresh.size(), step.object.points.size());
+      first = step.fresh.size();
+    } else {
+      added += step.fresh.size();
+      if (k > 10) added_late += step.fresh.size();
+    }
+  }
+  EXPECT_GT(first, 500u);
+  EXPECT_GT(added, 0u);           // noise reaches cells the first frame did not
+  EXPECT_LT(added, 2 * first);    // far from twenty copies
+  EXPECT_LT(2 * added_late, added);  // and less and less: the surface's cells fill up
+}
+
 TEST(SceneTracker, BadTargetsAndParametersAreInvalidArguments) {
   const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
   std::vector<TrackTarget> targets(4);
@@ -186,7 +213,7 @@ TEST(SceneTracker, BadTargetsAndParametersAreInvalidArguments) {
     EXPECT_EQ(tracker.error().code, ErrorCode::kInvalidArgument);
   }
   for (auto bad : {+[](TrackParams& p) { p.point_radius_m = -0.1f; }, +[](TrackParams& p) { p.match_distance_m = 0; },
-                   +[](TrackParams& p) { p.min_shared_fraction = 1.5; }, +[](TrackParams& p) { p.scene.cluster_tolerance_m = 0; }}) {
+                   +[](TrackParams& p) { p.min_shared_fraction = 1.5; }, +[](TrackParams& p) { p.fuse_cell_m = 0; }, +[](TrackParams& p) { p.scene.cluster_tolerance_m = 0; }}) {
     TrackParams params;
     bad(params);
     Expected<SceneTracker> tracker = SceneTracker::create({}, params);

@@ -10,6 +10,7 @@
 #include "common/fast_training.h"
 #include "core/synthetic_scene.h"
 #include "fakes.h"
+#include "glimpse/session/scene_tracking.h"
 #include "proto/wire/clouds.h"
 #include "shapes.h"
 
@@ -68,6 +69,17 @@ StreamResult Stream(v1::Glimpse::Stub& stub, std::vector<v1::ScanChunk> chunks) 
   return out;
 }
 
+// The first chunk of a tracking stream of `frame`: the model, quarter-frame objects, the cylinder's point.
+v1::ScanChunk TrackingFirst(const Cloud& frame) {
+  v1::ScanChunk c = Chunk(frame);
+  c.mutable_model()->set_name("shapes");
+  c.mutable_scene()->set_min_object_points(250);  // a quarter of a 640 x 480 frame's pixels
+  c.mutable_track()->mutable_point()->set_x(kCylinder.x());
+  c.mutable_track()->mutable_point()->set_y(kCylinder.y());
+  c.mutable_track()->mutable_point()->set_z(kCylinder.z());
+  return c;
+}
+
 class TrackStreamTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
@@ -76,15 +88,7 @@ class TrackStreamTest : public ::testing::Test {
     ASSERT_TRUE(trained.status.ok()) << trained.status.error_message();
   }
   static void TearDownTestSuite() { delete harness_; }
-  static v1::ScanChunk First(const Cloud& frame) {
-    v1::ScanChunk c = Chunk(frame);
-    c.mutable_model()->set_name("shapes");
-    c.mutable_scene()->set_min_object_points(250);  // a quarter of a 640 x 480 frame's pixels
-    c.mutable_track()->mutable_point()->set_x(kCylinder.x());
-    c.mutable_track()->mutable_point()->set_y(kCylinder.y());
-    c.mutable_track()->mutable_point()->set_z(kCylinder.z());
-    return c;
-  }
+  static v1::ScanChunk First(const Cloud& frame) { return TrackingFirst(frame); }
   static inline Harness* harness_ = nullptr;
 };
 
@@ -97,8 +101,16 @@ TEST_F(TrackStreamTest, FollowsTheTargetAmongOthersAndDecidesItsPointsAlone) {
   ASSERT_TRUE(tracked.status.ok()) << tracked.status.error_message();
   ASSERT_EQ(tracked.decisions.size(), azimuths.size() + 1);  // one per frame, then the final one
 
-  // Each frame shows the target: the cylinder's cluster, never the box 5 cm beside it.
-  std::vector<v1::ScanChunk> plain;  // the same stream of the target's clusters alone
+  // Each frame shows the target: the cylinder's cluster, never the box 5 cm beside it. The plain stream
+  // sends what core's tracker finds new of it in each frame.
+  TrackTarget target;
+  target.kind = TrackTarget::Kind::kPoint;
+  target.point = kCylinder;
+  TrackParams params;
+  params.scene.min_object_points = 250;
+  Expected<SceneTracker> local = SceneTracker::create(target, params);
+  ASSERT_TRUE(local.ok());
+  std::vector<v1::ScanChunk> plain;
   for (size_t i = 0; i < azimuths.size(); ++i) {
     const v1::Decision& d = tracked.decisions[i];
     ASSERT_TRUE(d.tracked().found()) << "frame " << i << ": " << d.tracked().not_found();
@@ -106,16 +118,14 @@ TEST_F(TrackStreamTest, FollowsTheTargetAmongOthersAndDecidesItsPointsAlone) {
     const v1::SceneObject& o = d.tracked().object();
     EXPECT_LT(std::hypot(o.centroid().x() - kCylinder.x(), o.centroid().y() - kCylinder.y()), 0.1f) << "frame " << i;
     EXPECT_LT(o.box_max().x() - o.box_min().x(), 0.25f) << "frame " << i;  // the cylinder alone is 0.2 m wide
-    if (i > 0) EXPECT_GE(d.points(), tracked.decisions[i - 1].points());
-    SceneParams quarter;
-    quarter.min_object_points = 250;
-    Expected<Scene> scene = segment_scene(wire::CloudFromProto(chunks[i].cloud(), 1'000'000).value(), quarter);
-    ASSERT_TRUE(scene.ok());
-    for (const SceneObject& s : scene->objects)
-      if (std::abs(s.centroid.x() - o.centroid().x()) < 1e-5f && std::abs(s.centroid.y() - o.centroid().y()) < 1e-5f) {
-        const Cloud frame = wire::CloudFromProto(chunks[i].cloud(), 1'000'000).value();
-        plain.push_back(Chunk(object_cloud(frame, s)));
-      }
+    if (i > 0) {
+      EXPECT_GE(d.points(), tracked.decisions[i - 1].points());
+    }
+    const Cloud frame = wire::CloudFromProto(chunks[i].cloud(), 1'000'000).value();
+    Expected<TrackStep> step = local->next(frame);
+    ASSERT_TRUE(step.ok() && step->found);
+    EXPECT_EQ(step->object.points.size(), o.points());
+    plain.push_back(Chunk(Cloud{step->fresh, frame.sensor, frame.frame}));
   }
   ASSERT_EQ(plain.size(), azimuths.size());
   plain.front().mutable_model()->set_name("shapes");
@@ -130,6 +140,39 @@ TEST_F(TrackStreamTest, FollowsTheTargetAmongOthersAndDecidesItsPointsAlone) {
   ASSERT_EQ(final_tracked.scores_size(), final_alone.scores_size());
   for (int k = 0; k < final_tracked.scores_size(); ++k)
     EXPECT_EQ(final_tracked.scores(k).score(), final_alone.scores(k).score());
+}
+
+// Thirty frames of a still camera fit a session of three times the target's points: each frame adds only
+// the surface earlier ones did not reach (1 cm cells), never a new noisy copy.
+TEST(TrackStream, AStillCameraStreamsOnWithinTheSessionLimit) {
+  const Cloud frame = FrameFrom(10);
+  SceneParams quarter;
+  quarter.min_object_points = 250;
+  Expected<Scene> scene = segment_scene(frame, quarter);
+  ASSERT_TRUE(scene.ok());
+  size_t target_points = 0;
+  for (const SceneObject& o : scene->objects)
+    if (std::hypot(o.centroid.x() - kCylinder.x(), o.centroid.y() - kCylinder.y()) < 0.1f) target_points = o.points.size();
+  ASSERT_GT(target_points, 250u);
+  Limits limits;
+  limits.max_session_points = 3 * target_points;
+  Harness h(limits, [](ServiceOptions& o) { o.engine = CoreEngine(); });
+  ASSERT_TRUE(TrainOverGrpc(*h.stub, FastTrainHeader("shapes"), Dataset()).status.ok());
+  std::vector<v1::ScanChunk> chunks;
+  for (uint32_t k = 0; k < 30; ++k) {
+    const float a = 10.f * std::numbers::pi_v<float> / 180.f;
+    const Vec3 sensor = kCentre + Vec3(2.2f * std::sin(a), -2.2f * std::cos(a), 1.15f);
+    test::SyntheticScene s = test::render_scene(test::Room{}, kShapes, sensor, kCentre, 320, 240, 0.004f, 50 + k);
+    std::erase_if(s.frame.points, [](const Vec3& p) { return !p.allFinite(); });
+    chunks.push_back(k == 0 ? TrackingFirst(s.frame) : Chunk(s.frame));
+  }
+  const StreamResult r = Stream(*h.stub, chunks);
+  ASSERT_TRUE(r.status.ok()) << r.status.error_message();
+  ASSERT_EQ(r.decisions.size(), chunks.size() + 1);
+  for (size_t k = 0; k < chunks.size(); ++k) EXPECT_TRUE(r.decisions[k].tracked().found()) << k;
+  EXPECT_GT(r.decisions[chunks.size() - 1].points(), r.decisions[0].points());
+  // The last ten frames add under a tenth of one frame's cluster: the fused surface saturates.
+  EXPECT_LT(10 * (r.decisions[chunks.size() - 1].points() - r.decisions[chunks.size() - 11].points()), target_points);
 }
 
 TEST_F(TrackStreamTest, AFrameWithoutTheTargetRepeatsTheDecisionAndSaysWhy) {

@@ -131,6 +131,8 @@ Expected<SceneTracker> SceneTracker::create(const TrackTarget& target, const Tra
     return invalid_argument("track: point_radius_m must be 0 or more");
   if (!(params.match_distance_m > 0.f) || !std::isfinite(params.match_distance_m))
     return invalid_argument("track: match_distance_m must be positive");
+  if (!(params.fuse_cell_m > 0.f) || !std::isfinite(params.fuse_cell_m))
+    return invalid_argument("track: fuse_cell_m must be positive");
   if (!(params.min_shared_fraction >= 0.0 && params.min_shared_fraction <= 1.0))
     return invalid_argument("track: min_shared_fraction must lie in [0, 1]");
   if (Expected<Scene> empty = segment_scene(Cloud{}, params.scene); !empty) return empty.error();  // checks the scene params
@@ -154,7 +156,7 @@ Expected<TrackStep> SceneTracker::next(const Cloud& frame) {
   }
   step.found = true;
   step.object = std::move(scene->objects[*pick.index]);
-  remember(step.object);
+  step.fresh = remember(step.object);
   return step;
 }
 
@@ -202,7 +204,7 @@ size_t SceneTracker::shared_cells(const Points& cell_centroids) const {
 }
 
 // Adds the object's points to the seen surface and its box to the seen box.
-void SceneTracker::remember(const SceneObject& object) {
+Points SceneTracker::remember(const SceneObject& object) {
   if (!acquired_) {
     seen_box_ = {object.box_min, object.box_max};
     acquired_ = true;
@@ -215,6 +217,18 @@ void SceneTracker::remember(const SceneObject& object) {
     cell.sum += p.cast<double>();
     ++cell.count;
   }
+  // A cell's points of this frame all count as fresh when the cell is new: the first frame gives its
+  // cluster whole, later ones what they add.
+  std::vector<CellKey> added;
+  Points fresh;
+  for (const Vec3& p : object.points) {
+    const CellKey key = cell_key(p, params_.fuse_cell_m);
+    if (fused_.count(key)) continue;
+    fresh.push_back(p);
+    added.push_back(key);
+  }
+  fused_.insert(added.begin(), added.end());
+  return fresh;
 }
 
 }  // namespace glimpse

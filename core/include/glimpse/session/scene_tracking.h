@@ -8,6 +8,7 @@
 #include <optional>
 #include <string>
 #include <unordered_map>
+#include <unordered_set>
 #include <vector>
 
 #include "glimpse/cloud.h"
@@ -43,11 +44,17 @@ struct TrackParams {
   // object qualifies, the object whose centroid lies inside the seen surface's box (grown by
   // match_distance_m) is taken: the target seen again from a side that shares nothing with the seen one.
   double min_shared_fraction = 0.2;
+  // TrackStep::fresh keeps the points in cells of this size that no earlier found cluster reached.
+  float fuse_cell_m = 0.01f;
 };
 
 struct TrackStep {
   bool found = false;
   SceneObject object;     // the target's cluster in this frame, when found
+  // Its points that add to what earlier frames gave of it: those in a cell of TrackParams::fuse_cell_m
+  // no earlier found cluster reached. A still camera's frames repeat one surface with new noise; fusing
+  // only these keeps the scan as large as the surface, not as the stream is long.
+  Points fresh;
   size_t objects = 0;     // objects segmented in this frame
   std::string not_found;  // why not, when not found
 };
@@ -70,7 +77,8 @@ class SceneTracker {
   SceneTracker(const TrackTarget& target, const TrackParams& params) : target_(target), params_(params) {}
   std::optional<size_t> follow(const std::vector<SceneObject>& objects) const;
   size_t shared_cells(const Points& cell_centroids) const;
-  void remember(const SceneObject& object);
+  // Adds the object to the seen surface and box; returns its points in cells not fused before.
+  Points remember(const SceneObject& object);
 
   struct CellSum {
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
@@ -82,6 +90,7 @@ class SceneTracker {
   // match_distance_m; it grows no larger than the target's surface.
   std::unordered_map<CellKey, CellSum, CellKeyHash> seen_;
   Bounds seen_box_;  // the union of its clusters' boxes
+  std::unordered_set<CellKey, CellKeyHash> fused_;  // cells of fuse_cell_m that found clusters reached
   bool acquired_ = false;
 };
 
