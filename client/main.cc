@@ -263,9 +263,8 @@ void AddScene(CLI::App& app, CommandLine& cl) {
                                             "the floor, walls and table tops are removed, the rest split into objects; one\n"
                                             "row per object, nearest first, with its box");
   SceneOptions& s = cl.scene;
-  scene->add_option("FRAME", s.file, "a frame: .pcd (ascii, binary, binary_compressed; organised frames' NaNs skipped), "
-                                     ".ply, .xyz; +z up, or its camera's own coordinates with --up floor")
-      ->required();
+  scene->add_option("FRAME", s.file, "a frame: .pcd (organised or not, binary_compressed too), .ply, .xyz; +z up, or its "
+                                     "camera's own coordinates with --up floor; no sensor given: at the origin")->required();
   scene->add_option("--model", s.model, "NAME[:VERSION]")->envname("GLIMPSE_MODEL")->required()->check(kModelRef);
   scene->add_option("--method", s.method, "bok|bog|kgh|vfh|esf|ush|size|fusion (default: the model's)")->check(kMethod);
   scene->add_flag("--json", s.json, "the scene as one JSON object: planes, and every object's box and answer");
@@ -282,10 +281,7 @@ void AddScene(CLI::App& app, CommandLine& cl) {
   scene->add_option_function<float>("--max-object-size", [&s](const float& m) { s.max_object_extent_m = m; },
                                      "metres: a longer box is a wall's remnant, not an object (server default 2.5)")
       ->check(CLI::Range(0.01f, 50.f))->group("Segmentation");
-  scene->add_option_function<std::string>("--sensor", [&s](const std::string& t) { s.sensor = *ParseSensor(t); },
-                                          "where the camera was, X,Y,Z in the frame's coordinates (default: the file's "
-                                          "VIEWPOINT, else the origin)")
-      ->check(kSensor);
+  AddSensorOption(*scene, s.sensor);  // none in the file: the origin, a camera's own coordinates
   AddCameraFovOption(*scene, s.camera_fov);
   AddPlacementOptions(*scene, s.placement, false, true);
   scene->callback([&cl] { cl.run = [&cl] { return RunScene(cl.conn, cl.scene); }; });
