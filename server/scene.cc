@@ -14,41 +14,34 @@ v1::Vec3 Vec(const Vec3& v) {
   return out;
 }
 
-Status CheckRange(const char* field, double value, double lo, double hi, bool lo_open) {
-  const bool inside = std::isfinite(value) && (lo_open ? value > lo : value >= lo) && value <= hi;
-  if (inside) return {};
-  return invalid_argument(std::string("scene.") + field + " is " + std::to_string(value) + "; it must be in " +
-                          (lo_open ? "(" : "[") + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+// Sets `target` to `value` when the field is set and within range; INVALID_ARGUMENT naming it otherwise.
+template <class T, class V>
+Status Take(bool has, const char* field, V value, double lo, double hi, bool lo_open, T& target) {
+  if (!has) return {};
+  const double v = static_cast<double>(value);
+  if (!(std::isfinite(v) && (lo_open ? v > lo : v >= lo) && v <= hi))
+    return invalid_argument(std::string("scene.") + field + " is " + std::to_string(v) + "; it must be in " +
+                            (lo_open ? "(" : "[") + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+  target = static_cast<T>(value);
+  return {};
 }
 
 }  // namespace
 
 Expected<SceneParams> SceneParamsFromProto(const v1::SceneParameters& in) {
   SceneParams p;
-  if (in.has_voxel_m()) {
-    if (Status s = CheckRange("voxel_m", in.voxel_m(), 0, 0.2, false); !s.ok()) return s.error();
-    p.voxel_m = in.voxel_m();
-  }
-  if (in.has_cluster_tolerance_m()) {
-    if (Status s = CheckRange("cluster_tolerance_m", in.cluster_tolerance_m(), 0, 1, true); !s.ok()) return s.error();
-    p.cluster_tolerance_m = in.cluster_tolerance_m();
-  }
-  if (in.has_min_object_points()) {
-    if (Status s = CheckRange("min_object_points", in.min_object_points(), 1, 1e6, false); !s.ok()) return s.error();
-    p.min_object_points = in.min_object_points();
-  }
-  if (in.has_max_object_extent_m()) {
-    if (Status s = CheckRange("max_object_extent_m", in.max_object_extent_m(), 0, 50, true); !s.ok()) return s.error();
-    p.max_object_extent_m = in.max_object_extent_m();
-  }
-  if (in.has_max_objects()) {
-    if (Status s = CheckRange("max_objects", in.max_objects(), 1, 256, false); !s.ok()) return s.error();
-    p.max_objects = in.max_objects();
-  }
-  if (in.has_min_plane_area_m2()) {
-    if (Status s = CheckRange("min_plane_area_m2", in.min_plane_area_m2(), 0, 100, false); !s.ok()) return s.error();
-    p.min_plane_area_m2 = in.min_plane_area_m2();
-  }
+  for (const Status& s : {
+           Take(in.has_voxel_m(), "voxel_m", in.voxel_m(), 0, 0.2, false, p.voxel_m),
+           Take(in.has_cluster_tolerance_m(), "cluster_tolerance_m", in.cluster_tolerance_m(), 0, 1, true,
+                p.cluster_tolerance_m),
+           Take(in.has_min_object_points(), "min_object_points", in.min_object_points(), 1, 1e6, false,
+                p.min_object_points),
+           Take(in.has_max_object_extent_m(), "max_object_extent_m", in.max_object_extent_m(), 0, 50, true,
+                p.max_object_extent_m),
+           Take(in.has_max_objects(), "max_objects", in.max_objects(), 1, 256, false, p.max_objects),
+           Take(in.has_min_plane_area_m2(), "min_plane_area_m2", in.min_plane_area_m2(), 0, 100, false,
+                p.min_plane_area_m2)})
+    if (!s.ok()) return s.error();
   return p;
 }
 

@@ -99,6 +99,15 @@ grpc::Status GlimpseService::Handle(grpc::ServerContext* ctx, std::string_view r
   return status;
 }
 
+Status GlimpseService::SetKnownAcceptance(const Model& model, std::vector<Expected<Classification>>& results,
+                                          double known_acceptance) const {
+  if (known_acceptance <= 0 || !options_.engine.set_known_acceptance) return {};
+  for (Expected<Classification>& r : results)
+    if (r)
+      if (Status s = options_.engine.set_known_acceptance(model, *r, known_acceptance); !s.ok()) return s;
+  return {};
+}
+
 Expected<StreamRegistry::Ticket> GlimpseService::OpenStream(grpc::ServerContext* ctx) {
   return streams_.Admit([ctx] { ctx->TryCancel(); });
 }
@@ -155,11 +164,7 @@ grpc::Status GlimpseService::ClassifyBatch(grpc::ServerContext* ctx, const v1::C
     if (CancelFor(ctx)()) return CancelledBeforeClassification();
     auto results = options_.engine.classify_batch(*loaded->model, batch->clouds, ask->method, CancelFor(ctx));
     if (Status s = CheckBatchResults(results); !s.ok()) return s;
-    if (ask->known_acceptance > 0 && options_.engine.set_known_acceptance)
-      for (Expected<Classification>& r : results)
-        if (r)
-          if (Status s = options_.engine.set_known_acceptance(*loaded->model, *r, ask->known_acceptance); !s.ok())
-            return s;
+    if (Status s = SetKnownAcceptance(*loaded->model, results, ask->known_acceptance); !s.ok()) return s;
     FillBatchResponse(*batch, results, loaded->record, loaded->load_ms, response);
     ToProto(loaded->record, response->mutable_model());
     response->set_method(wire::MethodToProto(used));
@@ -197,11 +202,7 @@ grpc::Status GlimpseService::ClassifyScene(grpc::ServerContext* ctx, const v1::C
     for (const SceneObject& o : scene->objects) objects.push_back(object_cloud(*frame, o));
     auto results = options_.engine.classify_batch(*loaded->model, objects, ask->method, CancelFor(ctx));
     if (Status s = CheckBatchResults(results); !s.ok()) return s;
-    if (ask->known_acceptance > 0 && options_.engine.set_known_acceptance)
-      for (Expected<Classification>& r : results)
-        if (r)
-          if (Status s = options_.engine.set_known_acceptance(*loaded->model, *r, ask->known_acceptance); !s.ok())
-            return s;
+    if (Status s = SetKnownAcceptance(*loaded->model, results, ask->known_acceptance); !s.ok()) return s;
     FillSceneResponse(*scene, results, loaded->record, loaded->load_ms, request->return_indices(), response);
     ToProto(loaded->record, response->mutable_model());
     response->set_method(wire::MethodToProto(used));

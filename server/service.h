@@ -70,6 +70,9 @@ class GlimpseService final : public v1::Glimpse::Service {
   template <class Body>
   grpc::Status Handle(grpc::ServerContext* ctx, std::string_view rpc, Access access, RequestLog& log, Body&& body);
   Expected<StreamRegistry::Ticket> OpenStream(grpc::ServerContext* ctx);
+  // Re-decides "unknown" of every answered result at a request's operating point (0: the model's default).
+  Status SetKnownAcceptance(const Model& model, std::vector<Expected<Classification>>& results,
+                            double known_acceptance) const;
 
   ServiceOptions options_;
   BearerToken token_;
