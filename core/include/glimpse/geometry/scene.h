@@ -1,7 +1,9 @@
-// The objects of a depth camera's frame: the large planes (floor, walls, table tops) removed by RANSAC,
-// largest first, and what remains split into Euclidean clusters, one per object. A level plane above the
-// floor on which nothing rests (a bare table's top) stays: it is an object's face, and the table an object. PCL's SACSegmentation
-// (through fit_plane) and EuclideanClusterExtraction do the work inside the .cpp.
+// The objects of a depth camera's frame: the large planes removed by RANSAC, largest first, and what
+// remains split into clusters, one per object. A removed plane stays removed when it bounds the room
+// (the floor, a wall: nothing lies behind it) or holds something (a table top with a cup on it); a bare
+// table's top or a plane through an object's broad face (a person facing the camera) goes back to its
+// object. Pieces of one object that a single view parts and that stand over one another are joined.
+// PCL's SACSegmentation (through fit_plane) and kd-tree do the work inside the .cpp files.
 #pragma once
 
 #include <algorithm>
@@ -46,9 +48,10 @@ struct SceneParams {
   // The longest side of an object's box; longer: a wall's remnant. Room for a standing person (2 m) and
   // a long table.
   float max_object_extent_m = 2.5f;
-  // A cluster with at least this share of its points within twice the inlier distance of a removed
-  // plane is that plane's remnant (noise beyond the inlier distance), not an object.
-  double max_remnant_share = 1.1;
+  // A cluster with at least this share of its points within twice the inlier distance of the floor or a
+  // wall is that plane's remnant (noise beyond the inlier distance, a strip seen between objects), not
+  // an object.
+  double max_remnant_share = 0.8;
   size_t max_objects = 32;             // the nearest ones are kept
 };
 

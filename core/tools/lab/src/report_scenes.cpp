@@ -88,9 +88,10 @@ std::string reason_table(const std::map<std::string, size_t>& counts, const char
 }
 
 // A miss's reason without its particulars: "split in 3" is "split", "merged with chair" "merged with
-// another object", the extent rule's length dropped.
+// another object", the extent rule's length and the box's shares dropped.
 std::string reason_kind(const std::string& miss) {
   if (miss.rfind("split", 0) == 0) return "split";
+  if (miss.rfind("box off", 0) == 0) return "box off";
   if (miss.rfind("dropped by the extent rule", 0) == 0) return "dropped by the extent rule";
   if (miss.rfind("merged with", 0) == 0 && miss != "merged with the room") return "merged with another object";
   return miss;

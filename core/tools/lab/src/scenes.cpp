@@ -128,7 +128,10 @@ std::string miss_reason(SceneData& s, int t) {
     const SceneObject& d = s.scene.objects[size_t(best.first)];
     if (double(best.second) < 0.6 * double(d.indices.size()))
       return "merged with " + s.owner_name(main_owner(d, s.truth_of, t).first);
-    return "box off";
+    // How much of the object the detection holds, and how much of the detection is something else.
+    auto percent = [](double share) { return std::to_string(int(std::lround(100 * share))) + " %"; };
+    return "box off (" + percent(double(best.second) / double(v.indices.size())) + " of it; " +
+           percent(1 - double(best.second) / double(d.indices.size())) + " else)";
   }
   if (pieces >= 2 && 2 * in_pieces >= v.indices.size()) return "split in " + std::to_string(pieces);
   return lost_reason(s, t);

@@ -1,0 +1,31 @@
+// Private: the plane steps of segment_scene (scene_planes.cpp), over the frame's voxel centroids.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "glimpse/geometry/scene.h"
+
+namespace glimpse {
+
+// Voxel labels: 0 = unlabelled, -(k + 1) = the k-th plane removed, c + 1 = the c-th cluster.
+using SceneLabels = std::vector<int32_t>;
+
+// A floor or a table top: a plane whose normal (facing the sensor) lies within 20 degrees of +z.
+inline bool is_level(const Plane& plane) { return plane.normal.z() >= 0.94f; }
+inline float level_height(const Plane& plane) { return -plane.offset / plane.normal.z(); }
+// The height of the lowest level plane: the floor's (none without a level plane).
+std::optional<float> floor_height(const std::vector<Plane>& planes);
+
+// The large planes, largest first, their broad regions' voxels labelled -(k + 1).
+std::vector<Plane> remove_planes(const Points& voxels, const Vec3& sensor, const SceneParams& params, SceneLabels& labels);
+
+// The planes that bound the room or hold objects, the others' voxels unlabelled (0) for clustering: a
+// level plane above the floor on which nothing rests (a bare table's top) and, in a +z-up frame, a plane
+// that is neither level nor a wall (some of the frame lies behind it: a person's front, an animal's
+// flank) are objects' faces. The kept planes' labels are renumbered.
+std::vector<Plane> keep_room_and_supports(std::vector<Plane> planes, const Points& voxels, const Vec3& sensor,
+                                          const SceneParams& params, SceneLabels& labels);
+
+}  // namespace glimpse
