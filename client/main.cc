@@ -279,7 +279,7 @@ void AddScene(CLI::App& app, CommandLine& cl) {
                                        "fewer points: noise, not an object (server default 1000, for a 640 x 480 frame)")
       ->check(CLI::Range(1u, 1000000u))->group("Segmentation");
   scene->add_option_function<float>("--max-object-size", [&s](const float& m) { s.max_object_extent_m = m; },
-                                     "metres: a longer box is a wall's remnant, not an object (server default 2.5)")
+                                     "metres: a longer box is a wall's remnant, not an object (server default 4)")
       ->check(CLI::Range(0.01f, 50.f))->group("Segmentation");
   AddSensorOption(*scene, s.sensor);  // none in the file: the origin, a camera's own coordinates
   AddCameraFovOption(*scene, s.camera_fov);

@@ -45,9 +45,9 @@ struct SceneParams {
   // still has 1000).
   size_t min_object_points = 1000;
   size_t max_object_points = 200000;   // frame points; more: a wall or floor left over
-  // The longest side of an object's box; longer: a wall's remnant. Room for a standing person (2 m) and
-  // a long table.
-  float max_object_extent_m = 2.5f;
+  // The longest side of an object's box; longer: what is left of a wall or a floor. Room for a standing
+  // person (2 m) and a conference table (3.5 m).
+  float max_object_extent_m = 4.f;
   // A cluster with at least this share of its points within twice the inlier distance of the floor or a
   // wall is that plane's remnant (noise beyond the inlier distance, a strip seen between objects), not
   // an object.
