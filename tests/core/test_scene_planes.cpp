@@ -1,6 +1,6 @@
 // Which removed planes stay removed in a scene: the floor and the walls bound the room, a plane through an
-// object's broad face goes back to the object; pieces of one object over one another join; the floor's
-// remnants are no objects. Frames made by hand (synthetic_scene.h).
+// object's broad face goes back to the object; pieces of one object over one another, or either side of a
+// nearer object, join; the floor's remnants are no objects. Frames made by hand (synthetic_scene.h).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -81,6 +81,30 @@ TEST(ScenePlanes, ASlabWithinTheFloorsNoiseIsItsRemnant) {
   Expected<Scene> kept = segment_scene(s.frame, keep_remnants);
   ASSERT_TRUE(kept.ok());
   EXPECT_EQ(kept->objects.size(), 2u);
+}
+
+// A 1.2 m wide cabinet 2.6 m away with a 20 cm post before its middle: the post parts it into two pieces
+// whose gap lies behind the post, so they are one object. Two boxes 60 cm apart behind the same post
+// stay two: the camera sees the floor between them.
+TEST(ScenePlanes, PiecesPartedByANearerObjectJoin) {
+  const Vec3 camera(0, 0, 1.0f), target(0, 2.4f, 0.4f);
+  const SceneShape post{SceneShape::kBox, Vec3(0, 1.6f, 0), Vec3(0.2f, 0.2f, 1.0f)};
+  const test::SyntheticScene parted =
+      test::render_scene(test::Room{}, {post, {SceneShape::kBox, Vec3(0, 2.6f, 0), Vec3(1.2f, 0.3f, 0.6f)}}, camera, target);
+  Expected<Scene> scene = segment_scene(parted.frame);
+  ASSERT_TRUE(scene.ok()) << scene.error().message;
+  ASSERT_EQ(scene->objects.size(), 2u);
+  const SceneObject& cabinet = scene->objects[1];  // the farther
+  EXPECT_LT((cabinet.box_min - parted.truth[1].min).head<2>().cwiseAbs().maxCoeff(), 0.03f) << cabinet.box_min.transpose();
+  EXPECT_LT((cabinet.box_max - parted.truth[1].max).cwiseAbs().maxCoeff(), 0.03f) << cabinet.box_max.transpose();
+
+  const test::SyntheticScene apart = test::render_scene(
+      test::Room{},
+      {post, {SceneShape::kBox, Vec3(-0.5f, 2.6f, 0), Vec3(0.4f, 0.3f, 0.6f)}, {SceneShape::kBox, Vec3(0.5f, 2.6f, 0), Vec3(0.4f, 0.3f, 0.6f)}},
+      camera, target);
+  Expected<Scene> two = segment_scene(apart.frame);
+  ASSERT_TRUE(two.ok());
+  EXPECT_EQ(two->objects.size(), 3u);
 }
 
 }  // namespace

@@ -205,7 +205,10 @@ Expected<Scene> segment_scene(const Cloud& frame, const SceneParams& params) {
   scene.planes = remove_planes(voxels.centroids, sensor, params, labels);
   scene.planes = keep_room_and_supports(std::move(scene.planes), voxels.centroids, sensor, params, labels);
   int32_t clusters = cluster_voxels(voxels.centroids, sensor, params, labels);
-  if (has_level_plane(scene)) clusters = join_overlapping(voxels.centroids, clusters, scene.planes, labels);  // +z is up
+  if (has_level_plane(scene)) {  // +z is up
+    clusters = join_overlapping(voxels.centroids, clusters, scene.planes, labels);
+    clusters = join_hidden(voxels.centroids, clusters, sensor, params, labels);
+  }
   // Each frame point follows its voxel, in the frame's order: planes count points, clusters gather them.
   for (Plane& plane : scene.planes) plane.inliers = 0;
   std::vector<std::vector<uint32_t>> members(static_cast<size_t>(clusters));

@@ -28,4 +28,9 @@ std::vector<Plane> remove_planes(const Points& voxels, const Vec3& sensor, const
 std::vector<Plane> keep_room_and_supports(std::vector<Plane> planes, const Points& voxels, const Vec3& sensor,
                                           const SceneParams& params, SceneLabels& labels);
 
+// Pieces of one object that a nearer object parts (seen either side of it): clusters of at least 20
+// voxels whose boxes lie within 50 cm, share half the lower one's height, and the space between whose
+// closest voxels lies behind other clusters, are joined; returns the count. For a frame that is +z up.
+int32_t join_hidden(const Points& voxels, int32_t clusters, const Vec3& sensor, const SceneParams& params, SceneLabels& labels);
+
 }  // namespace glimpse

@@ -2,7 +2,8 @@
 // remains split into clusters, one per object. A removed plane stays removed when it bounds the room
 // (the floor, a wall: nothing lies behind it) or holds something (a table top with a cup on it); a bare
 // table's top or a plane through an object's broad face (a person facing the camera) goes back to its
-// object. Pieces of one object that a single view parts and that stand over one another are joined.
+// object. Pieces of one object that a single view parts are joined: those that stand over one another,
+// and those either side of a nearer object that hides what lies between them.
 // PCL's SACSegmentation (through fit_plane) and kd-tree do the work inside the .cpp files.
 #pragma once
 
