@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <limits>
 #include <numeric>
+#include <optional>
 #include <unordered_map>
 #include <vector>
 
@@ -101,7 +102,7 @@ int32_t join_hidden(const Points& voxels, int32_t clusters, const Vec3& sensor, 
       k.box.min = k.box.min.cwiseMin(voxels[i]), k.box.max = k.box.max.cwiseMax(voxels[i]);
       k.members.push_back(i);
     }
-  const RangeImage image(voxels, labels, sensor);
+  std::optional<RangeImage> image;  // made for the first pair that needs it
   std::vector<int32_t> root(static_cast<size_t>(clusters));
   std::iota(root.begin(), root.end(), 0);
   auto find = [&root](int32_t x) {
@@ -116,7 +117,8 @@ int32_t join_hidden(const Points& voxels, int32_t clusters, const Vec3& sensor, 
       const float shared = std::min(p.max.z(), q.max.z()) - std::max(p.min.z(), q.min.z());
       if (gap > kMaxGap || shared < kMinHeightShare * std::min(p.max.z() - p.min.z(), q.max.z() - q.min.z())) continue;
       const auto [pa, pb] = closest_pair(voxels, c[size_t(a)].members, c[size_t(b)].members);
-      if (gap_hidden(image, pa, pb, a + 1, b + 1, params.cluster_tolerance_m)) root[size_t(find(b))] = find(a);
+      if (!image) image.emplace(voxels, labels, sensor);
+      if (gap_hidden(*image, pa, pb, a + 1, b + 1, params.cluster_tolerance_m)) root[size_t(find(b))] = find(a);
     }
   std::vector<int32_t> renumbered(static_cast<size_t>(clusters), 0);
   int32_t joined = 0;

@@ -60,33 +60,41 @@ Voxels voxelise(const Points& frame, float voxel_m) {
 }
 
 // The unlabelled voxels split into clusters: two voxels are joined when they lie within join_distance of
-// each other. A breadth-first growth over PCL's kd-tree, each voxel's neighbours searched within its own
-// join distance (PCL's Euclidean and conditional clusterings search one radius for every point, the
-// farthest point's, which costs the near ones, the most, several times over). Labelled 1, 2, ... from
-// the lowest unlabelled voxel up; returns their count.
+// each other. Each voxel's neighbours within its own join distance are searched over PCL's kd-tree, in
+// parallel (PCL's Euclidean and conditional clusterings search one radius for every point, the farthest
+// point's, which costs the near ones, the most, several times over); a breadth-first growth over them
+// then labels the clusters 1, 2, ... from the lowest unlabelled voxel up. Returns their count.
 int32_t cluster_voxels(const Points& voxels, const Vec3& sensor, const SceneParams& params, SceneLabels& labels) {
   auto indices = std::make_shared<pcl::Indices>();
   for (uint32_t i = 0; i < voxels.size(); ++i)
     if (labels[i] == 0) indices->push_back(int(i));
   if (indices->empty()) return 0;
   pcl::PointCloud<pcl::PointXYZ>::ConstPtr cloud(to_pcl(voxels).release());
-  pcl::search::KdTree<pcl::PointXYZ> tree(true);  // sorted results: the same clusters whatever the build
+  pcl::search::KdTree<pcl::PointXYZ> tree(false);  // unsorted: a cluster holds what it reaches, in any order
   tree.setInputCloud(cloud, indices);
+  const ptrdiff_t n = ptrdiff_t(indices->size());
+  std::vector<pcl::Indices> near(static_cast<size_t>(n));  // per unlabelled voxel, in indices' order
+#pragma omp parallel
+  {
+    std::vector<float> distances;
+#pragma omp for schedule(dynamic, 512)
+    for (ptrdiff_t k = 0; k < n; ++k) {
+      const int i = (*indices)[size_t(k)];
+      const float reach = std::max(params.cluster_tolerance_m, params.cluster_tolerance_per_m2 * (voxels[size_t(i)] - sensor).squaredNorm());
+      tree.radiusSearch(cloud->points[size_t(i)], reach, near[size_t(k)], distances);
+    }
+  }
+  std::vector<int32_t> position(voxels.size(), -1);
+  for (ptrdiff_t k = 0; k < n; ++k) position[size_t((*indices)[size_t(k)])] = int32_t(k);
   int32_t clusters = 0;
-  pcl::Indices found;
-  std::vector<float> distances;
   std::vector<int> queue;
   for (int seed : *indices) {
     if (labels[size_t(seed)] != 0) continue;
     labels[size_t(seed)] = ++clusters;
     queue.assign(1, seed);
-    for (size_t head = 0; head < queue.size(); ++head) {
-      const Vec3& p = voxels[size_t(queue[head])];
-      const float reach = std::max(params.cluster_tolerance_m, params.cluster_tolerance_per_m2 * (p - sensor).squaredNorm());
-      tree.radiusSearch(cloud->points[size_t(queue[head])], reach, found, distances);
-      for (int q : found)
+    for (size_t head = 0; head < queue.size(); ++head)
+      for (int q : near[size_t(position[size_t(queue[head])])])
         if (labels[size_t(q)] == 0) labels[size_t(q)] = clusters, queue.push_back(q);
-    }
   }
   return clusters;
 }

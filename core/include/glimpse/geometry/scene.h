@@ -34,7 +34,7 @@ struct SceneParams {
   // pieces are objects' faces (a box's top, a laptop's screen) and stay for clustering.
   float min_plane_area_m2 = 0.25f;
   int max_planes = 8;                  // RANSAC fits at most, largest plane first
-  size_t plane_fit_points = 3000;      // RANSAC scores an even subsample of at most this many voxels
+  size_t plane_fit_points = 1500;      // RANSAC scores an even subsample of at most this many voxels
   // Voxels closer than this belong to the same object: 3 cm bridges the gaps a depth camera leaves on one
   // object (a bottle's handle behind its shadow) and still parts objects 5 cm apart.
   float cluster_tolerance_m = 0.03f;
