@@ -1,11 +1,17 @@
 // Synthetic scenes (glimpse/lab/scenes.h): box overlap and matching, labelling a hand-made scene against
-// where its boxes are, its free-standing objects found by segment_scene, and a small run on the zoo with a
-// tiny model whose figures must agree with their counts.
+// where its boxes are, its free-standing objects found by segment_scene, a small run on the zoo with a
+// tiny model whose figures must agree with their counts, and segment_scene's detection on scenes of
+// sources its parameters were not chosen on, against floors just under the measured figures.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
 
+#include "glimpse/lab/evaluation.h"
 #include "glimpse/lab/scenes.h"
 
 namespace glimpse {
@@ -239,6 +245,40 @@ TEST(RunScenes, DoesNotDependOnTheThreadCount) {
       EXPECT_EQ(a->scenes[i].truth[t].miss, b->scenes[i].truth[t].miss);
     }
   }
+}
+
+// ---- detection on sources nothing was chosen on (docs/results.md#scenes) ----------------------------------
+
+ScenesSummary detect_only(std::vector<EvalObject> pool, const char* name) {
+  for (EvalObject& o : pool) o.role = EvalRole::kTestOnly;
+  auto r = run_scenes(pool, nullptr, ScenesParams{});  // 50 scenes, seed 42, segment_scene's defaults
+  EXPECT_TRUE(r.ok()) << r.error().message;
+  if (!r.ok()) return {};
+  const ScenesSummary s = summarise(*r);
+  std::printf("%s scenes: recall %.1f %% (%zu / %zu), precision %.1f %% (%zu / %zu)\n", name, s.recall.percent(),
+              s.recall.correct, s.recall.total, s.precision.percent(), s.precision.correct, s.precision.total);
+  return s;
+}
+
+// `glimpse-lab scenes --detect-only --test-zoo 10`: the zoo made with seed 43.
+TEST(SceneDetection, ZooScenesStayAboveTheirFloor) {
+  std::vector<EvalObject> pool = zoo_objects(10, 43);
+  for (EvalObject& o : pool) o.source = "zoo-test";
+  const ScenesSummary s = detect_only(std::move(pool), "zoo");
+  EXPECT_GE(s.recall.percent(), 77.0);     // measured 78.5
+  EXPECT_GE(s.precision.percent(), 72.0);  // measured 73.4
+}
+
+// `glimpse-lab scenes --detect-only --test $D/psb`.
+TEST(SceneDetection, PsbScenesStayAboveTheirFloor) {
+  const char* env = std::getenv("GLIMPSE_PSB_DIR");
+  const std::string dir = env ? env : GLIMPSE_SOURCE_DIR "/../shared/data/psb";
+  if (!std::filesystem::is_directory(dir)) GTEST_SKIP() << "PSB not found at " << dir << " (set GLIMPSE_PSB_DIR)";
+  auto pool = load_dataset_objects(dir, 42, 0);
+  ASSERT_TRUE(pool.ok()) << pool.error().message;
+  const ScenesSummary s = detect_only(std::move(*pool), "PSB");
+  EXPECT_GE(s.recall.percent(), 85.0);     // measured 86.5
+  EXPECT_GE(s.precision.percent(), 83.0);  // measured 84.6
 }
 
 }  // namespace
