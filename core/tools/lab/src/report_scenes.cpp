@@ -108,7 +108,8 @@ std::string failures_section(const ScenesResult& r) {
   std::ostringstream o;
   o << "## What limits detection\n\nEach unfound object (at least " << fmt("%.0f", 100 * r.params.min_visible)
     << " % visible) by what became of its points: *merged* (most of them in a detection mostly of another object), "
-       "*split* (spread over detections), *box off* (most in one detection whose box still misses), *dropped by the "
+       "*split* (spread over detections), *box off* (most in one detection whose box still misses; objects.csv says how much of the object "
+       "the detection holds and how much of it is something else), *dropped by the "
        "extent rule* or *the size rules* (found once segment_scene's max_object_extent_m and max_object_points are "
        "lifted), *in a removed plane*, *too few points* (under min_object_points).\n\n"
     << reason_table(misses, "why unfound") << "\n" << reason_table(missed_categories, "unfound: category, kind") << "\n"
