@@ -4,7 +4,6 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
-#include <numeric>
 #include <optional>
 #include <unordered_map>
 #include <vector>
@@ -103,30 +102,19 @@ int32_t join_hidden(const Points& voxels, int32_t clusters, const Vec3& sensor, 
       k.members.push_back(i);
     }
   std::optional<RangeImage> image;  // made for the first pair that needs it
-  std::vector<int32_t> root(static_cast<size_t>(clusters));
-  std::iota(root.begin(), root.end(), 0);
-  auto find = [&root](int32_t x) {
-    while (root[size_t(x)] != x) x = root[size_t(x)] = root[size_t(root[size_t(x)])];
-    return x;
-  };
+  ClusterJoins joins(clusters);
   for (int32_t a = 0; a < clusters; ++a)
     for (int32_t b = a + 1; b < clusters && c[size_t(a)].members.size() >= kMinVoxels; ++b) {
       const Bounds &p = c[size_t(a)].box, &q = c[size_t(b)].box;
-      if (c[size_t(b)].members.size() < kMinVoxels || find(a) == find(b)) continue;
+      if (c[size_t(b)].members.size() < kMinVoxels || joins.find(a) == joins.find(b)) continue;
       const float gap = (p.min - q.max).cwiseMax(q.min - p.max).cwiseMax(0.f).norm();
       const float shared = std::min(p.max.z(), q.max.z()) - std::max(p.min.z(), q.min.z());
       if (gap > kMaxGap || shared < kMinHeightShare * std::min(p.max.z() - p.min.z(), q.max.z() - q.min.z())) continue;
       const auto [pa, pb] = closest_pair(voxels, c[size_t(a)].members, c[size_t(b)].members);
       if (!image) image.emplace(voxels, labels, sensor);
-      if (gap_hidden(*image, pa, pb, a + 1, b + 1, params.cluster_tolerance_m)) root[size_t(find(b))] = find(a);
+      if (gap_hidden(*image, pa, pb, a + 1, b + 1, params.cluster_tolerance_m)) joins.join(a, b);
     }
-  std::vector<int32_t> renumbered(static_cast<size_t>(clusters), 0);
-  int32_t joined = 0;
-  for (int32_t k = 0; k < clusters; ++k)
-    if (find(k) == k) renumbered[size_t(k)] = ++joined;
-  for (int32_t& label : labels)
-    if (label > 0) label = renumbered[size_t(find(label - 1))];
-  return joined;
+  return joins.relabel(labels);
 }
 
 }  // namespace glimpse

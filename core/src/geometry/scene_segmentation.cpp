@@ -117,12 +117,7 @@ int32_t join_overlapping(const Points& voxels, int32_t clusters, const std::vect
       b.min = b.min.cwiseMin(voxels[i]), b.max = b.max.cwiseMax(voxels[i]);
       ++count[size_t(labels[i] - 1)];
     }
-  std::vector<int32_t> root(static_cast<size_t>(clusters));
-  for (int32_t c = 0; c < clusters; ++c) root[size_t(c)] = c;
-  auto find = [&root](int32_t c) {
-    while (root[size_t(c)] != c) c = root[size_t(c)] = root[size_t(root[size_t(c)])];
-    return c;
-  };
+  ClusterJoins joins(clusters);
   auto area = [](const Bounds& b) { return std::max(0.f, b.max.x() - b.min.x()) * std::max(0.f, b.max.y() - b.min.y()); };
   auto support_between = [&planes](float below, float above) {  // a removed level plane in the gap
     return std::any_of(planes.begin(), planes.end(), [&](const Plane& plane) {
@@ -139,15 +134,9 @@ int32_t join_overlapping(const Points& voxels, int32_t clusters, const std::vect
       if (area(both) < kShare * area(small)) continue;
       const float below = std::min(p.max.z(), q.max.z()), above = std::max(p.min.z(), q.min.z());  // the gap
       if (above - below > kMaxGap || (above > below && support_between(below, above))) continue;
-      root[size_t(find(b))] = find(a);
+      joins.join(a, b);
     }
-  std::vector<int32_t> renumbered(size_t(clusters), 0);
-  int32_t joined = 0;
-  for (int32_t c = 0; c < clusters; ++c)
-    if (find(c) == c) renumbered[size_t(c)] = ++joined;
-  for (int32_t& label : labels)
-    if (label > 0) label = renumbered[size_t(find(label - 1))];
-  return joined;
+  return joins.relabel(labels);
 }
 
 SceneObject make_object(const Points& frame, std::vector<uint32_t> indices, const Vec3& sensor) {

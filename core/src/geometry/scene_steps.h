@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <numeric>
 #include <optional>
 #include <vector>
 
@@ -11,6 +12,30 @@ namespace glimpse {
 
 // Voxel labels: 0 = unlabelled, -(k + 1) = the k-th plane removed, c + 1 = the c-th cluster.
 using SceneLabels = std::vector<int32_t>;
+
+// Clusters joined into groups (union-find): join(a, b) puts b's group under a's root; relabel numbers the
+// groups 1, 2, ... in the order of their roots' labels and returns their count.
+class ClusterJoins {
+ public:
+  explicit ClusterJoins(int32_t clusters) : root_(static_cast<size_t>(clusters)) { std::iota(root_.begin(), root_.end(), 0); }
+  int32_t find(int32_t c) {
+    while (root_[size_t(c)] != c) c = root_[size_t(c)] = root_[size_t(root_[size_t(c)])];
+    return c;
+  }
+  void join(int32_t a, int32_t b) { root_[size_t(find(b))] = find(a); }
+  int32_t relabel(SceneLabels& labels) {
+    std::vector<int32_t> renumbered(root_.size(), 0);
+    int32_t groups = 0;
+    for (int32_t c = 0; c < int32_t(root_.size()); ++c)
+      if (find(c) == c) renumbered[size_t(c)] = ++groups;
+    for (int32_t& label : labels)
+      if (label > 0) label = renumbered[size_t(find(label - 1))];
+    return groups;
+  }
+
+ private:
+  std::vector<int32_t> root_;
+};
 
 // A floor or a table top: a plane whose normal (facing the sensor) lies within 20 degrees of +z.
 inline bool is_level(const Plane& plane) { return plane.normal.z() >= 0.94f; }
