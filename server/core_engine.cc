@@ -14,6 +14,47 @@
 
 namespace glimpse::server {
 
+namespace {
+
+// Trains on the clouds, joined with the base's kept set when its bytes are given, learning from the base
+// model's heads (engine.h); the set's bytes come back when at most keep_set_bytes.
+Expected<TrainedModel> TrainJoined(const std::vector<TrainingCloud>& data, const TrainParams& params,
+                                   std::span<const uint8_t> base_set, std::span<const uint8_t> base_model,
+                                   size_t keep_set_bytes, const ProgressFn& progress, const CancelFn& cancel) {
+  const auto t0 = std::chrono::steady_clock::now();
+  std::optional<TrainingSet> base;
+  if (!base_set.empty()) {
+    auto read = deserialize_training_set(base_set);
+    if (!read) return Error{read.error().code, "the base's training set: " + read.error().message};
+    base = std::move(*read);
+  }
+  std::optional<Model> start;  // where a grown model's learning starts
+  if (!base_model.empty()) {
+    auto read = deserialize(base_model);
+    if (!read) return Error{read.error().code, "the base model: " + read.error().message};
+    start = std::move(*read);
+  }
+  auto set = training_set(data, params, progress, cancel, base ? &*base : nullptr);
+  if (!set) return set.error();
+  if (base) {
+    auto joined = join(std::move(*base), std::move(*set));
+    if (!joined) return joined.error();
+    set = std::move(*joined);
+  }
+  TrainedModel out;
+  if (keep_set_bytes > 0) {
+    out.training_set = serialize(*set);
+    if (out.training_set.size() > keep_set_bytes) out.training_set.clear();
+  }
+  auto model = glimpse::train(std::move(*set), params, progress, cancel, start ? &*start : nullptr);
+  if (!model) return model.error();
+  out.model = std::move(*model);
+  out.model.stats.seconds = ms_since(t0) / 1000.0;  // the added clouds' features and the learning
+  return out;
+}
+
+}  // namespace
+
 Engine CoreEngine(int request_threads) {
   // OpenMP's thread count is a per-thread setting: set on the gRPC thread that runs the call, it
   // bounds core's parallel loops for this call only.
@@ -22,35 +63,12 @@ Engine CoreEngine(int request_threads) {
   };
   Engine e;
   e.train = [budget](const std::vector<TrainingCloud>& data, const wire::TrainSpec& spec,
-                     std::span<const uint8_t> base_set, size_t keep_set_bytes, const ProgressFn& progress,
-                     const CancelFn& cancel) -> Expected<TrainedModel> {
+                     std::span<const uint8_t> base_set, std::span<const uint8_t> base_model, size_t keep_set_bytes,
+                     const ProgressFn& progress, const CancelFn& cancel) -> Expected<TrainedModel> {
     auto params = wire::ToTrainParams(spec);
     if (!params) return params.error();
     budget();
-    const auto t0 = std::chrono::steady_clock::now();
-    std::optional<TrainingSet> base;
-    if (!base_set.empty()) {
-      auto read = deserialize_training_set(base_set);
-      if (!read) return Error{read.error().code, "the base's training set: " + read.error().message};
-      base = std::move(*read);
-    }
-    auto set = training_set(data, *params, progress, cancel, base ? &*base : nullptr);
-    if (!set) return set.error();
-    if (base) {
-      auto joined = join(std::move(*base), std::move(*set));
-      if (!joined) return joined.error();
-      set = std::move(*joined);
-    }
-    TrainedModel out;
-    if (keep_set_bytes > 0) {
-      out.training_set = serialize(*set);
-      if (out.training_set.size() > keep_set_bytes) out.training_set.clear();
-    }
-    auto model = glimpse::train(std::move(*set), *params, progress, cancel);
-    if (!model) return model.error();
-    out.model = std::move(*model);
-    out.model.stats.seconds = ms_since(t0) / 1000.0;  // the added clouds' features and the learning
-    return out;
+    return TrainJoined(data, *params, base_set, base_model, keep_set_bytes, progress, cancel);
   };
   e.classify = [budget](const Model& model, const Cloud& cloud, std::optional<MethodId> method,
                         const CancelFn& cancel) {

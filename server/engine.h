@@ -25,11 +25,12 @@ struct TrainedModel {
 
 struct Engine {
   // Trains on the clouds, joined with a base version's training set when its bytes are given (the
-  // model grows: only the clouds' features are computed). The set's bytes come back with the model
-  // when they are at most `keep_set_bytes` (0: none kept).
+  // model grows: only the clouds' features are computed, and learning starts from the base model, whose
+  // bytes come beside them). The set's bytes come back with the model when they are at most
+  // `keep_set_bytes` (0: none kept).
   std::function<Expected<TrainedModel>(const std::vector<TrainingCloud>&, const wire::TrainSpec&,
-                                       std::span<const uint8_t> base_set, size_t keep_set_bytes,
-                                       const ProgressFn&, const CancelFn&)>
+                                       std::span<const uint8_t> base_set, std::span<const uint8_t> base_model,
+                                       size_t keep_set_bytes, const ProgressFn&, const CancelFn&)>
       train;
   std::function<Expected<Classification>(const Model&, const Cloud&, std::optional<MethodId>,
                                          const CancelFn&)>

@@ -65,13 +65,14 @@ namespace {
 struct Base {
   std::string name_version;
   std::vector<uint8_t> training_set;
+  std::vector<uint8_t> model;  // its bytes: where the grown model's learning starts
   size_t clouds = 0;  // the base's training clouds
 };
 
 Expected<Base> BaseOf(wire::TrainSpec& spec, const ModelStore& store) {
   auto record = store.Get(spec.base->name, spec.base->version);
   if (!record) return Error{record.error().code, "base: " + record.error().message};
-  Base base{record->name + ":" + std::to_string(record->version), {}, record->stats.clouds};
+  Base base{record->name + ":" + std::to_string(record->version), {}, {}, record->stats.clouds};
   if (record->feature_version != kFeaturePipelineVersion)
     return failed_precondition("base " + base.name_version + " was trained with feature pipeline version " +
                                std::to_string(record->feature_version) + ", this server computes version " +
@@ -83,6 +84,9 @@ Expected<Base> BaseOf(wire::TrainSpec& spec, const ModelStore& store) {
   auto set = store.TrainingSet(record->id);
   if (!set) return Error{set.error().code, "base " + base.name_version + ": " + set.error().message};
   base.training_set = std::move(*set);
+  auto blob = store.Blob(record->id);
+  if (!blob) return Error{blob.error().code, "base " + base.name_version + ": " + blob.error().message};
+  base.model = std::move(*blob);
   spec.methods = record->methods;
   spec.default_method = record->default_method;
   google::protobuf::util::JsonParseOptions options;
@@ -107,7 +111,7 @@ Expected<ModelRecord> TrainAndStore(const TrainInput& input, const Engine& engin
       features_share(kFeaturesPercent * static_cast<double>(input.clouds.size()) /
                      static_cast<double>(input.clouds.size() + base.clouds));
   }
-  auto trained = engine.train(input.clouds, spec, base.training_set, input.keep_set_bytes, progress, cancel);
+  auto trained = engine.train(input.clouds, spec, base.training_set, base.model, input.keep_set_bytes, progress, cancel);
   if (!trained) return trained.error();
   const Model* model = &trained->model;
   if (cancel && cancel()) return cancelled("training was cancelled");

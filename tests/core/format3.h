@@ -1,4 +1,4 @@
-// Model bytes of formats 3 to 11 made from a format-12 model (of no augmented cloud for 7 and older), for tests and benchmarks of models
+// Model bytes of formats 3 to 12 made from a format-13 model (of no augmented cloud for 7 and older), for tests and benchmarks of models
 // written before novelty existed ("none of these"; format 3 has no novelty block), before novelty was
 // divided by the decision's score (format 4 lacks that byte), before it was measured over several
 // training objects (format 5 lacks the reference objects that end the payload), before it joined the
@@ -84,8 +84,27 @@ inline std::vector<uint8_t> as_format_11(std::vector<uint8_t> bytes, const Model
   return with_version(std::move(bytes), 11, payload);
 }
 
-// A format-12 model's bytes as format 11 wrote them.
-inline std::vector<uint8_t> format_11_bytes(const Model& model) { return as_format_11(serialize(model), model); }
+// Format 12 is format 13 without the calibration folds' heads that end the payload (the model's, then its
+// novelty model's: a u32 count and per head its binary32 weights and binary64 biases).
+inline std::vector<uint8_t> as_format_12(std::vector<uint8_t> bytes, const Model& model) {
+  if (bytes.size() < 32 || !model.impl) return {};
+  auto tail = [](const ModelImpl* impl) {
+    size_t n = 4;
+    if (impl && impl->fusion_head)
+      for (const Chi2Logistic& h : impl->fold_heads)
+        n += 8 + 4 * static_cast<size_t>(h.weights.size()) + 4 + 8 * static_cast<size_t>(h.bias.size());
+    return n;
+  };
+  const size_t cut = tail(model.impl.get()) + tail(model.impl->novelty.get());
+  const size_t payload = bytes.size() - 24;
+  if (cut > payload) return {};
+  bytes.erase(bytes.end() - 4 - static_cast<std::ptrdiff_t>(cut), bytes.end() - 4);
+  return with_version(std::move(bytes), 12, payload - cut);
+}
+
+// A format-13 model's bytes as format 12 and 11 wrote them.
+inline std::vector<uint8_t> format_12_bytes(const Model& model) { return as_format_12(serialize(model), model); }
+inline std::vector<uint8_t> format_11_bytes(const Model& model) { return as_format_11(format_12_bytes(model), model); }
 
 // Format 10 is format 11 without the probability temperature and settle probability (two f64) that end
 // the payload: it reads with no probabilities.

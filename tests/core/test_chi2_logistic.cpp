@@ -10,6 +10,7 @@
 #include "glimpse/learning/chi2_logistic.h"
 #include "glimpse/learning/model.h"
 #include "glimpse/learning/scores.h"
+#include "glimpse/random.h"
 #include "glimpse/learning/train_params.h"
 #include "glimpse/features/upright_histogram.h"
 #include "glimpse/features/global_descriptors.h"
@@ -242,19 +243,36 @@ TEST(FusionHead, ItsShareIsCalibratedOnHeldOutFoldsAndItMovesTheScores) {
 
 TEST(FusionHead, LearnsAtMostItsRowsPerCategoryTheSameOnesEveryTime) {
   const std::vector<int> labels = {0, 1, 0, 0, 1, 0, 0, 2, 0, 0, 1, 0};  // 8, 3 and 1 rows
+  std::vector<uint64_t> keys;
+  for (size_t i = 0; i < labels.size(); ++i) keys.push_back(1000 + 17 * i);
   auto count = [&](const std::vector<uint8_t>& learns, int category) {
     int n = 0;
     for (size_t i = 0; i < labels.size(); ++i) n += learns[i] && labels[i] == category;
     return n;
   };
-  const std::vector<uint8_t> capped = fusion_head_learns(labels, 3, 2, 7);
+  const std::vector<uint8_t> capped = fusion_head_learns(labels, keys, 3, 2, 7);
   EXPECT_EQ(count(capped, 0), 2);
   EXPECT_EQ(count(capped, 1), 2);
   EXPECT_EQ(count(capped, 2), 1);  // fewer than the cap: all
-  EXPECT_EQ(fusion_head_learns(labels, 3, 2, 7), capped);
-  EXPECT_NE(fusion_head_learns(labels, 3, 2, 8), capped);  // another seed, other rows
-  const std::vector<uint8_t> all = fusion_head_learns(labels, 3, 0, 7);
+  EXPECT_EQ(fusion_head_learns(labels, keys, 3, 2, 7), capped);
+  EXPECT_NE(fusion_head_learns(labels, keys, 3, 2, 8), capped);  // another seed, other rows
+  const std::vector<uint8_t> all = fusion_head_learns(labels, keys, 3, 0, 7);
   EXPECT_EQ(count(all, 0) + count(all, 1) + count(all, 2), int(labels.size()));
+}
+
+TEST(FusionHead, ARowIsLearntOrNotByItsKeyWhereverItStands) {
+  // Rows of category 0 with a category-1 row put before them: the same rows of 0 are learnt.
+  const std::vector<int> labels = {0, 0, 0, 0, 0, 0, 0, 0};
+  std::vector<uint64_t> keys;
+  for (size_t i = 0; i < labels.size(); ++i) keys.push_back(splitmix64(99, i));
+  const std::vector<uint8_t> alone = fusion_head_learns(labels, keys, 2, 3, 7);
+  std::vector<int> more_labels = {1};
+  std::vector<uint64_t> more_keys = {12345};
+  more_labels.insert(more_labels.end(), labels.begin(), labels.end());
+  more_keys.insert(more_keys.end(), keys.begin(), keys.end());
+  const std::vector<uint8_t> joined = fusion_head_learns(more_labels, more_keys, 2, 3, 7);
+  EXPECT_EQ(std::vector<uint8_t>(joined.begin() + 1, joined.end()), alone);
+  EXPECT_EQ(joined[0], 1);
 }
 
 TEST(FusionHead, TheModelBytesKeepItAndAFormat6ModelReadsWithoutIt) {

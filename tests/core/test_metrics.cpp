@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "common/decisions.h"
+#include "glimpse/learning/calibration.h"
 #include "glimpse/learning/metrics.h"
 #include "glimpse/learning/model.h"
 
@@ -55,6 +56,27 @@ TEST(StratifiedFolds, UnevenCategoriesDifferByAtMostOnePerFold) {
   std::vector<int> sizes(3, 0);  // folds stay balanced overall too
   for (int f : fold) ++sizes[f];
   EXPECT_LE(*std::max_element(sizes.begin(), sizes.end()) - *std::min_element(sizes.begin(), sizes.end()), 1);
+}
+
+// Calibration's folds: a category added to the training objects (here between the others by name)
+// moves no other category's objects to another fold, as stratified_folds' rotation would.
+TEST(CalibrationFolds, ACategoryAddedMovesNoOtherCategorysObjects) {
+  std::vector<std::string> cats = shrec_like_categories(7);  // five categories of 7 objects
+  const std::vector<int> before = calibration_folds(cats, 4, 42);
+  std::vector<std::string> more = cats;
+  for (int i = 0; i < 5; ++i) more.push_back("dog");  // "chair" < "dog" < "fourleg"
+  const std::vector<int> after = calibration_folds(more, 4, 42);
+  EXPECT_EQ(std::vector<int>(after.begin(), after.begin() + static_cast<std::ptrdiff_t>(cats.size())), before);
+  std::map<std::string, std::vector<int>> per;  // still stratified: at most one apart per category
+  for (size_t i = 0; i < more.size(); ++i) {
+    per[more[i]].resize(4, 0);
+    ++per[more[i]][after[i]];
+  }
+  for (const auto& [c, n] : per) EXPECT_LE(*std::max_element(n.begin(), n.end()) - *std::min_element(n.begin(), n.end()), 1) << c;
+  // stratified_folds' rotation moves the categories after the added one.
+  const std::vector<int> rotated = stratified_folds(more, 4, 42);
+  EXPECT_NE(std::vector<int>(rotated.begin(), rotated.begin() + static_cast<std::ptrdiff_t>(cats.size())),
+            stratified_folds(cats, 4, 42));
 }
 
 TEST(StratifiedFolds, DeterministicPerSeedAndShuffledAcrossSeeds) {

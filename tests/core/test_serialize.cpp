@@ -77,7 +77,7 @@ TEST(Serialize, RoundTripGivesIdenticalScores) {
 // model of format 11 (binary64 references) reads and decides alike, and takes more bytes.
 TEST(Serialize, ReferencesAreBinary32AndAFormat11ModelReadsAlike) {
   const Trained& t = trained();
-  const std::vector<uint8_t> bytes = serialize(t.model), eleven = test::format_11_bytes(t.model);
+  const std::vector<uint8_t> twelve = test::format_12_bytes(t.model), eleven = test::format_11_bytes(t.model);
   ASSERT_FALSE(eleven.empty());
   size_t references = 0;
   for (const auto& stage : t.model.impl->stages)
@@ -85,15 +85,38 @@ TEST(Serialize, ReferencesAreBinary32AndAFormat11ModelReadsAlike) {
       references += static_cast<size_t>(stage->references.size());
       EXPECT_TRUE((stage->references.array() == stage->references.cast<float>().cast<double>().array()).all());
     }
-  EXPECT_EQ(eleven.size(), bytes.size() + 4 * references);
+  EXPECT_EQ(eleven.size(), twelve.size() + 4 * references);
   auto old = deserialize(eleven);
   ASSERT_TRUE(old.ok()) << old.error().message;
-  EXPECT_EQ(serialize(*old), bytes);  // read as binary64, written again as binary32: the same bytes
+  EXPECT_EQ(test::format_12_bytes(*old), twelve);  // read as binary64, written again as binary32: the same bytes
   for (size_t i = 0; i < 4; ++i) {
     auto a = classify(t.model, t.test[i * 5].cloud), b = classify(*old, t.test[i * 5].cloud);
     ASSERT_TRUE(a.ok() && b.ok());
     EXPECT_EQ(a->scores, b->scores);
   }
+}
+
+// The calibration folds' heads (where a grown model starts) come back from the bytes as binary32; a
+// format-12 model reads without them and decides alike.
+TEST(Serialize, TheFoldHeadsComeBackAndAFormat12ModelReadsWithoutThem) {
+  const Trained& t = trained();
+  ASSERT_TRUE(t.model.impl->fusion_head.has_value());
+  const size_t folds = t.model.impl->fold_heads.size();
+  ASSERT_GT(folds, 0u);
+  auto back = deserialize(serialize(t.model));
+  ASSERT_TRUE(back.ok()) << back.error().message;
+  ASSERT_EQ(back->impl->fold_heads.size(), folds);
+  for (size_t k = 0; k < folds; ++k) {
+    const Eigen::MatrixXd& w = t.model.impl->fold_heads[k].weights;
+    EXPECT_EQ(back->impl->fold_heads[k].weights, w.cast<float>().cast<double>().eval());
+    EXPECT_EQ(back->impl->fold_heads[k].bias, t.model.impl->fold_heads[k].bias);
+  }
+  auto twelve = deserialize(test::format_12_bytes(t.model));
+  ASSERT_TRUE(twelve.ok()) << twelve.error().message;
+  EXPECT_TRUE(twelve->impl->fold_heads.empty());
+  auto a = classify(t.model, t.test.front().cloud), b = classify(*twelve, t.test.front().cloud);
+  ASSERT_TRUE(a.ok() && b.ok());
+  EXPECT_EQ(a->scores, b->scores);
 }
 
 TEST(Serialize, RejectsCorruptAndTruncatedBytes) {

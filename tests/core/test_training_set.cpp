@@ -1,10 +1,12 @@
 // A model grown from a kept training set: the features of the added clouds joined with the base's give
-// the model a training of every cloud at once gives, and the set's bytes read back whole or not at all.
+// the model a training of every cloud at once gives (bit for bit from zero; from the base's heads, to
+// within the solver's tolerance), and the set's bytes read back whole or not at all.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 
 #include "glimpse/learning/model.h"
+#include "glimpse/learning/model_internals.h"
 #include "glimpse/learning/training_set.h"
 #include "synthetic.h"
 
@@ -55,6 +57,54 @@ TEST(TrainingSet, GrowingAModelGivesTheModelOfTrainingEveryCloudAtOnce) {
   EXPECT_EQ(grown->categories, (std::vector<std::string>{"ball", "box", "can"}));
   EXPECT_EQ(grown->stats.clouds, all.size() + 1);
   EXPECT_EQ(bytes_of(*grown), bytes_of(*full));
+}
+
+// A model grown from its base starts its logistic decisions where the base's ended (its own head and each
+// calibration fold's, by category name) and ends where a training from zero does, to within the solver's
+// tolerance: the same winners, scores within a hundredth; everything but the heads bit for bit.
+TEST(TrainingSet, AGrownModelStartsWhereItsBaseEndedAndDecidesAsAFullTraining) {
+  const std::vector<TrainingCloud> all = synthetic_views(4, 2, 7);
+  const std::vector<TrainingCloud> base = of_categories(all, {"ball", "can"});
+  const std::vector<TrainingCloud> added = of_categories(all, {"box"});  // a category between the base's
+  const TrainParams params = small_params();
+  auto base_set = training_set(base, params);
+  ASSERT_TRUE(base_set.ok()) << base_set.error().message;
+  auto base_model = train(*base_set, params);
+  ASSERT_TRUE(base_model.ok()) << base_model.error().message;
+  ASSERT_TRUE(base_model->impl->fusion_head.has_value());
+  EXPECT_EQ(base_model->impl->fold_heads.size(), static_cast<size_t>(params.calibration_folds));
+  auto added_set = training_set(added, params, {}, {}, &*base_set);
+  ASSERT_TRUE(added_set.ok()) << added_set.error().message;
+  auto joined = join(std::move(*base_set), std::move(*added_set));
+  ASSERT_TRUE(joined.ok()) << joined.error().message;
+  auto grown = train(*joined, params, {}, {}, &*base_model);
+  auto full = train(std::move(*joined), params);
+  ASSERT_TRUE(grown.ok() && full.ok());
+
+  const Chi2Logistic& g = *grown->impl->fusion_head;
+  const Chi2Logistic& f = *full->impl->fusion_head;
+  EXPECT_NE(g.weights, f.weights);  // started elsewhere: not the same steps
+  EXPECT_LT((g.weights - f.weights).norm(), 0.05 * f.weights.norm());
+  ASSERT_EQ(grown->impl->fold_heads.size(), full->impl->fold_heads.size());
+  for (size_t k = 0; k < full->impl->fold_heads.size(); ++k) {
+    const Eigen::MatrixXd& fw = full->impl->fold_heads[k].weights;
+    EXPECT_LT((grown->impl->fold_heads[k].weights - fw).norm(), 0.05 * fw.norm()) << "fold " << k;
+  }
+  Model same_heads = *grown;  // the grown model with the full one's heads is the full model
+  auto impl = std::make_shared<ModelImpl>(*grown->impl);
+  impl->fusion_head = full->impl->fusion_head;
+  impl->fold_heads = full->impl->fold_heads;
+  impl->calibration = full->impl->calibration;
+  impl->novelty = full->impl->novelty;
+  same_heads.impl = impl;
+  EXPECT_EQ(bytes_of(same_heads), bytes_of(*full));
+  for (const TrainingCloud& c : all) {
+    auto a = classify(*grown, c.cloud);
+    auto b = classify(*full, c.cloud);
+    ASSERT_TRUE(a.ok() && b.ok());
+    EXPECT_EQ(a->winner, b->winner);
+    for (size_t k = 0; k < b->scores.size(); ++k) EXPECT_NEAR(a->scores[k], b->scores[k], 0.01);
+  }
 }
 
 TEST(TrainingSet, BytesReadBackToTheSameModel) {

@@ -140,7 +140,8 @@ class FakeSession final : public ScanSession {
 inline decltype(Engine::train) FakeTrain(FakeBehaviour* b) {
   // The fake's training set is its categories, comma-separated: a grown model learns the base's too.
   return [b](const std::vector<TrainingCloud>& data, const wire::TrainSpec& spec, std::span<const uint8_t> base_set,
-                size_t keep_set_bytes, const ProgressFn& progress, const CancelFn& cancel) -> Expected<TrainedModel> {
+                std::span<const uint8_t>, size_t keep_set_bytes, const ProgressFn& progress,
+                const CancelFn& cancel) -> Expected<TrainedModel> {
     ++b->train_calls;
     if (b->train_error) return *b->train_error;
     if (b->train_waits_for_cancel) {

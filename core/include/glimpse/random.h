@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <numbers>
 #include <random>
+#include <string_view>
 
 namespace glimpse {
 
@@ -17,6 +18,13 @@ inline uint64_t splitmix64(uint64_t x) {
 }
 // The i-th of a seeded sequence: splitmix64 of seed + i x its increment.
 inline uint64_t splitmix64(uint64_t seed, uint64_t i) { return splitmix64(seed + 0x9E3779B97F4A7C15ull * i); }
+
+// FNV-1a of a name: a seed from a string that every standard library agrees on (std::hash differs).
+inline uint32_t name_hash(std::string_view s) {
+  uint32_t h = 2166136261u;
+  for (unsigned char c : s) h = (h ^ c) * 16777619u;
+  return h;
+}
 
 // Uniform in [0, 1) from the top 53 bits.
 inline double uniform01(uint64_t bits) { return double(bits >> 11) * 0x1.0p-53; }

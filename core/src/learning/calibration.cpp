@@ -132,13 +132,14 @@ std::vector<int> objects_per_category(const std::vector<int>& labels, const std:
   return out;
 }
 
-// Per row, whether calibration decides it: about `queries` of the n rows, each kept when a seeded hash
-// of its place falls under queries / n; empty (every row) when queries <= 0 or >= n.
-std::vector<uint8_t> decided_rows(size_t n, int queries, uint64_t seed) {
+// Per row, whether calibration decides it: about `queries` of the rows, each kept when a seeded hash of
+// its key falls under queries / rows; empty (every row) when queries <= 0 or >= the rows.
+std::vector<uint8_t> decided_rows(const std::vector<uint64_t>& keys, int queries, uint64_t seed) {
+  const size_t n = keys.size();
   if (queries <= 0 || static_cast<size_t>(queries) >= n) return {};
   const double keep = double(queries) / double(n);
   std::vector<uint8_t> out(n);
-  for (size_t i = 0; i < n; ++i) out[i] = uniform01(splitmix64(seed, i)) < keep;
+  for (size_t i = 0; i < n; ++i) out[i] = uniform01(splitmix64(seed, keys[i])) < keep;
   return out;
 }
 
@@ -160,6 +161,7 @@ struct InnerFolds {
   std::vector<int> novelty_objects{};  // per category (objects_per_category)
   std::vector<uint8_t> decided{};    // per row: whether it is decided held out (empty: every row)
   bool with_head = false;            // the fusion's logistic decision takes a share of its scores
+  const std::vector<Chi2Logistic>* head_starts = nullptr;  // per fold: where its head's solver starts
   bool measure_novelty = false;
   int threads = 1;
 };
@@ -245,10 +247,12 @@ bool component_decisions(const InnerFolds& in, size_t j, const FoldRows& fold, F
   return true;
 }
 
-// The fusion's logistic decision learnt on the fold's training rows like the stages, started from the
-// model's own head (all the rows it learns): LIBLINEAR stops at the same tolerance of the same problem, in fewer
-// steps. Per held-out row its probabilities; empty when the fit fails.
-Eigen::MatrixXd held_out_head_probabilities(const InnerFolds& in, const FoldRows& fold) {
+// The fusion's logistic decision learnt on the fold's training rows like the stages, started from fold k's
+// start (a base model's head of the same fold) or the model's own head (all the rows it learns): LIBLINEAR
+// stops at the same tolerance of the same problem, in fewer steps. Per held-out row its probabilities
+// (empty when the fit fails); the head into `learnt`.
+Eigen::MatrixXd held_out_head_probabilities(const InnerFolds& in, const FoldRows& fold, int k,
+                                            std::optional<Chi2Logistic>& learnt_head) {
   const TrainParams& p = in.impl.params;
   Eigen::MatrixXd probabilities;
   std::vector<Eigen::Index> learnt;
@@ -256,20 +260,25 @@ Eigen::MatrixXd held_out_head_probabilities(const InnerFolds& in, const FoldRows
   for (size_t i = 0; i < fold.train_rows.size(); ++i)
     if (in.rows.head_learns.empty() || in.rows.head_learns[static_cast<size_t>(fold.train_rows[i])])
       learnt.push_back(fold.train_rows[i]), labels.push_back(fold.train_labels[i]);
+  const bool own_start = in.head_starts && static_cast<size_t>(k) < in.head_starts->size() &&
+                         (*in.head_starts)[static_cast<size_t>(k)].weights.size() > 0;
+  const Chi2Logistic* start = own_start ? &(*in.head_starts)[static_cast<size_t>(k)] : &*in.impl.fusion_head;
   auto head = fit_chi2_logistic(fusion_head_rows(in.impl, in.rows.histograms, learnt, in.threads), labels,
-                                in.rows.categories, p.fusion_head, in.threads, &*in.impl.fusion_head);
+                                in.rows.categories, p.fusion_head, in.threads, start);
   if (head.ok()) {
     const Eigen::MatrixXd x = fusion_head_rows(in.impl, in.rows.queries(), fold.test_rows, in.threads);
     probabilities.resize(x.rows(), in.rows.categories);
     for (Eigen::Index r = 0; r < x.rows(); ++r)
       probabilities.row(r) = chi2_logistic_probabilities(*head, x.row(r).transpose()).transpose();
+    learnt_head = std::move(*head);
   }
   return probabilities;
 }
 
-// Inner fold k's held-out decisions, added to `out` (its winners are chosen later, at the head's share);
-// nothing when the fold has none or a component's stage cannot be fitted.
-void decide_held_out_fold(const InnerFolds& in, int k, const CancelFn& cancel, HeldOut& out) {
+// Inner fold k's held-out decisions, added to `out` (its winners are chosen later, at the head's share),
+// and its head; nothing when the fold has none or a component's stage cannot be fitted.
+void decide_held_out_fold(const InnerFolds& in, int k, const CancelFn& cancel, HeldOut& out,
+                          std::optional<Chi2Logistic>& head) {
   const std::optional<FoldRows> fold = fold_rows(in, k);
   if (!fold) return;
   const size_t n = fold->test_rows.size();
@@ -278,7 +287,7 @@ void decide_held_out_fold(const InnerFolds& in, int k, const CancelFn& cancel, H
   for (size_t j = 0; j < in.parts.size(); ++j)
     if (!component_decisions(in, j, *fold, d)) return;
   Eigen::MatrixXd probabilities;
-  if (in.with_head && !(cancel && cancel())) probabilities = held_out_head_probabilities(in, *fold);
+  if (in.with_head && !(cancel && cancel())) probabilities = held_out_head_probabilities(in, *fold, k, head);
   for (size_t r = 0; r < n; ++r) {
     Eigen::VectorXd s = Eigen::VectorXd::Zero(in.rows.categories);
     for (const Eigen::MatrixXd& m : d.scores) s += m.row(static_cast<Eigen::Index>(r)).transpose();
@@ -346,26 +355,35 @@ void model_references(Calibration& c, const ModelImpl& impl, const std::vector<M
 }  // namespace
 
 Calibration calibrate(const ModelImpl& impl, MethodId method, const CalibrationRows& rows, bool measure_novelty,
-                      int threads, const CancelFn& cancel, const std::function<void(size_t, size_t)>& fold_done) {
+                      int threads, const CancelFn& cancel, const std::function<void(size_t, size_t)>& fold_done,
+                      std::vector<Chi2Logistic>* fold_heads) {
   const TrainParams& p = impl.params;
   Calibration c;
   c.method = method;
   const int folds = p.calibration_folds;
   if (folds < 2 || !two_objects_per_category(rows.object_categories)) return c;
   InnerFolds in{impl, rows};
-  in.object_fold = stratified_folds(rows.object_categories, folds, p.seed + 101);
+  in.object_fold = calibration_folds(rows.object_categories, folds, p.seed + 101);
   in.parts = component_methods(impl, method);
   in.novelty_objects = objects_per_category(rows.labels, rows.objects, in.object_fold, folds, rows.categories,
                                             std::max(1, p.novelty_objects));
   in.with_head = method == MethodId::kFusion && impl.fusion_head.has_value() && !p.fusion_head_shares.empty();
   in.measure_novelty = measure_novelty;
   in.threads = threads;
-  in.decided = decided_rows(rows.labels.size(), p.calibration_queries, p.seed + 103);
+  in.decided = decided_rows(rows.keys, p.calibration_queries, p.seed + 103);
+  const std::vector<Chi2Logistic> starts = fold_heads ? std::move(*fold_heads) : std::vector<Chi2Logistic>{};
+  in.head_starts = &starts;
+  std::vector<std::optional<Chi2Logistic>> heads(static_cast<size_t>(folds));
   HeldOut held_out;
   for (int k = 0; k < folds; ++k) {
     if (cancel && cancel()) return c;  // the caller sees the cancel and stores nothing
-    decide_held_out_fold(in, k, cancel, held_out);
+    decide_held_out_fold(in, k, cancel, held_out, heads[static_cast<size_t>(k)]);
     if (fold_done) fold_done(static_cast<size_t>(k) + 1, static_cast<size_t>(folds));
+  }
+  if (fold_heads) {  // every fold's, or none
+    fold_heads->clear();
+    if (std::all_of(heads.begin(), heads.end(), [](const auto& h) { return h.has_value(); }))
+      for (auto& h : heads) fold_heads->push_back(std::move(*h));
   }
   if (held_out.scores.empty()) return c;
   if (in.with_head) c.fusion_head_share = choose_head_share(p.fusion_head_shares, held_out, c.fusion_head_share);

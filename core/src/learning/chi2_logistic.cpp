@@ -166,6 +166,28 @@ Expected<Chi2Logistic> fit_chi2_logistic(const Eigen::MatrixXd& features, const 
   return head;
 }
 
+Chi2Logistic head_for_categories(const Chi2Logistic& head, const std::vector<std::string>& from,
+                                 const std::vector<std::string>& to, const Chi2Logistic* others) {
+  Chi2Logistic out;
+  out.sample_steps = head.sample_steps;
+  out.sample_interval = head.sample_interval;
+  out.weights = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(to.size()), head.weights.cols());
+  out.bias = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(to.size()));
+  for (size_t k = 0; k < to.size(); ++k) {
+    const auto at = std::find(from.begin(), from.end(), to[k]);
+    const Eigen::Index row = at - from.begin(), to_row = static_cast<Eigen::Index>(k);
+    if (at != from.end() && row < head.weights.rows() && row < head.bias.size()) {
+      out.weights.row(to_row) = head.weights.row(row);
+      out.bias[to_row] = head.bias[row];
+    } else if (others && others->weights.rows() == out.weights.rows() && others->weights.cols() == out.weights.cols() &&
+               others->bias.size() == out.bias.size()) {
+      out.weights.row(to_row) = others->weights.row(to_row);
+      out.bias[to_row] = others->bias[to_row];
+    }
+  }
+  return out;
+}
+
 Eigen::VectorXd chi2_logistic_probabilities(const Chi2Logistic& head, const Eigen::VectorXd& features) {
   if (features.size() != head.weights.cols() || head.weights.rows() == 0) return {};
   const Eigen::VectorXd decision = head.weights * features + head.bias;

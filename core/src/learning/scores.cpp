@@ -78,13 +78,13 @@ Eigen::MatrixXd fusion_head_rows(const ModelImpl& impl, const std::vector<Eigen:
   return out;
 }
 
-std::vector<uint8_t> fusion_head_learns(const std::vector<int>& labels, int categories, int per_category,
-                                        uint64_t seed) {
+std::vector<uint8_t> fusion_head_learns(const std::vector<int>& labels, const std::vector<uint64_t>& keys,
+                                        int categories, int per_category, uint64_t seed) {
   std::vector<uint8_t> learns(labels.size(), 1);
   if (per_category <= 0) return learns;
   std::vector<std::vector<std::pair<uint64_t, size_t>>> by_category(static_cast<size_t>(categories));
   for (size_t i = 0; i < labels.size(); ++i)
-    by_category[static_cast<size_t>(labels[i])].push_back({splitmix64(seed, i), i});
+    by_category[static_cast<size_t>(labels[i])].push_back({splitmix64(seed, keys[i]), i});
   for (auto& rows : by_category) {
     if (rows.size() <= static_cast<size_t>(per_category)) continue;
     std::nth_element(rows.begin(), rows.begin() + per_category, rows.end());

@@ -47,7 +47,10 @@ constexpr char kMagic[8] = {'G', 'L', 'M', 'P', 'S', 'M', 'D', 'L'};
 // no probabilities, streams settle on the score margin.
 // 12: every decision stage's references are binary32 (the precision fit_decision keeps them at), half
 // the model's bytes; format 11 and older read binary64.
-constexpr uint32_t kFormatVersion = 12;
+// 13: at the payload's end, the calibration folds' heads (ModelImpl::fold_heads) of the model and of its
+// novelty model, each a u32 count and the heads (binary32 weights, binary64 biases): where a model grown
+// from it starts; format 12 and older read none.
+constexpr uint32_t kFormatVersion = 13;
 constexpr uint32_t kOldestReadableVersion = 1;
 
 

@@ -44,7 +44,7 @@ class Writer {
       for (Eigen::Index c = 0; c < m.cols(); ++c) f64(m(r, c));
   }
   // The same layout with binary32 values: for a matrix whose values are binary32 already (a decision
-  // stage's references), so nothing is lost.
+  // stage's references), so nothing is lost, or where binary32 is enough (a solver's start).
   void mat32(const Eigen::MatrixXd& m) {
     u32(static_cast<uint32_t>(m.rows()));
     u32(static_cast<uint32_t>(m.cols()));

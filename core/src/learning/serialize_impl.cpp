@@ -187,6 +187,32 @@ void read_fusion_head(Reader& r, ModelImpl& impl, uint32_t ncat) {
   impl.fusion_head = std::move(head);
 }
 
+// The calibration folds' heads (format 13 on, the model's then its novelty model's, at the payload's
+// end): a u32 count, each head's binary32 weights and binary64 biases, of the fusion head's shape.
+void write_fold_heads(Writer& w, const ModelImpl& m) {
+  w.u32(static_cast<uint32_t>(m.fusion_head ? m.fold_heads.size() : 0));
+  if (m.fusion_head)
+    for (const Chi2Logistic& fold : m.fold_heads) w.mat32(fold.weights), w.vec(fold.bias);
+}
+
+void read_fold_heads(Reader& r, ModelImpl& impl) {
+  const uint32_t n = r.u32("fold head count");
+  if (n > 64 || (n > 0 && !impl.fusion_head)) r.fail("fold heads without a fusion head, or too many");
+  for (uint32_t k = 0; k < n && !r.failed(); ++k) {
+    Chi2Logistic fold;
+    fold.sample_steps = impl.fusion_head->sample_steps;
+    fold.sample_interval = impl.fusion_head->sample_interval;
+    fold.weights = r.mat("fold head weights", true);
+    fold.bias = r.vec("fold head bias");
+    if (!r.failed() && (fold.weights.rows() != impl.fusion_head->weights.rows() ||
+                        fold.weights.cols() != impl.fusion_head->weights.cols() ||
+                        fold.bias.size() != impl.fusion_head->bias.size() || !fold.weights.allFinite() ||
+                        !fold.bias.allFinite()))
+      r.fail("inconsistent calibration fold head");
+    impl.fold_heads.push_back(std::move(fold));
+  }
+}
+
 // The novelty model (format 8 on), after its flag: the trained part again, of the same methods and
 // calibrated method, with a calibrated novelty; none within a novelty model.
 std::shared_ptr<ModelImpl> read_novelty_model(Reader& r, const ModelImpl& impl, uint32_t ncat, uint32_t version,
@@ -258,6 +284,7 @@ void write_impl(Writer& w, const ModelImpl& m, bool nested) {
   if (!nested) w.u8(m.calibration.novelty_adds_evidence ? 1 : 0);
   if (!nested) w.f64(m.calibration.probability_temperature);
   if (!nested) w.f64(m.calibration.settle_probability);
+  if (!nested) write_fold_heads(w, m), write_fold_heads(w, m.novelty ? *m.novelty : ModelImpl{});
 }
 
 std::shared_ptr<ModelImpl> read_impl(Reader& r, uint32_t ncat, uint32_t version, bool nested) {
@@ -284,6 +311,11 @@ std::shared_ptr<ModelImpl> read_impl(Reader& r, uint32_t ncat, uint32_t version,
       r.fail("probability temperature out of range");
     if (!(impl->calibration.settle_probability >= 0 && impl->calibration.settle_probability <= 1 + 1e-6))
       r.fail("settle probability out of range");
+  }
+  if (version >= 13 && !nested && !r.failed()) {
+    read_fold_heads(r, *impl);
+    ModelImpl none;
+    read_fold_heads(r, novelty ? *novelty : none);
   }
   if (novelty) {
     novelty->calibration.novelty_adds_evidence = impl->calibration.novelty_adds_evidence;

@@ -16,6 +16,7 @@
 #include "glimpse/learning/model_internals.h"
 #include "glimpse/learning/scores.h"
 #include "glimpse/learning/train_params.h"
+#include "glimpse/random.h"
 #include "glimpse/threads.h"
 #include "learning/training_checks.h"
 
@@ -65,12 +66,16 @@ CalibrationRows labelled_rows(const std::vector<TrainingSample>& data, std::vect
   }
   CalibrationRows rows;
   std::map<std::string, int> object_index;
+  std::vector<uint64_t> object_rows;  // per object: its rows so far
   for (const auto& d : data) {
     rows.labels.push_back(index[d.category]);
     rows.whole.push_back(d.whole ? 1 : 0);
     // A cloud without an object id is an object of its own.
     const std::string key = d.object_id.empty() ? '#' + std::to_string(rows.labels.size()) : d.category + "/" + d.object_id;
-    rows.objects.push_back(object_index.emplace(key, static_cast<int>(object_index.size())).first->second);
+    const auto [at, fresh] = object_index.emplace(key, static_cast<int>(object_index.size()));
+    rows.objects.push_back(at->second);
+    if (fresh) object_rows.push_back(0);
+    rows.keys.push_back(splitmix64(name_hash(key), object_rows[static_cast<size_t>(at->second)]++));
   }
   rows.object_categories.resize(object_index.size());
   for (size_t i = 0; i < rows.labels.size(); ++i)
@@ -224,8 +229,14 @@ Status choose_methods(Model& model, const ModelImpl& impl, const TrainParams& pa
   return {};
 }
 
+// Whether `start` has a logistic decision over `features` mapped features to start from.
+bool can_start_from(const Model* start, Eigen::Index features) {
+  return start && start->impl && start->impl->fusion_head && start->impl->fusion_head->weights.cols() == features;
+}
+
 // 3b. The fusion's logistic decision over its components' histograms (its share is calibrated in step 4).
-Status fit_fusion_head(ModelImpl& impl, const Model& model, const CalibrationRows& rows, int threads) {
+Status fit_fusion_head(ModelImpl& impl, const Model& model, const CalibrationRows& rows, int threads,
+                       const Model* start) {
   const TrainParams& params = impl.params;
   if (!(needs(model.methods, MethodId::kFusion) && params.fusion_head.c > 0 && model.categories.size() >= 2 &&
         !fusion_head_methods(impl).empty()))
@@ -237,10 +248,20 @@ Status fit_fusion_head(ModelImpl& impl, const Model& model, const CalibrationRow
     for (size_t i = 0; i < rows.labels.size(); ++i)
       if (rows.head_learns[i]) learnt.push_back(static_cast<Eigen::Index>(i)), labels.push_back(rows.labels[i]);
   }
-  auto head = fit_chi2_logistic(fusion_head_rows(impl, rows.histograms, learnt, threads), labels,
-                                static_cast<int>(model.categories.size()), params.fusion_head, threads);
+  const Eigen::MatrixXd x = fusion_head_rows(impl, rows.histograms, learnt, threads);
+  const bool started = can_start_from(start, x.cols());
+  std::optional<Chi2Logistic> from;
+  if (started) from = head_for_categories(*start->impl->fusion_head, start->categories, model.categories);
+  auto head = fit_chi2_logistic(x, labels, static_cast<int>(model.categories.size()), params.fusion_head, threads,
+                                from ? &*from : nullptr);
   if (!head.ok()) return with_method(MethodId::kFusion, head.error());
   impl.fusion_head = std::move(*head);
+  // Each calibration fold starts at the start's same fold, a category it lacks at the head just learnt;
+  // calibration keeps what the folds learn.
+  impl.fold_heads.clear();
+  if (started)
+    for (const Chi2Logistic& fold : start->impl->fold_heads)
+      impl.fold_heads.push_back(head_for_categories(fold, start->categories, model.categories, &*impl.fusion_head));
   return {};
 }
 
@@ -271,7 +292,8 @@ TrainingSummary training_summary(const std::vector<TrainingSample>& data, const 
 // they are never held twice.
 Status learn_novelty_apart(ModelImpl& impl, const Model& model, const CalibrationRows& rows,
                            std::vector<TrainingSample>& data, std::vector<CloudFeatures>& f,
-                           std::vector<std::optional<CloudFeatures>>& as_seen, int threads, const Steps& steps) {
+                           std::vector<std::optional<CloudFeatures>>& as_seen, int threads, const Steps& steps,
+                           const Model* start) {
   const TrainParams& params = impl.params;
   std::vector<TrainingSample> given;
   for (size_t i = 0; i < data.size(); ++i)
@@ -279,7 +301,18 @@ Status learn_novelty_apart(ModelImpl& impl, const Model& model, const Calibratio
       given.push_back({std::move(data[i].category), std::move(data[i].object_id), std::move(f[i]), data[i].whole,
                        std::move(as_seen[i]), false});
   steps.report("novelty", 0, 1);
-  auto novelty = train_on_features(std::move(given), params, {}, steps.cancel);
+  // The novelty model starts at the start's novelty model, a category that lacks at this model's head.
+  Model novelty_start;
+  if (start && start->impl && start->impl->novelty && start->impl->novelty->fusion_head && impl.fusion_head) {
+    const ModelImpl& base = *start->impl->novelty;
+    auto from = std::make_shared<ModelImpl>();
+    from->fusion_head = head_for_categories(*base.fusion_head, start->categories, model.categories, &*impl.fusion_head);
+    for (const Chi2Logistic& fold : base.fold_heads)
+      from->fold_heads.push_back(head_for_categories(fold, start->categories, model.categories, &*impl.fusion_head));
+    novelty_start.categories = model.categories;
+    novelty_start.impl = std::move(from);
+  }
+  auto novelty = train_on_features(std::move(given), params, {}, steps.cancel, novelty_start.impl ? &novelty_start : nullptr);
   if (steps.cancelled_now()) return cancelled("training cancelled");
   if (novelty.ok() && novelty->categories == model.categories && novelty->impl &&
       !novelty->impl->calibration.novelty_scale.empty() && novelty->impl->calibration.method == impl.calibration.method)
@@ -294,7 +327,7 @@ Status learn_novelty_apart(ModelImpl& impl, const Model& model, const Calibratio
 }  // namespace
 
 Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainParams& params,
-                                  const ProgressFn& progress, const CancelFn& cancel) {
+                                  const ProgressFn& progress, const CancelFn& cancel, const Model* start) {
   const auto t0 = std::chrono::steady_clock::now();
   if (Status s = check_training_set(data, params); !s.ok()) return s.error();
   const Steps steps{progress, cancel};
@@ -303,7 +336,8 @@ Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainP
   impl->params = params;
   CalibrationRows rows = labelled_rows(data, model.categories);
   if (params.fusion_head_rows_per_category > 0)
-    rows.head_learns = fusion_head_learns(rows.labels, rows.categories, params.fusion_head_rows_per_category, params.seed + 107);
+    rows.head_learns = fusion_head_learns(rows.labels, rows.keys, rows.categories, params.fusion_head_rows_per_category,
+                                          params.seed + 107);
   // With some clouds augmented, novelty measures against the others, learnt apart (step 5).
   const size_t augmented = static_cast<size_t>(std::count_if(data.begin(), data.end(), [](const TrainingSample& d) { return d.augmented; }));
   const bool novelty_apart = augmented > 0 && augmented < data.size();
@@ -321,19 +355,22 @@ Expected<Model> train_on_features(std::vector<TrainingSample> data, const TrainP
   if (Status s = fit_decision_stages(*impl, rows, f, as_seen, base, threads, steps); !s.ok()) return s.error();
   if (Status s = choose_methods(model, *impl, params); !s.ok()) return s.error();
   if (steps.cancelled_now()) return cancelled("training cancelled");
-  if (Status s = fit_fusion_head(*impl, model, rows, threads); !s.ok()) return s.error();
+  if (Status s = fit_fusion_head(*impl, model, rows, threads, start); !s.ok()) return s.error();
   steps.report("centres", base.size() + 1, base.size() + 1);
   // 4. Calibration of the default method on held-out folds of the training objects. With augmented
   // clouds the novelty model's calibration measures novelty (step 5); this one does only if that fails.
   const size_t folds = static_cast<size_t>(std::max(1, params.calibration_folds));
   steps.report("calibration", 0, folds);
+  std::vector<Chi2Logistic> fold_heads = std::move(impl->fold_heads);
   impl->calibration = calibrate(*impl, model.default_method, rows, params.measure_novelty && !novelty_apart, threads,
-                                cancel, [&](size_t k, size_t n) { steps.report("calibration", k, n); });
+                                cancel, [&](size_t k, size_t n) { steps.report("calibration", k, n); }, &fold_heads);
+  impl->fold_heads = std::move(fold_heads);
   if (params.calibration_folds < 2) steps.report("calibration", folds, folds);  // else the last fold said so
   if (steps.cancelled_now()) return cancelled("training cancelled");
   model.stats = training_summary(data, f, rows.labels, model.categories);
   if (novelty_apart)
-    if (Status s = learn_novelty_apart(*impl, model, rows, data, f, as_seen, threads, steps); !s.ok()) return s.error();
+    if (Status s = learn_novelty_apart(*impl, model, rows, data, f, as_seen, threads, steps, start); !s.ok())
+      return s.error();
   model.stats.seconds = ms_since(t0) / 1000.0;
   model.impl = std::move(impl);
   steps.report("done", 1, 1);

@@ -179,14 +179,15 @@ Expected<TrainingSet> training_set(const std::vector<TrainingCloud>& data, const
   return TrainingSet{kFeaturePipelineVersion, given_clouds(data, params), std::move(*samples)};
 }
 
-Expected<Model> train(TrainingSet set, const TrainParams& params, const ProgressFn& progress, const CancelFn& cancel) {
+Expected<Model> train(TrainingSet set, const TrainParams& params, const ProgressFn& progress, const CancelFn& cancel,
+                      const Model* start) {
   const auto t0 = std::chrono::steady_clock::now();
   if (set.feature_version != kFeaturePipelineVersion)
     return failed_precondition("the training set's features are of pipeline version " +
                                std::to_string(set.feature_version) + ", this build computes version " +
                                std::to_string(kFeaturePipelineVersion) + ": train again from the clouds");
   order_by_object(set.samples);
-  auto model = train_on_features(std::move(set.samples), with_learnt_density(set.clouds, params), progress, cancel);
+  auto model = train_on_features(std::move(set.samples), with_learnt_density(set.clouds, params), progress, cancel, start);
   if (model.ok()) {
     count_given_clouds(*model, set.clouds);
     model->stats.seconds = ms_since(t0) / 1000.0;

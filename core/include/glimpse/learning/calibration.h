@@ -35,6 +35,9 @@ struct CalibrationRows {
   // Per row: whether the fusion's logistic decision learns it (TrainParams::fusion_head_rows_per_category);
   // empty: every row.
   std::vector<uint8_t> head_learns;
+  // Per row: a hash of its object's category and name and its place among the object's rows, what rows
+  // are sampled by: the same row keeps its key when other objects join the training set.
+  std::vector<uint64_t> keys;
 
   const std::vector<Eigen::MatrixXd>& queries() const { return as_seen.empty() ? histograms : as_seen; }
 };
@@ -44,8 +47,15 @@ struct CalibrationRows {
 // is calibrated (nor any prefix decided): the settle margin, the head's share and the held-out accuracy
 // are the same. A cancel stops it between inner folds with what it has (the caller then stores nothing).
 // `fold_done(k, folds)` after each inner fold: long trainings report where calibration is.
+// `fold_heads`, when given: per inner fold, where its logistic decision's solver starts (empty, or a fold
+// without one: the model's own head), replaced by the heads the folds learnt.
 Calibration calibrate(const ModelImpl& impl, MethodId method, const CalibrationRows& rows, bool measure_novelty,
                       int threads, const CancelFn& cancel = {},
-                      const std::function<void(size_t, size_t)>& fold_done = {});
+                      const std::function<void(size_t, size_t)>& fold_done = {},
+                      std::vector<Chi2Logistic>* fold_heads = nullptr);
+
+// Inner folds of the training objects (stratified_folds, model.h), each category's round robin starting
+// at a fold drawn from its name, so a category added to the training set moves no other's objects.
+std::vector<int> calibration_folds(const std::vector<std::string>& object_categories, int folds, uint64_t seed);
 
 }  // namespace glimpse

@@ -5,6 +5,7 @@
 // all of them, so it holds up where an object of another modeller has no close neighbour.
 #pragma once
 
+#include <string>
 #include <vector>
 
 #include "glimpse/expected.h"
@@ -43,6 +44,12 @@ Eigen::VectorXd additive_chi2_features(const std::vector<Eigen::VectorXd>& histo
 Expected<Chi2Logistic> fit_chi2_logistic(const Eigen::MatrixXd& features, const std::vector<int>& labels, int categories,
                                          const Chi2LogisticParams& params, int threads = 1,
                                          const Chi2Logistic* start = nullptr);
+
+// `head`, learnt over `from` categories, with its rows for `to` (by name): where a solver of `to`'s problem
+// starts. A category `from` lacks takes its row of `others` (a head over `to`, of the same features) when
+// given, else zero weights and bias (where a cold solver starts).
+Chi2Logistic head_for_categories(const Chi2Logistic& head, const std::vector<std::string>& from,
+                                 const std::vector<std::string>& to, const Chi2Logistic* others = nullptr);
 
 // Per category, its one-vs-rest probability, normalised to sum to 1 (LIBLINEAR's predict_probability).
 Eigen::VectorXd chi2_logistic_probabilities(const Chi2Logistic& head, const Eigen::VectorXd& features);

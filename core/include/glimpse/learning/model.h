@@ -175,8 +175,9 @@ Status set_known_acceptance(const Model& model, Classification& classification, 
 std::string size_warning(const TrainingSummary& stats, const Cloud& cloud);
 
 // Fold (0..folds-1) of every object: per category, the objects are shuffled (seeded) and dealt round
-// robin, so each fold holds floor or ceil(n / folds) objects of every category. Used by training's own
-// calibration (held-out folds of the training set) and by the evaluation's cross-validation.
+// robin, so each fold holds floor or ceil(n / folds) objects of every category; each category starts
+// where the one before it ended. The evaluation's cross-validation (training's own calibration deals
+// with calibration_folds, calibration.h).
 std::vector<int> stratified_folds(const std::vector<std::string>& object_categories, int folds, uint64_t seed);
 
 // The lowest margin at which (margin, right) decisions reach `precision` (counting from min_count

@@ -31,6 +31,9 @@ struct ModelImpl {
   // the fusion's scores in calibration.fusion_head_share. None: a model of format 6 or older, or trained
   // without one.
   std::optional<Chi2Logistic> fusion_head;
+  // The same decision learnt in each inner calibration fold (on the other folds' rows), where a model grown
+  // from this one starts its folds' solvers (format 13 on; empty: a model of format 12 or older).
+  std::vector<Chi2Logistic> fold_heads;
   // What novelty ("none of these") measures a cloud against when some training clouds were augmented
   // (TrainingCloud::augmented): the same training on the other clouds alone (its stages, its calibrated
   // novelty and threshold; the same categories, nothing nested further). A decision stage fitted with the

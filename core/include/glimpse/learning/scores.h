@@ -20,9 +20,10 @@ Eigen::VectorXd method_histogram(const ModelImpl& impl, MethodId method, const C
 std::vector<MethodId> fusion_head_methods(const ModelImpl& impl);
 Eigen::VectorXd fusion_head_features(const ModelImpl& impl, const std::function<Eigen::VectorXd(MethodId)>& histogram);
 // Per row (of category labels[i]), whether the logistic decision learns it: at most `per_category` rows of
-// each category, those of the smallest seeded hash of their place (every row when per_category <= 0).
-std::vector<uint8_t> fusion_head_learns(const std::vector<int>& labels, int categories, int per_category,
-                                        uint64_t seed);
+// each category, those of the smallest seeded hash of their key (CalibrationRows::keys; every row when
+// per_category <= 0).
+std::vector<uint8_t> fusion_head_learns(const std::vector<int>& labels, const std::vector<uint64_t>& keys,
+                                        int categories, int per_category, uint64_t seed);
 // The mapped features of every row of `histograms` (indexed by MethodId, rows aligned; `rows` empty: all),
 // rows shared among `threads` (<= 0: all).
 Eigen::MatrixXd fusion_head_rows(const ModelImpl& impl, const std::vector<Eigen::MatrixXd>& histograms,

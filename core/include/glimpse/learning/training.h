@@ -36,7 +36,12 @@ struct TrainingSample {
   std::optional<CloudFeatures> as_seen;
   bool augmented = false;  // TrainingCloud::augmented
 };
+// `start`: a model learnt from related rows (the base a model grows from, of the same parameters): the
+// logistic decisions' solvers (the model's, its calibration folds', its novelty model's) start at its
+// heads, by category name, and stop at the same tolerance in fewer steps; the model learnt is the one a
+// start from zero gives, to within that tolerance.
 Expected<Model> train_on_features(std::vector<TrainingSample> samples, const TrainParams& params,
-                                  const ProgressFn& progress = {}, const CancelFn& cancel = {});
+                                  const ProgressFn& progress = {}, const CancelFn& cancel = {},
+                                  const Model* start = nullptr);
 
 }  // namespace glimpse
