@@ -96,17 +96,17 @@ TEST(RunEvaluation, ReducedCrossSourceShrecToPsb) {
   // 114 test views, one is 0.9 points. Measured with the recipe's training sensors and the fusion's logistic
   // decision, the cameras' training views thinned to the model's one density: fusion 98.2 / 96.5 / 98.2
   // (full / 10 % / 20 %), size only 71.1 on full views (it learns the sensors' extents too); streams
-  // settle on 91.2 % of views, 98.1 % of them right.
+  // settle on 87.7 % of views, 99.0 % of them right.
   EXPECT_GE(full, 97.5);  // measured 98.2
   EXPECT_GE(p10, 95.5);   // measured 96.5
   EXPECT_GE(p20, 97.5);   // measured 98.2
   EXPECT_GT(full, size + 15);  // shape adds to what a ruler gets right
-  EXPECT_GE(settled.settled_percent(), 90.5);    // measured 91.2
+  EXPECT_GE(settled.settled_percent(), 87.0);    // measured 87.7
   // Settled as "unknown" counts wrong. Novelty comes from the novelty model (the cameras' views
   // augmented: PSB views look more novel to a model of SHREC's ideal views alone), and settling is
   // cautious both ways (fewer known views settle "unknown", and a category settles only on a novelty well
   // inside the threshold).
-  EXPECT_GE(settled.precision_percent(), 97.5);  // measured 98.1
+  EXPECT_GE(settled.precision_percent(), 98.0);  // measured 99.0
 }
 
 std::string psb_other_dir() {
