@@ -107,6 +107,29 @@ TEST(TrainingSet, AGrownModelStartsWhereItsBaseEndedAndDecidesAsAFullTraining) {
   }
 }
 
+// A grown model whose calibration cannot run (a category of one object) keeps no folds' heads: it keeps
+// only what it learnt, never its base's.
+TEST(TrainingSet, AGrownModelWithoutCalibrationKeepsNoFoldHeads) {
+  const std::vector<TrainingCloud> all = synthetic_views(4, 2, 7);
+  const TrainParams params = small_params();
+  auto base_set = training_set(of_categories(all, {"ball", "can"}), params);
+  ASSERT_TRUE(base_set.ok()) << base_set.error().message;
+  auto base_model = train(*base_set, params);
+  ASSERT_TRUE(base_model.ok()) << base_model.error().message;
+  ASSERT_FALSE(base_model->impl->fold_heads.empty());
+  std::vector<TrainingCloud> one_box;
+  for (const TrainingCloud& c : of_categories(all, {"box"}))
+    if (c.object_id == of_categories(all, {"box"}).front().object_id) one_box.push_back(c);
+  auto added_set = training_set(one_box, params, {}, {}, &*base_set);
+  ASSERT_TRUE(added_set.ok()) << added_set.error().message;
+  auto joined = join(std::move(*base_set), std::move(*added_set));
+  ASSERT_TRUE(joined.ok()) << joined.error().message;
+  auto grown = train(std::move(*joined), params, {}, {}, &*base_model);
+  ASSERT_TRUE(grown.ok()) << grown.error().message;
+  EXPECT_EQ(grown->categories.size(), 3u);
+  EXPECT_TRUE(grown->impl->fold_heads.empty());
+}
+
 TEST(TrainingSet, BytesReadBackToTheSameModel) {
   const std::vector<TrainingCloud> data = synthetic_views(3, 2, 11);
   const TrainParams params = small_params();

@@ -361,7 +361,10 @@ Calibration calibrate(const ModelImpl& impl, MethodId method, const CalibrationR
   Calibration c;
   c.method = method;
   const int folds = p.calibration_folds;
-  if (folds < 2 || !two_objects_per_category(rows.object_categories)) return c;
+  if (folds < 2 || !two_objects_per_category(rows.object_categories)) {
+    if (fold_heads) fold_heads->clear();  // no fold learns a head
+    return c;
+  }
   InnerFolds in{impl, rows};
   in.object_fold = calibration_folds(rows.object_categories, folds, p.seed + 101);
   in.parts = component_methods(impl, method);
