@@ -229,6 +229,15 @@ Status choose_methods(Model& model, const ModelImpl& impl, const TrainParams& pa
   return {};
 }
 
+// Each of `folds` (heads over `from` categories) with its rows for `to`, a category `from` lacks at `others`'
+// row (head_for_categories).
+std::vector<Chi2Logistic> folds_for_categories(const std::vector<Chi2Logistic>& folds, const std::vector<std::string>& from,
+                                               const std::vector<std::string>& to, const Chi2Logistic& others) {
+  std::vector<Chi2Logistic> out;
+  for (const Chi2Logistic& fold : folds) out.push_back(head_for_categories(fold, from, to, &others));
+  return out;
+}
+
 // Whether `start` has a logistic decision over `features` mapped features to start from.
 bool can_start_from(const Model* start, Eigen::Index features) {
   return start && start->impl && start->impl->fusion_head && start->impl->fusion_head->weights.cols() == features;
@@ -260,8 +269,7 @@ Status fit_fusion_head(ModelImpl& impl, const Model& model, const CalibrationRow
   // calibration keeps what the folds learn.
   impl.fold_heads.clear();
   if (started)
-    for (const Chi2Logistic& fold : start->impl->fold_heads)
-      impl.fold_heads.push_back(head_for_categories(fold, start->categories, model.categories, &*impl.fusion_head));
+    impl.fold_heads = folds_for_categories(start->impl->fold_heads, start->categories, model.categories, *impl.fusion_head);
   return {};
 }
 
@@ -307,8 +315,7 @@ Status learn_novelty_apart(ModelImpl& impl, const Model& model, const Calibratio
     const ModelImpl& base = *start->impl->novelty;
     auto from = std::make_shared<ModelImpl>();
     from->fusion_head = head_for_categories(*base.fusion_head, start->categories, model.categories, &*impl.fusion_head);
-    for (const Chi2Logistic& fold : base.fold_heads)
-      from->fold_heads.push_back(head_for_categories(fold, start->categories, model.categories, &*impl.fusion_head));
+    from->fold_heads = folds_for_categories(base.fold_heads, start->categories, model.categories, *impl.fusion_head);
     novelty_start.categories = model.categories;
     novelty_start.impl = std::move(from);
   }
