@@ -1,4 +1,4 @@
-// Model bytes of formats 3 to 12 made from a format-13 model (of no augmented cloud for 7 and older), for tests and benchmarks of models
+// Model bytes of formats 3 to 13 made from a format-14 model (of no augmented cloud for 7 and older), for tests and benchmarks of models
 // written before novelty existed ("none of these"; format 3 has no novelty block), before novelty was
 // divided by the decision's score (format 4 lacks that byte), before it was measured over several
 // training objects (format 5 lacks the reference objects that end the payload), before it joined the
@@ -84,6 +84,43 @@ inline std::vector<uint8_t> as_format_11(std::vector<uint8_t> bytes, const Model
   return with_version(std::move(bytes), 11, payload);
 }
 
+// Format 13 is format 14 with every decision stage's references (the model's and its novelty model's) as
+// binary32 and without the byte before them that gives their precision: each binary16 block found by its
+// values (they are binary16 already) and widened. Empty when a block is not found.
+inline std::vector<uint8_t> as_format_13(std::vector<uint8_t> bytes, const Model& model) {
+  if (bytes.size() < 24 || !model.impl) return {};
+  auto block = [](const Eigen::MatrixXd& m, bool binary16) {
+    std::vector<uint8_t> out;
+    auto put = [&out](uint64_t v, size_t n) {
+      for (size_t i = 0; i < n; ++i) out.push_back(static_cast<uint8_t>(v >> (8 * i)));
+    };
+    if (binary16) put(2, 1);
+    put(static_cast<uint64_t>(m.rows()), 4);
+    put(static_cast<uint64_t>(m.cols()), 4);
+    for (Eigen::Index r = 0; r < m.rows(); ++r)
+      for (Eigen::Index c = 0; c < m.cols(); ++c) {
+        const float v = static_cast<float>(m(r, c));
+        if (binary16) put(Eigen::numext::bit_cast<uint16_t>(static_cast<Eigen::half>(v)), 2);
+        else put(std::bit_cast<uint32_t>(v), 4);
+      }
+    return out;
+  };
+  std::vector<const ModelImpl*> impls = {model.impl.get()};
+  if (model.impl->novelty) impls.push_back(model.impl->novelty.get());
+  for (const ModelImpl* impl : impls)
+    for (const auto& stage : impl->stages) {
+      if (!stage) continue;
+      const std::vector<uint8_t> narrow = block(stage->references, true), wide = block(stage->references, false);
+      const auto at = std::search(bytes.begin() + 20, bytes.end() - 4, narrow.begin(), narrow.end());
+      if (at == bytes.end() - 4) return {};
+      const auto pos = at - bytes.begin();
+      bytes.erase(bytes.begin() + pos, bytes.begin() + pos + static_cast<std::ptrdiff_t>(narrow.size()));
+      bytes.insert(bytes.begin() + pos, wide.begin(), wide.end());
+    }
+  const size_t payload = bytes.size() - 24;
+  return with_version(std::move(bytes), 13, payload);
+}
+
 // Format 12 is format 13 without the calibration folds' heads that end the payload (the model's, then its
 // novelty model's: a u32 count and per head its binary32 weights and binary64 biases).
 inline std::vector<uint8_t> as_format_12(std::vector<uint8_t> bytes, const Model& model) {
@@ -102,8 +139,9 @@ inline std::vector<uint8_t> as_format_12(std::vector<uint8_t> bytes, const Model
   return with_version(std::move(bytes), 12, payload - cut);
 }
 
-// A format-13 model's bytes as format 12 and 11 wrote them.
-inline std::vector<uint8_t> format_12_bytes(const Model& model) { return as_format_12(serialize(model), model); }
+// A format-14 model's bytes as formats 13, 12 and 11 wrote them.
+inline std::vector<uint8_t> format_13_bytes(const Model& model) { return as_format_13(serialize(model), model); }
+inline std::vector<uint8_t> format_12_bytes(const Model& model) { return as_format_12(format_13_bytes(model), model); }
 inline std::vector<uint8_t> format_11_bytes(const Model& model) { return as_format_11(format_12_bytes(model), model); }
 
 // Format 10 is format 11 without the probability temperature and settle probability (two f64) that end

@@ -96,6 +96,62 @@ TEST(Serialize, ReferencesAreBinary32AndAFormat11ModelReadsAlike) {
   }
 }
 
+// Format 14 stores the decision stages' references as binary16, the precision training keeps them at: a
+// model of format 13 (binary32 references) reads and decides alike, and takes about twice the bytes.
+TEST(Serialize, ReferencesAreBinary16AndAFormat13ModelReadsAlike) {
+  const Trained& t = trained();
+  const std::vector<uint8_t> fourteen = serialize(t.model), thirteen = test::format_13_bytes(t.model);
+  ASSERT_FALSE(thirteen.empty());
+  size_t references = 0, stages = 0;
+  for (const auto& stage : t.model.impl->stages)
+    if (stage) {
+      ++stages;
+      references += static_cast<size_t>(stage->references.size());
+      EXPECT_TRUE(is_binary16(stage->references));
+      EXPECT_GT(stage->references.cwiseAbs().maxCoeff(), 0.0);
+    }
+  ASSERT_GT(stages, 0u);
+  if (t.model.impl->novelty)
+    for (const auto& stage : t.model.impl->novelty->stages)
+      if (stage) ++stages, references += static_cast<size_t>(stage->references.size());
+  EXPECT_EQ(thirteen.size(), fourteen.size() + 2 * references - stages);
+  auto old = deserialize(thirteen);
+  ASSERT_TRUE(old.ok()) << old.error().message;
+  EXPECT_EQ(serialize(*old), fourteen);  // read as binary32, written again as binary16: the same bytes
+  for (size_t i = 0; i < 4; ++i) {
+    auto a = classify(t.model, t.test[i * 5].cloud), b = classify(*old, t.test[i * 5].cloud);
+    ASSERT_TRUE(a.ok() && b.ok());
+    EXPECT_EQ(a->scores, b->scores);
+  }
+}
+
+// References beyond binary16's range are kept, and stored, at binary32.
+TEST(Serialize, ReferencesBeyondBinary16KeepBinary32) {
+  Eigen::MatrixXd big(2, 2);
+  big << 0.1, -70000.25, 3.0, 1e-3;
+  const Eigen::MatrixXd kept = stored_precision(big);
+  EXPECT_EQ(kept, big.cast<float>().cast<double>().eval());
+  EXPECT_FALSE(is_binary16(kept));
+  Eigen::MatrixXd small = big;
+  small(0, 1) = -700.25;
+  EXPECT_TRUE(is_binary16(stored_precision(small)));
+  EXPECT_NE(stored_precision(small)(0, 0), 0.1);  // 0.1 has no binary16 value
+  EXPECT_NEAR(stored_precision(small)(0, 0), 0.1, 1e-4);
+  // A model whose stage holds such a value stores that stage at binary32 and reads it back whole.
+  Model copy = trained().model;
+  auto impl = std::make_shared<ModelImpl>(*copy.impl);
+  DecisionStage* stage = nullptr;
+  for (auto& s : impl->stages)
+    if (s && !stage) stage = &*s;
+  ASSERT_NE(stage, nullptr);
+  stage->references(0, 0) = -70000.25;
+  copy.impl = impl;
+  auto back = deserialize(serialize(copy));
+  ASSERT_TRUE(back.ok()) << back.error().message;
+  for (size_t m = 0; m < copy.impl->stages.size(); ++m)
+    if (copy.impl->stages[m]) EXPECT_EQ(back->impl->stages[m]->references, copy.impl->stages[m]->references) << m;
+}
+
 // The calibration folds' heads (where a grown model starts) come back from the bytes as binary32; a
 // format-12 model reads without them and decides alike.
 TEST(Serialize, TheFoldHeadsComeBackAndAFormat12ModelReadsWithoutThem) {

@@ -206,9 +206,9 @@ Expected<DecisionStage> fit_decision(const Eigen::MatrixXd& histograms, const st
   st.categories = categories;
   st.neighbours = std::max(1, params.neighbours);
   if (Status s = fit_projection(st, histograms, params, threads); !s.ok()) return s.error();
-  // Training vectors at binary32 precision, as a model stores its references (format 12): the model
-  // trained and the model read back decide alike, and the temperature is of the references stored.
-  const Eigen::MatrixXd y = project(st.pca, histograms, threads).cast<float>().cast<double>();
+  // Training vectors at the precision a model stores its references: the model trained and the model
+  // read back decide alike, and the temperature is of the references stored.
+  const Eigen::MatrixXd y = stored_precision(project(st.pca, histograms, threads));
   std::vector<double> scale;
   if (params.kind == DecisionRule::kNearestNeighbours || params.kind == DecisionRule::kNearestReference) {
     st.references = y;
@@ -218,8 +218,23 @@ Expected<DecisionStage> fit_decision(const Eigen::MatrixXd& histograms, const st
     scale = category_centres(st, y, labels, per_category, params, seed, threads);
   }
   st.temperature = std::max(median(scale), 1e-9);
-  st.references = st.references.cast<float>().cast<double>();  // centres too (training vectors already are)
+  st.references = stored_precision(st.references);  // centres too (training vectors already are)
   return st;
+}
+
+Eigen::MatrixXd stored_precision(const Eigen::MatrixXd& references) {
+  constexpr double kLargestBinary16 = 65504;
+  const bool fits = references.allFinite() && (references.size() == 0 || references.cwiseAbs().maxCoeff() <= kLargestBinary16);
+  if (!fits) return references.cast<float>().cast<double>();
+  return references.cast<float>().cast<Eigen::half>().cast<float>().cast<double>();
+}
+
+bool is_binary16(const Eigen::MatrixXd& m) {
+  for (Eigen::Index i = 0; i < m.size(); ++i) {
+    const float v = static_cast<float>(m.data()[i]);
+    if (!std::isfinite(v) || static_cast<float>(static_cast<Eigen::half>(v)) != v) return false;
+  }
+  return true;
 }
 
 bool is_identity_projection(const Pca& pca) {

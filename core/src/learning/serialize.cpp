@@ -50,7 +50,9 @@ constexpr char kMagic[8] = {'G', 'L', 'M', 'P', 'S', 'M', 'D', 'L'};
 // 13: at the payload's end, the calibration folds' heads (ModelImpl::fold_heads) of the model and of its
 // novelty model, each a u32 count and the heads (binary32 weights, binary64 biases): where a model grown
 // from it starts; format 12 and older read none.
-constexpr uint32_t kFormatVersion = 13;
+// 14: a decision stage's references are preceded by a u8, the bytes of each value: 2 (binary16, the
+// precision fit_decision keeps them at when they fit) or 4 (binary32); formats 12 and 13 read binary32.
+constexpr uint32_t kFormatVersion = 14;
 constexpr uint32_t kOldestReadableVersion = 1;
 
 

@@ -44,12 +44,22 @@ class Writer {
       for (Eigen::Index c = 0; c < m.cols(); ++c) f64(m(r, c));
   }
   // The same layout with binary32 values: for a matrix whose values are binary32 already (a decision
-  // stage's references), so nothing is lost, or where binary32 is enough (a solver's start).
+  // stage's references that do not fit binary16), so nothing is lost, or where binary32 is enough (a
+  // solver's start).
   void mat32(const Eigen::MatrixXd& m) {
     u32(static_cast<uint32_t>(m.rows()));
     u32(static_cast<uint32_t>(m.cols()));
     for (Eigen::Index r = 0; r < m.rows(); ++r)
       for (Eigen::Index c = 0; c < m.cols(); ++c) uint(std::bit_cast<uint32_t>(static_cast<float>(m(r, c))));
+  }
+  // The same layout with binary16 values, for a matrix whose values are binary16 already (a decision
+  // stage's references, format 14 on): nothing is lost.
+  void mat16(const Eigen::MatrixXd& m) {
+    u32(static_cast<uint32_t>(m.rows()));
+    u32(static_cast<uint32_t>(m.cols()));
+    for (Eigen::Index r = 0; r < m.rows(); ++r)
+      for (Eigen::Index c = 0; c < m.cols(); ++c)
+        uint(Eigen::numext::bit_cast<uint16_t>(static_cast<Eigen::half>(static_cast<float>(m(r, c)))));
   }
 };
 
@@ -82,6 +92,7 @@ class Reader {
   uint64_t u64(const char* w) { return uint<uint64_t>(w); }
   double f64(const char* w) { return std::bit_cast<double>(uint<uint64_t>(w)); }
   double f32(const char* w) { return std::bit_cast<float>(uint<uint32_t>(w)); }
+  double f16(const char* w) { return static_cast<float>(Eigen::numext::bit_cast<Eigen::half>(uint<uint16_t>(w))); }
   std::string str(const char* what) {
     const uint32_t n = u32(what);
     if (!need(n, what)) return {};
@@ -96,9 +107,9 @@ class Reader {
     for (uint32_t i = 0; i < n; ++i) v[i] = f64(what);
     return v;
   }
-  // A matrix of binary64 values (mat) or of binary32 ones (mat32, binary32 = true).
-  Eigen::MatrixXd mat(const char* what, bool binary32 = false) {
-    const uint64_t rows = u32(what), cols = u32(what), bytes = binary32 ? 4 : 8;
+  // A matrix of binary64 values (mat), binary32 ones (mat32, bytes 4) or binary16 ones (mat16, bytes 2).
+  Eigen::MatrixXd mat(const char* what, int value_bytes = 8) {
+    const uint64_t rows = u32(what), cols = u32(what), bytes = static_cast<uint64_t>(value_bytes);
     if (cols && rows > left() / bytes / cols) {
       fail(std::string("truncated while reading ") + what);
       return {};
@@ -107,7 +118,8 @@ class Reader {
     Eigen::MatrixXd m(static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(cols));
     for (uint64_t r = 0; r < rows; ++r)
       for (uint64_t c = 0; c < cols; ++c)
-        m(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = binary32 ? f32(what) : f64(what);
+        m(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) =
+            bytes == 2 ? f16(what) : bytes == 4 ? f32(what) : f64(what);
     return m;
   }
 

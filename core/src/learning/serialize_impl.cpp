@@ -61,7 +61,12 @@ void write_stage(Writer& w, const DecisionStage& s) {
   w.i32(s.categories);
   w.i32(s.neighbours);
   write_pca(w, s.pca);
-  w.mat32(s.references);  // binary32 values (fit_decision), format 12 on
+  // Format 14 on: a u8, the bytes of a value (2: binary16, fit_decision's precision; 4: binary32), then
+  // the values (binary32 when they are not binary16 ones, as formats 12 and 13 stored every stage).
+  const bool narrow = is_binary16(s.references);
+  w.u8(narrow ? 2 : 4);
+  if (narrow) w.mat16(s.references);
+  else w.mat32(s.references);
   w.u32(static_cast<uint32_t>(s.labels.size()));
   for (int l : s.labels) w.i32(l);
   w.f64(s.temperature);
@@ -74,7 +79,9 @@ DecisionStage read_stage(Reader& r, int categories, Eigen::Index histogram_size,
   s.categories = r.i32("decision categories");
   s.neighbours = r.i32("decision neighbours");
   s.pca = read_pca(r);
-  s.references = r.mat("decision references", version >= 12);
+  const int value_bytes = version >= 14 ? r.u8("decision reference precision") : version >= 12 ? 4 : 8;
+  if (value_bytes != 2 && value_bytes != 4 && value_bytes != 8) r.fail("unknown decision reference precision");
+  s.references = r.mat("decision references", r.failed() ? 8 : value_bytes);
   const uint32_t n = r.u32("decision labels");
   if (n != s.references.rows()) r.fail("decision labels do not match references");
   for (uint32_t i = 0; i < n && !r.failed(); ++i) {
@@ -202,7 +209,7 @@ void read_fold_heads(Reader& r, ModelImpl& impl) {
     Chi2Logistic fold;
     fold.sample_steps = impl.fusion_head->sample_steps;
     fold.sample_interval = impl.fusion_head->sample_interval;
-    fold.weights = r.mat("fold head weights", true);
+    fold.weights = r.mat("fold head weights", 4);
     fold.bias = r.vec("fold head bias");
     if (!r.failed() && (fold.weights.rows() != impl.fusion_head->weights.rows() ||
                         fold.weights.cols() != impl.fusion_head->weights.cols() ||

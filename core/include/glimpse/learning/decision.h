@@ -18,13 +18,19 @@ struct DecisionStage {
   int categories = 0;
   int neighbours = 5;
   Pca pca;                     // of the training histograms
-  Eigen::MatrixXd references;  // centres or training vectors, in PCA space (rows), binary32 values
+  Eigen::MatrixXd references;  // centres or training vectors, in PCA space (rows), binary16 values (stored_precision)
   std::vector<int> labels;     // category of each reference
   double temperature = 1;      // L1 distance scale turning distances into scores (see fit_decision)
   bool projected = true;       // false: no PCA (the identity), references are histograms
 };
 // True when the stage's PCA is the identity (fit_decision without PCA; checked once on a read model).
 bool is_identity_projection(const Pca& pca);
+// A stage's references at the precision a model stores them: binary16 when every value is finite and within
+// its range, else binary32 (fit_decision's references, so a model read back decides as the one trained).
+Eigen::MatrixXd stored_precision(const Eigen::MatrixXd& references);
+// Whether every value, at binary32, is a binary16 value: a model stores such references in 2 bytes a value
+// and loses nothing its binary32 storage would keep.
+bool is_binary16(const Eigen::MatrixXd& m);
 
 // `labels` in [0, categories); every category must have at least one row. `groups` (optional, one per
 // row): the training object of each row. The score temperature is the median distance from a training
