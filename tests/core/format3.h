@@ -49,76 +49,58 @@ inline std::vector<uint8_t> without_parameter(std::vector<uint8_t> bytes, const 
   return with_version(std::move(bytes), version, payload);
 }
 
-// Format 11 is format 12 with every decision stage's references (the model's and its novelty model's)
-// as binary64: each binary32 block found by its values (they are binary32 already) and widened. Empty when
-// a block is not found.
-inline std::vector<uint8_t> as_format_11(std::vector<uint8_t> bytes, const Model& model) {
-  if (bytes.size() < 24 || !model.impl) return {};
-  auto block = [](const Eigen::MatrixXd& m, bool binary32) {
-    std::vector<uint8_t> out;
-    auto put = [&out](uint64_t v, size_t n) {
-      for (size_t i = 0; i < n; ++i) out.push_back(static_cast<uint8_t>(v >> (8 * i)));
-    };
-    put(static_cast<uint64_t>(m.rows()), 4);
-    put(static_cast<uint64_t>(m.cols()), 4);
-    for (Eigen::Index r = 0; r < m.rows(); ++r)
-      for (Eigen::Index c = 0; c < m.cols(); ++c) {
-        if (binary32) put(std::bit_cast<uint32_t>(static_cast<float>(m(r, c))), 4);
-        else put(std::bit_cast<uint64_t>(m(r, c)), 8);
-      }
-    return out;
+// A stage's references as a block of the model's bytes: u32 rows, u32 cols, then the values of `bytes`
+// bytes each (8, 4 or 2), after a u8 giving that width when `width_byte`.
+inline std::vector<uint8_t> reference_block(const Eigen::MatrixXd& m, int bytes, bool width_byte) {
+  std::vector<uint8_t> out;
+  auto put = [&out](uint64_t v, size_t n) {
+    for (size_t i = 0; i < n; ++i) out.push_back(static_cast<uint8_t>(v >> (8 * i)));
   };
-  std::vector<const ModelImpl*> impls = {model.impl.get()};
-  if (model.impl->novelty) impls.push_back(model.impl->novelty.get());
-  for (const ModelImpl* impl : impls)
-    for (const auto& stage : impl->stages) {
-      if (!stage) continue;
-      const std::vector<uint8_t> narrow = block(stage->references, true), wide = block(stage->references, false);
-      const auto at = std::search(bytes.begin() + 20, bytes.end() - 4, narrow.begin(), narrow.end());
-      if (at == bytes.end() - 4) return {};
-      const auto pos = at - bytes.begin();
-      bytes.erase(bytes.begin() + pos, bytes.begin() + pos + static_cast<std::ptrdiff_t>(narrow.size()));
-      bytes.insert(bytes.begin() + pos, wide.begin(), wide.end());
+  if (width_byte) put(static_cast<uint64_t>(bytes), 1);
+  put(static_cast<uint64_t>(m.rows()), 4);
+  put(static_cast<uint64_t>(m.cols()), 4);
+  for (Eigen::Index r = 0; r < m.rows(); ++r)
+    for (Eigen::Index c = 0; c < m.cols(); ++c) {
+      const float v = static_cast<float>(m(r, c));
+      if (bytes == 2) put(Eigen::numext::bit_cast<uint16_t>(static_cast<Eigen::half>(v)), 2);
+      else if (bytes == 4) put(std::bit_cast<uint32_t>(v), 4);
+      else put(std::bit_cast<uint64_t>(m(r, c)), 8);
     }
-  const size_t payload = bytes.size() - 24;
-  return with_version(std::move(bytes), 11, payload);
+  return out;
 }
 
-// Format 13 is format 14 with every decision stage's references (the model's and its novelty model's) as
-// binary32 and without the byte before them that gives their precision: each binary16 block found by its
-// values (they are binary16 already) and widened. Empty when a block is not found.
-inline std::vector<uint8_t> as_format_13(std::vector<uint8_t> bytes, const Model& model) {
+// The bytes with every decision stage's reference block (the model's and its novelty model's) found by its
+// values as `narrow` (reference_block) and written again as `wide`, framed as `version`. Empty when a block
+// is not found.
+inline std::vector<uint8_t> widen_references(std::vector<uint8_t> bytes, const Model& model, uint32_t version,
+                                             int narrow, bool narrow_width_byte, int wide) {
   if (bytes.size() < 24 || !model.impl) return {};
-  auto block = [](const Eigen::MatrixXd& m, bool binary16) {
-    std::vector<uint8_t> out;
-    auto put = [&out](uint64_t v, size_t n) {
-      for (size_t i = 0; i < n; ++i) out.push_back(static_cast<uint8_t>(v >> (8 * i)));
-    };
-    if (binary16) put(2, 1);
-    put(static_cast<uint64_t>(m.rows()), 4);
-    put(static_cast<uint64_t>(m.cols()), 4);
-    for (Eigen::Index r = 0; r < m.rows(); ++r)
-      for (Eigen::Index c = 0; c < m.cols(); ++c) {
-        const float v = static_cast<float>(m(r, c));
-        if (binary16) put(Eigen::numext::bit_cast<uint16_t>(static_cast<Eigen::half>(v)), 2);
-        else put(std::bit_cast<uint32_t>(v), 4);
-      }
-    return out;
-  };
   std::vector<const ModelImpl*> impls = {model.impl.get()};
   if (model.impl->novelty) impls.push_back(model.impl->novelty.get());
   for (const ModelImpl* impl : impls)
     for (const auto& stage : impl->stages) {
       if (!stage) continue;
-      const std::vector<uint8_t> narrow = block(stage->references, true), wide = block(stage->references, false);
-      const auto at = std::search(bytes.begin() + 20, bytes.end() - 4, narrow.begin(), narrow.end());
+      const std::vector<uint8_t> from = reference_block(stage->references, narrow, narrow_width_byte),
+                                 to = reference_block(stage->references, wide, false);
+      const auto at = std::search(bytes.begin() + 20, bytes.end() - 4, from.begin(), from.end());
       if (at == bytes.end() - 4) return {};
       const auto pos = at - bytes.begin();
-      bytes.erase(bytes.begin() + pos, bytes.begin() + pos + static_cast<std::ptrdiff_t>(narrow.size()));
-      bytes.insert(bytes.begin() + pos, wide.begin(), wide.end());
+      bytes.erase(bytes.begin() + pos, bytes.begin() + pos + static_cast<std::ptrdiff_t>(from.size()));
+      bytes.insert(bytes.begin() + pos, to.begin(), to.end());
     }
   const size_t payload = bytes.size() - 24;
-  return with_version(std::move(bytes), 13, payload);
+  return with_version(std::move(bytes), version, payload);
+}
+
+// Format 13 is format 14 with every decision stage's references as binary32, without the byte before them
+// that gives their precision.
+inline std::vector<uint8_t> as_format_13(std::vector<uint8_t> bytes, const Model& model) {
+  return widen_references(std::move(bytes), model, 13, 2, true, 4);
+}
+
+// Format 11 is format 12 with every decision stage's references as binary64.
+inline std::vector<uint8_t> as_format_11(std::vector<uint8_t> bytes, const Model& model) {
+  return widen_references(std::move(bytes), model, 11, 4, false, 8);
 }
 
 // Format 12 is format 13 without the calibration folds' heads that end the payload (the model's, then its
