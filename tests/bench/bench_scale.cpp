@@ -20,6 +20,7 @@
 #include "glimpse/learning/train_params.h"
 #include "glimpse/views/zoo.h"
 #include "median_reporter.h"
+#include "zoo_recipe.h"
 #include "scene.h"
 
 namespace glimpse {
@@ -34,8 +35,7 @@ std::vector<TrainingCloud> grouped_zoo(size_t per_category, size_t groups) {
   std::vector<TrainingCloud> out;
   std::map<std::string, size_t> seen;
   for (const LabelledMesh& object : make_zoo(per_category, 42)) {
-    const size_t index = seen[object.category]++;
-    const std::string category = groups > 1 ? object.category + "." + std::to_string(index % groups) : object.category;
+    const std::string category = bench::grouped_category(object.category, seen[object.category]++, groups);
     const std::string key = object.category + "/" + object.id;
     const ObjectViews views = training_views(object.mesh, key, object.any_pose, recipe, kZooDensity);
     for (const Cloud& view : views.views)
