@@ -188,6 +188,9 @@ void add_scene_flags(CLI::App* cmd, ScenesOptions& o) {
   cmd->add_option("--scenes", s.scenes, "scenes to make")->capture_default_str();
   cmd->add_option("--min-objects", s.layout.min_objects, "objects per scene, at least")->capture_default_str();
   cmd->add_option("--max-objects", s.layout.max_objects, "objects per scene, at most")->capture_default_str();
+  cmd->add_option("--camera-width", s.layout.camera.width, "the depth camera's image width in pixels (57 degrees)")->capture_default_str();
+  cmd->add_option("--camera-height", s.layout.camera.height, "the depth camera's image height in pixels (43 degrees)")
+      ->capture_default_str();
   cmd->add_option("--min-visible", s.min_visible, "objects less visible (of what the camera sees of them alone) are not counted")
       ->capture_default_str();
   cmd->add_option("--min-iou", s.min_iou, "a detection matches a true object at this 3-D box IoU")->capture_default_str();
