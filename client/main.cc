@@ -276,7 +276,7 @@ void AddScene(CLI::App& app, CommandLine& cl) {
                                     "metres: points closer than this are one object (server default 0.03)")
       ->check(CLI::Range(0.001f, 1.f))->group("Segmentation");
   scene->add_option_function<uint32_t>("--min-object-points", [&s](const uint32_t& n) { s.min_object_points = n; },
-                                       "fewer points: noise, not an object (server default 1000, for a 640 x 480 frame)")
+                                       "fewer points: noise, not an object (server default 1000 for a 640 x 480 frame, fewer for a sparser one)")
       ->check(CLI::Range(1u, 1000000u))->group("Segmentation");
   scene->add_option_function<float>("--max-object-size", [&s](const float& m) { s.max_object_extent_m = m; },
                                      "metres: a longer box is a wall's remnant, not an object (server default 4)")

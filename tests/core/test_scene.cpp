@@ -190,9 +190,55 @@ TEST(SegmentScene, KeepsTheNearestObjectsAndDropsSmallOnes) {
   for (const SceneObject& o : all->objects) smallest = std::min(smallest, o.indices.size());
   params = SceneParams{};
   params.min_object_points = smallest + 1;
+  params.reference_density_per_deg2 = 0;  // the threshold as given, not scaled to the 320 x 240 frame
   Expected<Scene> fewer = segment_scene(s.frame, params);
   ASSERT_TRUE(fewer.ok());
   EXPECT_EQ(fewer->objects.size(), all->objects.size() - 1);
+}
+
+// A frame's objects need points in proportion to its density: the same room at 640 x 480 and 320 x 240
+// gives the same objects with the default parameters; 320 x 240 with the counts of 640 x 480 as given loses
+// the smaller ones.
+TEST(SegmentScene, ASparserFrameAsksItsObjectsForFewerPoints) {
+  const std::vector<SceneShape> shapes = {{SceneShape::kBox, Vec3(-0.5f, 2.0f, 0), Vec3(0.2f, 0.2f, 0.3f)},
+                                          {SceneShape::kCylinder, Vec3(0.3f, 1.8f, 0), Vec3(0.08f, 0, 0.25f)},
+                                          {SceneShape::kSphere, Vec3(0.9f, 2.3f, 0), Vec3(0.1f, 0, 0)}};
+  const test::Room room{2.f, 3.f, 1.5f};
+  const SyntheticScene full = test::render_scene(room, shapes, Vec3(0, 0, 1.3f), Vec3(0.2f, 2.f, 0), 640, 480);
+  const SyntheticScene quarter = test::render_scene(room, shapes, Vec3(0, 0, 1.3f), Vec3(0.2f, 2.f, 0), 320, 240);
+  Expected<Scene> a = segment_scene(full.frame), b = segment_scene(quarter.frame);
+  ASSERT_TRUE(a.ok() && b.ok());
+  EXPECT_GT(a->density_per_deg2, 100);  // 640 x 480 over 57 x 43 degrees: about 109 on the axis
+  EXPECT_LT(a->density_per_deg2, 140);
+  EXPECT_NEAR(b->density_per_deg2, a->density_per_deg2 / 4, 0.1 * a->density_per_deg2);
+  EXPECT_EQ(a->min_object_points, 1000u);
+  EXPECT_NEAR(double(b->min_object_points), 1000 * b->density_per_deg2 / 80, 1);
+  expect_objects_match(*a, full.truth, 0.03f);
+  expect_objects_match(*b, quarter.truth, 0.03f);
+  SceneParams as_given;
+  as_given.reference_density_per_deg2 = 0;
+  Expected<Scene> c = segment_scene(quarter.frame, as_given);
+  ASSERT_TRUE(c.ok());
+  EXPECT_EQ(c->min_object_points, 1000u);
+  EXPECT_LT(c->objects.size(), quarter.truth.size());
+}
+
+// Below the reference density the object's points scale with the density and the clustering's range term
+// with the points' spacing; the 3 cm that parts objects stays; at or above it nothing changes.
+TEST(SegmentScene, AtDensityScalesCountsAndTheRangeTermBelowTheReference) {
+  SceneParams p;
+  const SceneParams kinect = at_density(p, 84);
+  EXPECT_EQ(kinect.min_object_points, p.min_object_points);
+  EXPECT_EQ(kinect.cluster_tolerance_per_m2, p.cluster_tolerance_per_m2);
+  const SceneParams quarter = at_density(p, p.reference_density_per_deg2 / 4);
+  EXPECT_EQ(quarter.min_object_points, p.min_object_points / 4);
+  EXPECT_FLOAT_EQ(quarter.cluster_tolerance_per_m2, 2 * p.cluster_tolerance_per_m2);
+  EXPECT_EQ(quarter.cluster_tolerance_m, p.cluster_tolerance_m);
+  EXPECT_EQ(at_density(p, 0.5).min_object_points, 20u);  // never below 20
+  p.min_object_points = 5;
+  EXPECT_EQ(at_density(p, 1).min_object_points, 5u);      // nor above what was asked
+  p.reference_density_per_deg2 = 0;
+  EXPECT_EQ(at_density(p, 10).min_object_points, 5u);     // off: as given
 }
 
 TEST(SegmentScene, EmptyFramesAndBadParameters) {
@@ -321,6 +367,9 @@ TEST(SegmentScene, RealDeskFramesPartTheLaptopFromTheBox) {
       const Cloud frame = level ? levelled(*read) : *read;
       Expected<Scene> scene = segment_scene(frame);
       ASSERT_TRUE(scene.ok()) << scene.error().message;
+      // A real 640 x 480 Kinect's frame (about 84 points per square degree) keeps the default counts.
+      EXPECT_GE(scene->density_per_deg2, SceneParams{}.reference_density_per_deg2);
+      EXPECT_EQ(scene->min_object_points, SceneParams{}.min_object_points);
       const std::vector<Standing> on_desk = standing_on(*scene, level ? Vec3::UnitZ() : desk_up);
       print_scene(level ? name + ", levelled" : name, *scene, on_desk);
       // The desk's front holds the laptop (open, its screen up to ~0.22 m above the desk) and the box

@@ -27,14 +27,8 @@ SyntheticScene camera_frame(const std::vector<SceneShape>& shapes, const Vec3& s
   return s;
 }
 
-// The frames are a quarter of a 640 x 480 camera's pixels: objects a quarter of the points.
-TrackParams quarter_frames() {
-  TrackParams p;
-  p.scene.min_object_points /= 4;
-  return p;
-}
-
-SceneTracker make_tracker(const TrackTarget& target, const TrackParams& params = quarter_frames()) {
+// The frames are 320 x 240, with the default parameters: segment_scene asks their objects for fewer points.
+SceneTracker make_tracker(const TrackTarget& target, const TrackParams& params = {}) {
   Expected<SceneTracker> tracker = SceneTracker::create(target, params);
   if (!tracker.ok()) {
     ADD_FAILURE() << tracker.error().message;
@@ -119,9 +113,9 @@ const std::vector<SceneShape> kGroup = {{SceneShape::kCylinder, Vec3(0, 1.8f, 0)
 // box alone (no object ever shares enough cells).
 TEST(SceneTracker, FollowsTheTargetRoundTheGroupNeverANeighbour) {
   const Vec3 centre(0.125f, 1.8f, 0.15f);
-  TrackParams box_only = quarter_frames();
+  TrackParams box_only;
   box_only.min_shared_cells = std::numeric_limits<size_t>::max();
-  for (const TrackParams& params : {quarter_frames(), box_only}) {
+  for (const TrackParams& params : {TrackParams{}, box_only}) {
     SCOPED_TRACE(params.min_shared_cells == box_only.min_shared_cells ? "by the seen box" : "by the seen surface");
     SceneTracker tracker = make_tracker(point_target(Vec3(0, 1.8f, 0.2f)), params);
     constexpr int kFrames = 10;

@@ -69,11 +69,11 @@ StreamResult Stream(v1::Glimpse::Stub& stub, std::vector<v1::ScanChunk> chunks) 
   return out;
 }
 
-// The first chunk of a tracking stream of `frame`: the model, quarter-frame objects, the cylinder's point.
+// The first chunk of a tracking stream of `frame`: the model and the cylinder's point (a 320 x 240 frame's
+// objects need fewer points: segment_scene scales its threshold to the frame's density).
 v1::ScanChunk TrackingFirst(const Cloud& frame) {
   v1::ScanChunk c = Chunk(frame);
   c.mutable_model()->set_name("shapes");
-  c.mutable_scene()->set_min_object_points(250);  // a quarter of a 640 x 480 frame's pixels
   c.mutable_track()->mutable_point()->set_x(kCylinder.x());
   c.mutable_track()->mutable_point()->set_y(kCylinder.y());
   c.mutable_track()->mutable_point()->set_z(kCylinder.z());
@@ -107,7 +107,6 @@ TEST_F(TrackStreamTest, FollowsTheTargetAmongOthersAndDecidesItsPointsAlone) {
   target.kind = TrackTarget::Kind::kPoint;
   target.point = kCylinder;
   TrackParams params;
-  params.scene.min_object_points = 250;
   Expected<SceneTracker> local = SceneTracker::create(target, params);
   ASSERT_TRUE(local.ok());
   std::vector<v1::ScanChunk> plain;
@@ -146,9 +145,7 @@ TEST_F(TrackStreamTest, FollowsTheTargetAmongOthersAndDecidesItsPointsAlone) {
 // the surface earlier ones did not reach (1 cm cells), never a new noisy copy.
 TEST(TrackStream, AStillCameraStreamsOnWithinTheSessionLimit) {
   const Cloud frame = FrameFrom(10);
-  SceneParams quarter;
-  quarter.min_object_points = 250;
-  Expected<Scene> scene = segment_scene(frame, quarter);
+  Expected<Scene> scene = segment_scene(frame);
   ASSERT_TRUE(scene.ok());
   size_t target_points = 0;
   for (const SceneObject& o : scene->objects)

@@ -176,7 +176,7 @@ bool remnant(const SceneObject& o, const std::vector<Plane>& planes, const Vec3&
 
 bool keep(const SceneObject& o, const std::vector<Plane>& planes, const Vec3& sensor, const SceneParams& params) {
   const size_t n = o.indices.size();
-  return n >= params.min_object_points && n <= params.max_object_points &&
+  return n <= params.max_object_points &&
          (o.box_max - o.box_min).maxCoeff() <= params.max_object_extent_m && !remnant(o, planes, sensor, params);
 }
 
@@ -192,13 +192,57 @@ Status check(const SceneParams& p) {
 
 }  // namespace
 
-Expected<Scene> segment_scene(const Cloud& frame, const SceneParams& params) {
-  if (Status s = check(params); !s) return s.error();
-  const Voxels voxels = voxelise(frame.points, params.voxel_m);
+double frame_density(const Points& points, const Vec3& sensor) {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const Vec3& p : points)
+    if (p.allFinite() && p != sensor) mean += (p - sensor).normalized().cast<double>();
+  if (!(mean.norm() > 0)) return 0;
+  const Vec3 axis = mean.normalized().cast<float>();
+  const Vec3 u = axis.unitOrthogonal(), v = axis.cross(u);
+  // Cells of two degrees at the axis (wide enough that the pixels' lattice, at any angle to them, fills
+  // each alike) on the plane one metre ahead, where a camera's pixels lie evenly, out to 60 degrees.
+  constexpr float kCell = 0.0349208f;  // tan(2 degrees)
+  constexpr int kHalf = 50;            // tan(60 degrees) / kCell, rounded up
+  std::vector<uint32_t> cells(size_t(4 * kHalf * kHalf), 0);
+  for (const Vec3& p : points) {
+    if (!p.allFinite()) continue;
+    const Vec3 d = p - sensor;
+    const float ahead = d.dot(axis);
+    if (!(ahead > 0)) continue;
+    const int a = int(std::floor(d.dot(u) / ahead / kCell)) + kHalf, b = int(std::floor(d.dot(v) / ahead / kCell)) + kHalf;
+    if (a >= 0 && a < 2 * kHalf && b >= 0 && b < 2 * kHalf) ++cells[size_t(a) * 2 * kHalf + size_t(b)];
+  }
+  std::erase(cells, 0u);
+  if (cells.empty()) return 0;
+  const auto mid = cells.begin() + std::ptrdiff_t(cells.size() / 2);
+  std::nth_element(cells.begin(), mid, cells.end());
+  return double(*mid) / 4;  // per square degree
+}
+
+SceneParams at_density(const SceneParams& params, double density_per_deg2) {
+  if (!(params.reference_density_per_deg2 > 0) || !(density_per_deg2 > 0) ||
+      !(density_per_deg2 < params.reference_density_per_deg2))
+    return params;
+  const double share = density_per_deg2 / params.reference_density_per_deg2;  // of the points
+  SceneParams at = params;
+  at.min_object_points = std::max<size_t>(std::min<size_t>(20, params.min_object_points),
+                                          size_t(std::lround(double(params.min_object_points) * share)));
+  // The camera's depth steps (a pixel's fraction of disparity) grow as its pixels widen: the range term of
+  // the cluster tolerance with them. The 3 cm that parts objects stays.
+  at.cluster_tolerance_per_m2 *= float(1 / std::sqrt(share));
+  return at;
+}
+
+Expected<Scene> segment_scene(const Cloud& frame, const SceneParams& given) {
+  if (Status s = check(given); !s) return s.error();
+  const Voxels voxels = voxelise(frame.points, given.voxel_m);
   Scene scene;
   scene.finite_points = voxels.finite;
   SceneLabels labels(voxels.centroids.size(), 0);
   const Vec3 sensor = frame.sensor.value_or(Vec3::Zero());
+  if (given.reference_density_per_deg2 > 0) scene.density_per_deg2 = frame_density(frame.points, sensor);
+  const SceneParams params = at_density(given, scene.density_per_deg2);
+  scene.min_object_points = params.min_object_points;
   scene.planes = remove_planes(voxels.centroids, sensor, params, labels);
   scene.planes = keep_room_and_supports(std::move(scene.planes), voxels.centroids, sensor, params, labels);
   int32_t clusters = cluster_voxels(voxels.centroids, sensor, params, labels);

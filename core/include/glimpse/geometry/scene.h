@@ -42,9 +42,15 @@ struct SceneParams {
   // surface into slabs. Two voxels join within max(cluster_tolerance_m, cluster_tolerance_per_m2 x
   // range^2): 3 cm to 2.6 m, 5.5 cm at 3.5 m.
   float cluster_tolerance_per_m2 = 0.0045f;
-  // Frame points; fewer: noise, a plane's remnant or a piece of an object (a 20 cm object 4 m away
-  // still has 1000).
+  // Frame points; fewer: noise, a plane's remnant or a piece of an object (a 20 cm object 4 m away still
+  // has 1000). For a frame of a 640 x 480 depth camera; a sparser one asks for fewer (below).
   size_t min_object_points = 1000;
+  // The frame density (frame_density, points per square degree) the counts and the cluster tolerance's
+  // range term are set for: a real 640 x 480 Kinect's frames read about 84, the lab's camera about 110, a
+  // 320 x 240 frame 21-30. A sparser frame scales min_object_points by its density over this (never below
+  // 20) and the range term by the square root of the inverse (its depth steps widen with its pixels); the
+  // 3 cm that parts objects stays. A denser frame keeps them. 0: everything as given, whatever the frame.
+  double reference_density_per_deg2 = 80;
   size_t max_object_points = 200000;   // frame points; more: a wall or floor left over
   // The longest side of an object's box; longer: what is left of a wall or a floor. Room for a standing
   // person (2 m) and a conference table (3.5 m).
@@ -71,7 +77,16 @@ struct Scene {
   std::vector<Plane> planes;
   std::vector<SceneObject> objects;  // nearest the sensor first; at equal range the larger first
   size_t finite_points = 0;          // the frame's points with a depth
+  double density_per_deg2 = 0;       // the frame's points per square degree (frame_density)
+  size_t min_object_points = 0;      // the fewest points an object had to have in this frame (at_density)
 };
+
+// Points per square degree seen from `sensor`: the median count over the occupied cells of two degrees on
+// a plane facing the points' mean direction (where a camera's pixels lie evenly), so an object's edge
+// cells, half empty, do not lower it. 0 without finite points ahead.
+double frame_density(const Points& points, const Vec3& sensor);
+// The parameters segment_scene uses on a frame of this density (SceneParams::reference_density_per_deg2).
+SceneParams at_density(const SceneParams& params, double density_per_deg2);
 
 // The planes and objects of `frame`. Non-finite points (an organised frame's missing depth) are skipped.
 // Deterministic: the same frame gives the same scene. A frame without finite points gives an empty scene.

@@ -201,6 +201,9 @@ void add_scene_flags(CLI::App* cmd, ScenesOptions& o) {
   cmd->add_option("--min-plane-fraction", p.min_plane_fraction, "segment_scene: min_plane_fraction")->capture_default_str();
   cmd->add_option("--max-planes", p.max_planes, "segment_scene: max_planes")->capture_default_str();
   cmd->add_option("--cluster-tolerance", p.cluster_tolerance_m, "segment_scene: cluster_tolerance_m")->capture_default_str();
+  cmd->add_option("--reference-density", p.reference_density_per_deg2,
+                  "segment_scene: reference_density_per_deg2 (0: the counts and distances as given)")
+      ->capture_default_str();
   cmd->add_option("--min-object-points", p.min_object_points, "segment_scene: min_object_points")->capture_default_str();
   cmd->add_option("--max-extent", p.max_object_extent_m, "segment_scene: max_object_extent_m")->capture_default_str();
   cmd->add_option("--tuned-on", o.tuned_on, "where segment_scene's parameters were chosen, for the report")->capture_default_str();

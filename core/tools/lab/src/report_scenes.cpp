@@ -158,7 +158,8 @@ std::string settings_section(const ScenesResult& r, const ScenesSummary& s) {
     << "| min_plane_fraction | " << p.min_plane_fraction << " |\n| min_plane_area_m2 | " << p.min_plane_area_m2 << " |\n"
     << "| max_planes | " << p.max_planes << " |\n| plane_fit_points | " << p.plane_fit_points << " |\n"
     << "| cluster_tolerance_m | " << p.cluster_tolerance_m << " |\n"
-    << "| min_object_points | " << p.min_object_points << " |\n| max_object_points | " << p.max_object_points << " |\n"
+    << "| min_object_points | " << p.min_object_points << " |\n| reference_density_per_deg2 | " << p.reference_density_per_deg2
+    << " |\n| max_object_points | " << p.max_object_points << " |\n"
     << "| max_object_extent_m | " << p.max_object_extent_m << " |\n| max_objects | " << p.max_objects << " |\n\n"
     << "Scenes: " << L.min_objects << "-" << L.max_objects << " objects each on a floor in front of a wall "
     << fmt("%.2f", L.wall_gap_m) << " m behind the farthest; after the first, each stands touching one before it ("

@@ -116,7 +116,7 @@ std::string lost_reason(SceneData& s, int t) {
 // Why true object t matched no detection.
 std::string miss_reason(SceneData& s, int t) {
   const ObjectView& v = s.truth[size_t(t)];
-  if (v.indices.size() < s.params.segmentation.min_object_points) return "too few points";
+  if (v.indices.size() < s.scene.min_object_points) return "too few points";
   const std::map<int, size_t> n = shares(v.indices, s.detection_of);
   std::pair<int, size_t> best{-1, 0};
   size_t pieces = 0, in_pieces = 0;
