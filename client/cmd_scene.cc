@@ -43,6 +43,7 @@ v1::ClassifySceneRequest SceneRequest(const SceneOptions& o, const Cloud& frame)
   v1::SceneParameters* p = request.mutable_scene();
   if (o.cluster_tolerance_m) p->set_cluster_tolerance_m(*o.cluster_tolerance_m);
   if (o.min_object_points) p->set_min_object_points(*o.min_object_points);
+  if (o.reference_density) p->set_reference_density_per_deg2(*o.reference_density);
   if (o.max_object_extent_m) p->set_max_object_extent_m(*o.max_object_extent_m);
   return request;
 }

@@ -70,6 +70,7 @@ struct SceneOptions {
   double known_acceptance = 0;
   std::optional<float> cluster_tolerance_m, max_object_extent_m;  // SceneParameters; unset: the server's
   std::optional<uint32_t> min_object_points;
+  std::optional<float> reference_density;
 };
 int RunScene(const ConnectionOptions& conn, const SceneOptions& options);
 

@@ -278,6 +278,10 @@ void AddScene(CLI::App& app, CommandLine& cl) {
   scene->add_option_function<uint32_t>("--min-object-points", [&s](const uint32_t& n) { s.min_object_points = n; },
                                        "fewer points: noise, not an object (server default 1000 for a 640 x 480 frame, fewer for a sparser one)")
       ->check(CLI::Range(1u, 1000000u))->group("Segmentation");
+  scene->add_option_function<float>("--reference-density", [&s](const float& d) { s.reference_density = d; },
+                                    "points per square degree the counts are for: a sparser frame asks for fewer "
+                                    "(server default 80; 0: as given)")
+      ->check(CLI::Range(0.f, 1e6f))->group("Segmentation");
   scene->add_option_function<float>("--max-object-size", [&s](const float& m) { s.max_object_extent_m = m; },
                                      "metres: a longer box is a wall's remnant, not an object (server default 4)")
       ->check(CLI::Range(0.01f, 50.f))->group("Segmentation");

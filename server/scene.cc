@@ -40,7 +40,9 @@ Expected<SceneParams> SceneParamsFromProto(const v1::SceneParameters& in) {
                 p.max_object_extent_m),
            Take(in.has_max_objects(), "max_objects", in.max_objects(), 1, 256, false, p.max_objects),
            Take(in.has_min_plane_area_m2(), "min_plane_area_m2", in.min_plane_area_m2(), 0, 100, false,
-                p.min_plane_area_m2)})
+                p.min_plane_area_m2),
+           Take(in.has_reference_density_per_deg2(), "reference_density_per_deg2", in.reference_density_per_deg2(), 0,
+                1e6, false, p.reference_density_per_deg2)})
     if (!s.ok()) return s.error();
   return p;
 }

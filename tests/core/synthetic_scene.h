@@ -126,12 +126,12 @@ inline SyntheticScene render_scene(const Room& room, const std::vector<SceneShap
 
 // A room-sized 640 x 480 frame: four objects apart from each other on the floor, the camera 1.3 m up
 // looking 30 degrees down.
-inline SyntheticScene four_object_scene(uint32_t seed = 1) {
+inline SyntheticScene four_object_scene(uint32_t seed = 1, int width = 640, int height = 480) {
   const std::vector<SceneShape> shapes = {{SceneShape::kBox, Vec3(-0.7f, 1.9f, 0), Vec3(0.3f, 0.2f, 0.4f)},
                                           {SceneShape::kCylinder, Vec3(-0.15f, 2.3f, 0), Vec3(0.1f, 0, 0.35f)},
                                           {SceneShape::kSphere, Vec3(0.4f, 1.7f, 0), Vec3(0.15f, 0, 0)},
                                           {SceneShape::kBox, Vec3(0.9f, 2.6f, 0), Vec3(0.25f, 0.25f, 0.25f)}};
-  return render_scene(Room{}, shapes, Vec3(0, 0, 1.3f), Vec3(0, 2.25f, 0), 640, 480, 0.002f, seed);
+  return render_scene(Room{}, shapes, Vec3(0, 0, 1.3f), Vec3(0, 2.25f, 0), width, height, 0.002f, seed);
 }
 
 }  // namespace glimpse::test

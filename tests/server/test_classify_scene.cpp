@@ -106,6 +106,19 @@ TEST_F(ClassifySceneTest, IndicesComeOnlyWhenAsked) {
   }
 }
 
+// A 320 x 240 frame holds a quarter of the points: its objects are asked for fewer by default, and as
+// many as a 640 x 480 frame's with reference_density_per_deg2 0 (some are then lost).
+TEST_F(ClassifySceneTest, AFrameOfHalfTheResolutionFindsTheSameObjects) {
+  const test::SyntheticScene half = test::four_object_scene(1, 320, 240);
+  v1::ClassifySceneResponse response;
+  ASSERT_TRUE(Call(Request(Finite(half.frame)), &response).ok());
+  EXPECT_EQ(response.objects_size(), 4);
+  v1::ClassifySceneRequest as_given = Request(Finite(half.frame));
+  as_given.mutable_scene()->set_reference_density_per_deg2(0);
+  ASSERT_TRUE(Call(as_given, &response).ok());
+  EXPECT_LT(response.objects_size(), 4);
+}
+
 TEST_F(ClassifySceneTest, AFrameWhoseUpIsNotZIsWarned) {
   Cloud frame = Finite(test::four_object_scene().frame);
   for (Vec3& p : frame.points) p = Vec3(p.x(), -p.z(), p.y());  // a camera's own coordinates: y down
@@ -134,6 +147,12 @@ TEST_F(ClassifySceneTest, BadRequestsAreClearStatusesAndTheServerKeepsServing) {
   grpc::Status s = status_of(bad);
   EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
   EXPECT_THAT(s.error_message(), ::testing::HasSubstr("scene.cluster_tolerance_m"));
+
+  bad = Request(frame);
+  bad.mutable_scene()->set_reference_density_per_deg2(-5);
+  s = status_of(bad);
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_THAT(s.error_message(), ::testing::HasSubstr("scene.reference_density_per_deg2"));
 
   bad = Request(frame);
   bad.mutable_model()->set_name("nothing");
